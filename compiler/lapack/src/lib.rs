@@ -1,0 +1,1 @@
+//! tsf-lapack
