@@ -12,6 +12,20 @@
 //! - [`trigger`]: periodic, static relative, adaptive (Xu & Huang 2020) and
 //!   mixed (Amrr et al. 2019) transmission triggers.
 
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::indexing_slicing,
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::unreachable,
+        clippy::todo,
+        clippy::unimplemented,
+        missing_docs
+    )
+)]
+
 #[cfg(test)]
 extern crate std;
 

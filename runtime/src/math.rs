@@ -91,10 +91,8 @@ pub fn exp(x: f64) -> f64 {
     let lo = kf * LN2_LO;
     let r = hi - lo;
     let s = r * r;
-    let mut p = EXP_P[5];
-    for &coef in EXP_P[..5].iter().rev() {
-        p = coef + s * p;
-    }
+    // Horner from the innermost coefficient (0 * s + P6 = P6 exactly).
+    let p = EXP_P.iter().rev().fold(0.0, |acc, &coef| coef + s * acc);
     let c = r - s * p;
     let y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi);
     if k > 1023 {
@@ -249,10 +247,7 @@ const ATAN_Q: [f64; 11] = [
 #[inline]
 fn atan_poly_tail(t: f64) -> f64 {
     let s = t * t;
-    let mut q = ATAN_Q[10];
-    for &coef in ATAN_Q[..10].iter().rev() {
-        q = coef + s * q;
-    }
+    let q = ATAN_Q.iter().rev().fold(0.0, |acc, &coef| coef + s * acc);
     t * (s * q)
 }
 
