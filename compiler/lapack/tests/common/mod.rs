@@ -236,16 +236,16 @@ impl Padded {
 /// Records the worst error of a family of checks, asserts the tolerance and
 /// prints the measurement (visible with `--nocapture`).
 pub struct Worst {
-    name: &'static str,
+    name: String,
     tol: f64,
     worst: f64,
 }
 
 impl Worst {
     /// New record for `name` with tolerance `tol`.
-    pub fn new(name: &'static str, tol: f64) -> Self {
+    pub fn new(name: impl Into<String>, tol: f64) -> Self {
         Self {
-            name,
+            name: name.into(),
             tol,
             worst: 0.0,
         }
