@@ -1,1 +1,51 @@
-//! tsf-lmi
+//! tsf-lmi: a small modelling layer for linear matrix inequalities, lowered to
+//! Clarabel's PSD cones. It knows nothing about fuzzy systems, and it is the
+//! only crate of tsfc that knows Clarabel exists.
+//!
+//! Flow: create variables on a [`Problem`], build affine [`Expr`]essions
+//! (`L V R` terms, `he`, block matrices), add named constraints
+//! (`E ⪰ margin I`, `E ⪯ -margin I`, scalar relations), set an objective,
+//! [`Problem::solve`], then rebuild every constraint from the returned values
+//! with [`Problem::margins`] to certify it.
+//!
+//! ```
+//! use nalgebra::DMatrix;
+//! use tsf_lmi::{Expr, Problem, SolveSettings, SolveStatus};
+//!
+//! # fn main() -> Result<(), tsf_lmi::LmiError> {
+//! // Lyapunov: find P ⪰ I with A'P + PA ⪯ -I, minimising trace P.
+//! let a = DMatrix::from_row_slice(2, 2, &[-1.0, 2.0, 0.0, -3.0]);
+//! let mut lp = Problem::new();
+//! let p = lp.symmetric("P", 2)?;
+//! lp.psd("P > 0", Expr::var(p), 1.0)?;
+//! lp.nsd("A'P + PA < 0", Expr::var(p).right_mul(&a)?.he()?, 1.0)?;
+//! lp.minimize(Expr::var(p).trace()?)?;
+//! let solution = lp.solve(&SolveSettings::default())?;
+//! assert_eq!(solution.status, SolveStatus::Solved);
+//! let values = solution.assignment()?;
+//! assert!(lp.margins(values)?.iter().all(|m| m.certified()));
+//! # Ok(())
+//! # }
+//! ```
+
+use tsf_lapack as _;
+
+mod assignment;
+mod constraint;
+mod error;
+mod expr;
+mod lower;
+mod margin;
+mod problem;
+mod solve;
+mod var;
+
+pub use assignment::Assignment;
+pub use constraint::{ConstraintId, ConstraintKind, LmiSense, Relation};
+pub use error::{LmiError, Result};
+pub use expr::{BlockGrid, Expr};
+pub use lower::ProblemStats;
+pub use margin::Margin;
+pub use problem::{ObjectiveSense, Problem};
+pub use solve::{Solution, SolveSettings, SolveStatus};
+pub use var::{Var, VarKind};
