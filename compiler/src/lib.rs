@@ -1,1 +1,9 @@
-//! tsfc
+//! tsfc: the compiler for Takagi-Sugeno fuzzy controllers.
+//!
+//! The pipeline flows one way, one module per stage, plain data between them:
+//! `tsf_lang` (parse, resolve, shape-check) → [`model`] (local models, premises,
+//! coverage) → synthesis → LMI solve → certificate → code generation / simulation
+//! / report. [`frontend`] runs the first two stages on a file.
+
+pub mod frontend;
+pub mod model;

@@ -1,1 +1,103 @@
-fn main() {}
+//! The `tsfc` command line.
+
+use clap::{Parser, Subcommand, ValueEnum};
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use tsf_lang::diag;
+use tsfc::frontend;
+
+/// Exit codes: 0 ok, 1 spec error, 2 usage or I/O error, 3 infeasible or refused.
+mod exit {
+    pub const SPEC: u8 = 1;
+    pub const IO: u8 = 2;
+}
+
+#[derive(Parser)]
+#[command(name = "tsfc", version, about = "Compiler for Takagi-Sugeno fuzzy controllers: .tsf spec -> certified PDC gains -> Rust/C")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Format {
+    /// rustc-style messages on stderr.
+    Human,
+    /// One JSON document on stdout (for editors).
+    Json,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Parse and check specs: names, shapes, operating points, coverage.
+    Check {
+        /// Spec files.
+        #[arg(required = true)]
+        specs: Vec<PathBuf>,
+        /// Output format of the diagnostics.
+        #[arg(long, value_enum, default_value = "human")]
+        format: Format,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Check { specs, format } => check(&specs, format),
+    }
+}
+
+fn check(specs: &[PathBuf], format: Format) -> ExitCode {
+    let mut worst = 0u8;
+    let mut json_files = Vec::new();
+    let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
+    for path in specs {
+        let source = match frontend::read_source(path) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("error: {}", e.message);
+                worst = worst.max(exit::IO);
+                continue;
+            }
+        };
+        let checked = frontend::check(&source);
+        if checked.has_errors() {
+            worst = worst.max(exit::SPEC);
+        }
+        match format {
+            Format::Human => {
+                eprint!("{}", diag::render(&source.name, &source.text, &checked.diagnostics, color));
+                if let Some(m) = &checked.model {
+                    eprintln!(
+                        "ok: {} — controller `{}`: n = {}, m = {}, {} rules, {} premise components; coverage checked at {} points{}",
+                        source.name,
+                        m.spec.controller.node,
+                        m.n,
+                        m.m,
+                        m.r(),
+                        m.premises.len(),
+                        m.coverage.points,
+                        if m.coverage.exhaustive { "" } else { " (sampled)" }
+                    );
+                }
+            }
+            Format::Json => {
+                let diags: Vec<_> = checked.diagnostics.iter().map(|d| diag::to_json(&source.name, &source.text, d)).collect();
+                json_files.push(serde_json::json!({
+                    "file": source.name,
+                    "ok": !checked.has_errors(),
+                    "diagnostics": diags,
+                }));
+            }
+        }
+    }
+    if matches!(format, Format::Json) {
+        let doc = serde_json::json!({ "files": json_files });
+        let mut out = std::io::stdout().lock();
+        if writeln!(out, "{}", serde_json::to_string_pretty(&doc).unwrap_or_default()).is_err() {
+            return ExitCode::from(exit::IO);
+        }
+    }
+    ExitCode::from(worst)
+}

@@ -1,1 +1,29 @@
-//! tsf-lang
+//! The `.tsf` language: grammar (pest), typed AST with spans, name resolution,
+//! shape checking, expression evaluation and rustc-style diagnostics.
+//!
+//! Entry point: [`check_source`], which never panics and never fails as a
+//! whole: it returns the checked [`Spec`] when the file is valid, and every
+//! diagnostic it found.
+
+pub mod ast;
+pub mod check;
+pub mod diag;
+pub mod eval;
+pub mod parser;
+pub mod span;
+pub mod spec;
+pub mod split;
+
+pub use diag::{Diagnostic, Severity};
+pub use span::Span;
+pub use spec::Spec;
+
+/// Parses and checks a source text: the spec (if valid) and all diagnostics.
+pub fn check_source(source: &str) -> (Option<Spec>, Vec<Diagnostic>) {
+    let (file, mut diags) = parser::parse_file(source);
+    let (spec, more) = check::check(&file);
+    diags.extend(more);
+    diags.sort_by_key(|d| (d.span.start, d.span.end));
+    let has_error = diags.iter().any(Diagnostic::is_error);
+    (if has_error { None } else { spec }, diags)
+}

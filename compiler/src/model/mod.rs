@@ -1,0 +1,93 @@
+//! The model stage: a checked [`Spec`] becomes a [`TsModel`]: local linear
+//! models per rule, the premise layout, the rule premises as runtime terms,
+//! and the coverage check.
+
+mod coverage;
+mod local;
+mod premise;
+
+pub use coverage::{check_coverage, Coverage};
+pub use premise::{PremiseLayout, PremiseSlot, TermSpec};
+
+use nalgebra::DMatrix;
+use tsf_lang::spec::{Output, Spec};
+use tsf_lang::Diagnostic;
+
+/// The local linear model of one rule: x' = A x + B u + D w.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LocalModel {
+    /// Rule name.
+    pub name: String,
+    /// n x n.
+    pub a: DMatrix<f64>,
+    /// n x m.
+    pub b: DMatrix<f64>,
+    /// n x q.
+    pub d: DMatrix<f64>,
+    /// The operating point, when the rule has one.
+    pub at: Option<Vec<f64>>,
+}
+
+/// The T-S fuzzy model: what synthesis, code generation and simulation consume.
+#[derive(Debug, Clone)]
+pub struct TsModel {
+    /// The checked spec it came from.
+    pub spec: Spec,
+    /// States.
+    pub n: usize,
+    /// Inputs.
+    pub m: usize,
+    /// Disturbances.
+    pub q: usize,
+    /// One local model per rule, in rule order.
+    pub rules: Vec<LocalModel>,
+    /// Premise variables flattened into z.
+    pub premises: PremiseLayout,
+    /// Per rule: its premise terms (product t-norm).
+    pub terms: Vec<Vec<TermSpec>>,
+    /// Per rule: its centre in premise space (for the nearest-rule fallback).
+    pub centers: Vec<Vec<f64>>,
+    /// Result of the coverage check.
+    pub coverage: Coverage,
+}
+
+impl TsModel {
+    /// Number of rules.
+    pub fn r(&self) -> usize {
+        self.rules.len()
+    }
+
+    /// The performance outputs.
+    pub fn outputs(&self) -> &[Output] {
+        &self.spec.outputs
+    }
+}
+
+/// Builds the model; errors and warnings go to `diags`. `None` if any error.
+pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
+    let errors_before = diags.iter().filter(|d| d.is_error()).count();
+    let rules = local::local_models(&spec, diags);
+    let premises = premise::layout(&spec, diags);
+    let terms = premise::rule_terms(&spec, &premises);
+    let centers = premise::rule_centers(&spec, &premises, &terms);
+    premise::check_operating_points(&spec, &premises, &terms, diags);
+    local::check_objectives(&spec, diags);
+    if diags.iter().filter(|d| d.is_error()).count() > errors_before {
+        return None;
+    }
+    let coverage = check_coverage(&spec, &premises, &terms, diags);
+    if !coverage.covered {
+        return None;
+    }
+    Some(TsModel {
+        n: spec.n(),
+        m: spec.m(),
+        q: spec.q(),
+        rules,
+        premises,
+        terms,
+        centers,
+        coverage,
+        spec,
+    })
+}

@@ -1,0 +1,216 @@
+//! Diagnostics: a message, a labelled primary span, optional secondary labels,
+//! notes and a help line; rendered like rustc's or as JSON for editors.
+
+use crate::span::Span;
+use codespan_reporting::diagnostic::{Diagnostic as CsDiagnostic, Label as CsLabel};
+use codespan_reporting::files::SimpleFile;
+use codespan_reporting::term::{self, Config};
+use serde::Serialize;
+
+/// How serious a diagnostic is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Severity {
+    /// The spec is invalid.
+    Error,
+    /// The spec is valid but probably not what was meant.
+    Warning,
+}
+
+/// A secondary label: a span and what it shows.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Label {
+    /// Where.
+    pub span: Span,
+    /// What.
+    pub message: String,
+}
+
+/// One diagnostic about a spec.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnostic {
+    /// Error or warning.
+    pub severity: Severity,
+    /// The headline, in the reader's terms.
+    pub message: String,
+    /// The primary span.
+    pub span: Span,
+    /// Text under the primary span.
+    pub label: String,
+    /// Other related places.
+    pub secondary: Vec<Label>,
+    /// Extra facts.
+    pub notes: Vec<String>,
+    /// How to fix it, where there is a known way.
+    pub help: Option<String>,
+}
+
+impl Diagnostic {
+    /// An error at `span`.
+    pub fn error(span: Span, message: impl Into<String>) -> Self {
+        Diagnostic {
+            severity: Severity::Error,
+            message: message.into(),
+            span,
+            label: String::new(),
+            secondary: Vec::new(),
+            notes: Vec::new(),
+            help: None,
+        }
+    }
+
+    /// A warning at `span`.
+    pub fn warning(span: Span, message: impl Into<String>) -> Self {
+        Diagnostic { severity: Severity::Warning, ..Diagnostic::error(span, message) }
+    }
+
+    /// Sets the primary label.
+    pub fn with_label(mut self, label: impl Into<String>) -> Self {
+        self.label = label.into();
+        self
+    }
+
+    /// Adds a secondary label.
+    pub fn with_secondary(mut self, span: Span, message: impl Into<String>) -> Self {
+        self.secondary.push(Label { span, message: message.into() });
+        self
+    }
+
+    /// Adds a note.
+    pub fn with_note(mut self, note: impl Into<String>) -> Self {
+        self.notes.push(note.into());
+        self
+    }
+
+    /// Sets the help line.
+    pub fn with_help(mut self, help: impl Into<String>) -> Self {
+        self.help = Some(help.into());
+        self
+    }
+
+    /// Whether this is an error.
+    pub fn is_error(&self) -> bool {
+        self.severity == Severity::Error
+    }
+
+    /// The same diagnostic with every span clamped into `0..=len` (and to char boundaries).
+    pub fn clamped(mut self, source: &str) -> Self {
+        self.span = clamp(self.span, source);
+        for l in &mut self.secondary {
+            l.span = clamp(l.span, source);
+        }
+        self
+    }
+}
+
+fn clamp(span: Span, source: &str) -> Span {
+    let fix = |mut i: usize| {
+        i = i.min(source.len());
+        while i > 0 && !source.is_char_boundary(i) {
+            i -= 1;
+        }
+        i
+    };
+    Span::new(fix(span.start), fix(span.end))
+}
+
+/// 1-based line and column (in characters) of byte offset `at`.
+pub fn line_col(source: &str, at: usize) -> (usize, usize) {
+    let at = clamp(Span::new(at, at), source).start;
+    let before = &source[..at];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let col = source[line_start..at].chars().count() + 1;
+    (line, col)
+}
+
+/// Renders diagnostics like rustc does (`error: ...`, `--> file:line:col`,
+/// the source line, carets under the span, `= help: ...`). `color` adds ANSI colours.
+pub fn render(file_name: &str, source: &str, diagnostics: &[Diagnostic], color: bool) -> String {
+    let file = SimpleFile::new(file_name, source);
+    let mut config = Config::default();
+    config.chars = codespan_reporting::term::Chars::ascii();
+    let mut out: Vec<u8> = Vec::new();
+    for d in diagnostics {
+        let d = d.clone().clamped(source);
+        let cs = to_codespan(&d);
+        let result = if color {
+            let mut w = term::termcolor::Ansi::new(&mut out);
+            term::emit_to_write_style(&mut w, &config, &file, &cs)
+        } else {
+            let mut w = term::termcolor::NoColor::new(&mut out);
+            term::emit_to_write_style(&mut w, &config, &file, &cs)
+        };
+        if result.is_err() {
+            // Fall back to a plain line: rendering must never lose a diagnostic.
+            let (l, c) = line_col(source, d.span.start);
+            out.extend_from_slice(format!("error: {}\n --> {file_name}:{l}:{c}\n", d.message).as_bytes());
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn to_codespan(d: &Diagnostic) -> CsDiagnostic<()> {
+    let base = match d.severity {
+        Severity::Error => CsDiagnostic::error(),
+        Severity::Warning => CsDiagnostic::warning(),
+    };
+    let mut labels = vec![CsLabel::primary((), d.span.start..d.span.end).with_message(&d.label)];
+    for l in &d.secondary {
+        labels.push(CsLabel::secondary((), l.span.start..l.span.end).with_message(&l.message));
+    }
+    let mut notes = d.notes.clone();
+    if let Some(h) = &d.help {
+        notes.push(format!("help: {h}"));
+    }
+    base.with_message(&d.message).with_labels(labels).with_notes(notes)
+}
+
+/// A diagnostic in the JSON form printed by `tsfc check --format json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct JsonDiagnostic<'a> {
+    /// File name as given.
+    pub file: &'a str,
+    /// `error` or `warning`.
+    pub severity: Severity,
+    /// Headline.
+    pub message: &'a str,
+    /// 1-based start line.
+    pub line: usize,
+    /// 1-based start column (characters).
+    pub column: usize,
+    /// 1-based end line.
+    pub end_line: usize,
+    /// 1-based end column (characters, exclusive).
+    pub end_column: usize,
+    /// Byte span.
+    pub span: Span,
+    /// Primary label.
+    pub label: &'a str,
+    /// Secondary labels.
+    pub secondary: &'a [Label],
+    /// Notes.
+    pub notes: &'a [String],
+    /// Help line.
+    pub help: Option<&'a str>,
+}
+
+/// The JSON view of `d` for `file`.
+pub fn to_json<'a>(file: &'a str, source: &str, d: &'a Diagnostic) -> JsonDiagnostic<'a> {
+    let (line, column) = line_col(source, d.span.start);
+    let (end_line, end_column) = line_col(source, d.span.end);
+    JsonDiagnostic {
+        file,
+        severity: d.severity,
+        message: &d.message,
+        line,
+        column,
+        end_line,
+        end_column,
+        span: d.span,
+        label: &d.label,
+        secondary: &d.secondary,
+        notes: &d.notes,
+        help: d.help.as_deref(),
+    }
+}

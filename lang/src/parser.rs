@@ -1,0 +1,575 @@
+//! The pest parser and the conversion of its pairs into the typed AST.
+//!
+//! Parsing never fails as a whole: every item is parsed on its own, items with
+//! syntax errors are reported and left out, the others form the [`File`].
+
+use crate::ast::*;
+use crate::diag::Diagnostic;
+use crate::span::{Span, Spanned};
+use crate::split::split_items;
+use pest::iterators::Pair;
+use pest::pratt_parser::{Assoc, Op, PrattParser};
+use pest::Parser as _;
+use std::sync::OnceLock;
+
+#[derive(pest_derive::Parser)]
+#[grammar = "tsf.pest"]
+struct TsfParser;
+
+fn pratt() -> &'static PrattParser<Rule> {
+    static P: OnceLock<PrattParser<Rule>> = OnceLock::new();
+    P.get_or_init(|| {
+        PrattParser::new()
+            .op(Op::infix(Rule::add, Assoc::Left) | Op::infix(Rule::sub, Assoc::Left))
+            .op(Op::infix(Rule::mul, Assoc::Left)
+                | Op::infix(Rule::emul, Assoc::Left)
+                | Op::infix(Rule::div, Assoc::Left))
+            .op(Op::prefix(Rule::neg) | Op::prefix(Rule::pos))
+            .op(Op::infix(Rule::pow, Assoc::Right))
+            .op(Op::postfix(Rule::transpose) | Op::postfix(Rule::index))
+    })
+}
+
+/// Parses a whole file: the items that parsed, and the syntax errors.
+pub fn parse_file(source: &str) -> (File, Vec<Diagnostic>) {
+    let mut diags = Vec::new();
+    let chunks = split_items(source, &mut diags);
+    let mut file = File::default();
+    for chunk in chunks {
+        let text = &source[chunk.span.start..chunk.span.end];
+        match TsfParser::parse(Rule::item, text) {
+            Ok(mut pairs) => {
+                let cx = Cx { offset: chunk.span.start };
+                if let Some(item) = pairs.next() {
+                    match cx.item(item) {
+                        Ok(it) => file.items.push(it),
+                        Err(d) => diags.push(d),
+                    }
+                }
+            }
+            Err(e) => diags.push(syntax_error(&e, chunk.span.start, text)),
+        }
+    }
+    (file, diags)
+}
+
+/// A readable name for a grammar rule in "expected ..." messages.
+fn rule_name(r: &Rule) -> Option<&'static str> {
+    Some(match r {
+        Rule::ident | Rule::goal_word => "a name",
+        Rule::number => "a number",
+        Rule::expr | Rule::value | Rule::range_value | Rule::index_arg | Rule::slice => {
+            "an expression"
+        }
+        Rule::add | Rule::sub | Rule::mul | Rule::emul | Rule::div | Rule::pow => "an operator",
+        Rule::transpose | Rule::index => return None,
+        Rule::neg | Rule::pos => return None,
+        Rule::matrix => "a matrix `[...]`",
+        Rule::call => "a function call",
+        Rule::paren => "`(`",
+        Rule::set_block | Rule::setting_block => "`{`",
+        Rule::set_def => "a set definition `name = tri(...);`",
+        Rule::setting => "a setting `name = value;`",
+        Rule::clause => "a clause `premise is set`",
+        Rule::kw_and => "`and`",
+        Rule::kw_is => "`is`",
+        Rule::kw_about => "`about`",
+        Rule::kw_at | Rule::at_point => "`at(...)`",
+        Rule::kw_for | Rule::obj_for => "`for`",
+        Rule::kw_in => "`in`",
+        Rule::kw_with | Rule::obj_with => "`with`",
+        Rule::kw_range | Rule::premise_range => "`range`",
+        Rule::kw_sigma | Rule::premise_sigma => "`sigma`",
+        Rule::kw_step => "`step`",
+        Rule::named_arg => "`name = value`",
+        Rule::consequent => "a consequent (`at(...)` or `A = ...`)",
+        Rule::antecedent => "a premise",
+        Rule::signals => "`(signal)`",
+        Rule::goal | Rule::goal_le | Rule::goal_ge => "a goal (`<= value`, `>= value`, `minimize`, `maximize`)",
+        Rule::saturate => "`saturate`",
+        Rule::bound => "`bound`",
+        Rule::var_decl | Rule::var_list => "a declaration `name` or `name[size]`",
+        Rule::derivative => "a derivative `name' = ...;`",
+        Rule::dynamics_block => "`dynamics { ... }`",
+        Rule::signal_def => "a signal `name(t) = ...;`",
+        Rule::sim_stmt => "a simulate statement",
+        Rule::modifier => "a modifier",
+        Rule::EOI => "end of item",
+        Rule::item => "an item (`const`, `state`, `rule`, ...)",
+        _ => return None,
+    })
+}
+
+fn syntax_error(e: &pest::error::Error<Rule>, offset: usize, text: &str) -> Diagnostic {
+    use pest::error::{ErrorVariant, InputLocation};
+    let (start, end) = match e.location {
+        InputLocation::Pos(p) => (p, p),
+        InputLocation::Span((s, e)) => (s, e),
+    };
+    // Point at the offending token (or the end of the item).
+    let token_end = text[start.min(text.len())..]
+        .char_indices()
+        .find(|(_, c)| c.is_whitespace() || matches!(c, ';' | ',' | ')' | ']' | '}'))
+        .map_or(text.len(), |(i, c)| start + if i == 0 { c.len_utf8() } else { i });
+    let end = end.max(token_end).min(text.len());
+    let span = Span::new(start, end).shifted(offset);
+    let found = text[start.min(text.len())..end]
+        .chars()
+        .take(24)
+        .collect::<String>();
+    let found = if found.trim().is_empty() { "end of item".to_string() } else { format!("`{}`", found.trim()) };
+    let mut expected: Vec<&str> = match &e.variant {
+        ErrorVariant::ParsingError { positives, .. } => positives.iter().filter_map(rule_name).collect(),
+        ErrorVariant::CustomError { .. } => Vec::new(),
+    };
+    expected.sort_unstable();
+    expected.dedup();
+    let msg = if expected.is_empty() {
+        format!("syntax error: unexpected {found}")
+    } else {
+        format!("syntax error: expected {}, found {found}", join_or(&expected))
+    };
+    let mut d = Diagnostic::error(span, msg).with_label("unexpected here");
+    if text.trim_end().ends_with(';') || text.trim_end().ends_with('}') {
+        if expected.contains(&"an operator") && found != "end of item" {
+            d = d.with_help("a `;` may be missing at the end of the previous statement");
+        }
+    } else {
+        d = d.with_help("every item ends with `;` (or with a `{ ... }` block)");
+    }
+    d
+}
+
+fn join_or(items: &[&str]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => (*one).to_string(),
+        [rest @ .., last] => format!("{} or {last}", rest.join(", ")),
+    }
+}
+
+/// Conversion context: the byte offset of the item in the file.
+struct Cx {
+    offset: usize,
+}
+
+type PResult<T> = Result<T, Diagnostic>;
+
+impl Cx {
+    fn span(&self, p: &Pair<Rule>) -> Span {
+        let s = p.as_span();
+        Span::new(s.start(), s.end()).shifted(self.offset)
+    }
+
+    fn ident(&self, p: Pair<Rule>) -> Ident {
+        Spanned::new(p.as_str().to_string(), self.span(&p))
+    }
+
+    fn number(&self, p: &Pair<Rule>) -> PResult<f64> {
+        match p.as_str().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(Diagnostic::error(self.span(p), format!("number `{}` is out of range", p.as_str()))
+                .with_label("not a finite double-precision number")
+                .with_help("the largest magnitude is about 1.8e308")),
+        }
+    }
+
+    fn item(&self, item: Pair<Rule>) -> PResult<Item> {
+        let span = self.span(&item);
+        let inner = item.into_inner().next();
+        let Some(p) = inner else {
+            return Err(Diagnostic::error(span, "empty item"));
+        };
+        let rule = p.as_rule();
+        let mut it = p.into_inner();
+        let kind = match rule {
+            Rule::version => {
+                let n = next(&mut it, span)?;
+                ItemKind::Version(Spanned::new(self.number(&n)?, self.span(&n)))
+            }
+            Rule::controller => ItemKind::Controller(self.ident(next(&mut it, span)?)),
+            Rule::const_def => {
+                let name = self.ident(next(&mut it, span)?);
+                ItemKind::Const(name, self.expr(next(&mut it, span)?)?)
+            }
+            Rule::fn_def => {
+                let name = self.ident(next(&mut it, span)?);
+                let mut params = Vec::new();
+                let mut body = None;
+                for p in it {
+                    match p.as_rule() {
+                        Rule::params => params = p.into_inner().map(|i| self.ident(i)).collect(),
+                        _ => body = Some(self.expr(p)?),
+                    }
+                }
+                let body = body.ok_or_else(|| Diagnostic::error(span, "function without a body"))?;
+                ItemKind::Fn(name, params, body)
+            }
+            Rule::state_decl => ItemKind::State(self.var_list(next(&mut it, span)?)?),
+            Rule::input_decl | Rule::disturbance_decl => {
+                let vars = self.var_list(next(&mut it, span)?)?;
+                let extra = match it.next() {
+                    Some(p) => Some(self.expr(first(p, span)?)?),
+                    None => None,
+                };
+                if rule == Rule::input_decl {
+                    ItemKind::Input(vars, extra)
+                } else {
+                    ItemKind::Disturbance(vars, extra)
+                }
+            }
+            Rule::output_decl => {
+                let name = self.ident(next(&mut it, span)?);
+                ItemKind::Output(name, self.expr(next(&mut it, span)?)?)
+            }
+            Rule::matrix_def => {
+                let name = self.ident(next(&mut it, span)?);
+                let p2 = next(&mut it, span)?;
+                if p2.as_rule() == Rule::ident {
+                    let param = Some(self.ident(p2));
+                    ItemKind::Matrix { name, param, value: self.expr(next(&mut it, span)?)? }
+                } else {
+                    ItemKind::Matrix { name, param: None, value: self.expr(p2)? }
+                }
+            }
+            Rule::premise_decl => self.premise(it, span)?,
+            Rule::rule_decl => self.rule(it, span)?,
+            Rule::objective_decl => self.objective(it, span)?,
+            Rule::relaxation_decl => {
+                let name = self.ident(next(&mut it, span)?);
+                ItemKind::Relaxation(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)
+            }
+            Rule::trigger_decl => {
+                let name = self.ident(next(&mut it, span)?);
+                let settings = match it.next() {
+                    Some(block) => block.into_inner().map(|s| self.setting(s)).collect::<PResult<_>>()?,
+                    None => Vec::new(),
+                };
+                ItemKind::Trigger(name, settings)
+            }
+            Rule::emit_decl => {
+                ItemKind::Emit(next(&mut it, span)?.into_inner().map(|p| self.ident(p)).collect())
+            }
+            Rule::precision_decl => ItemKind::Precision(self.ident(next(&mut it, span)?)),
+            Rule::simulate_decl => {
+                ItemKind::Simulate(it.map(|p| self.sim_stmt(p)).collect::<PResult<_>>()?)
+            }
+            _ => return Err(Diagnostic::error(span, "unsupported item")),
+        };
+        Ok(Item { kind, span })
+    }
+
+    fn var_list(&self, p: Pair<Rule>) -> PResult<Vec<VarDecl>> {
+        p.into_inner()
+            .map(|v| {
+                let vspan = self.span(&v);
+                let mut parts = v.into_inner();
+                let name = self.ident(next(&mut parts, vspan)?);
+                let len = match parts.next() {
+                    Some(n) => Some(Spanned::new(self.number(&n)?, self.span(&n))),
+                    None => None,
+                };
+                Ok(VarDecl { name, len })
+            })
+            .collect()
+    }
+
+    fn premise(&self, it: pest::iterators::Pairs<Rule>, span: Span) -> PResult<ItemKind> {
+        let mut names = Vec::new();
+        let mut expr = None;
+        let mut range = None;
+        let mut sigma = None;
+        let mut sets = Vec::new();
+        for p in it {
+            match p.as_rule() {
+                Rule::ident_list => names = p.into_inner().map(|i| self.ident(i)).collect(),
+                Rule::expr => expr = Some(self.expr(p)?),
+                Rule::premise_range => {
+                    let mut r = p.into_inner().filter(|q| q.as_rule() == Rule::expr);
+                    let lo = self.expr(next(&mut r, span)?)?;
+                    let hi = self.expr(next(&mut r, span)?)?;
+                    range = Some((lo, hi));
+                }
+                Rule::premise_sigma => {
+                    let mut r = p.into_inner().filter(|q| q.as_rule() == Rule::expr);
+                    sigma = Some(self.expr(next(&mut r, span)?)?);
+                }
+                Rule::set_block => {
+                    for s in p.into_inner() {
+                        let sspan = self.span(&s);
+                        let mut parts = s.into_inner();
+                        let name = self.ident(next(&mut parts, sspan)?);
+                        let call = next(&mut parts, sspan)?;
+                        let mut c = call.into_inner();
+                        let shape = self.ident(next(&mut c, sspan)?);
+                        let args = c.map(|a| self.arg(a)).collect::<PResult<_>>()?;
+                        sets.push(SetDef { name, shape, args, span: sspan });
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok(ItemKind::Premise { names, expr, range, sigma, sets })
+    }
+
+    fn rule(&self, mut it: pest::iterators::Pairs<Rule>, span: Span) -> PResult<ItemKind> {
+        let name = self.ident(next(&mut it, span)?);
+        let ante = next(&mut it, span)?;
+        let mut clauses = Vec::new();
+        for c in ante.into_inner().filter(|c| c.as_rule() == Rule::clause) {
+            let cspan = self.span(&c);
+            let mut parts = c.into_inner().filter(|q| q.as_rule() != Rule::kw_is);
+            let premise = self.ident(next(&mut parts, cspan)?);
+            let set = next(&mut parts, cspan)?;
+            let set = if set.as_rule() == Rule::about_set {
+                let mut e = set.into_inner().filter(|q| q.as_rule() == Rule::expr);
+                SetRef::About(self.expr(next(&mut e, cspan)?)?)
+            } else {
+                SetRef::Named(self.ident(set))
+            };
+            clauses.push(Clause { premise, set, span: cspan });
+        }
+        let cons = next(&mut it, span)?;
+        let mut at = None;
+        let mut matrices = Vec::new();
+        for p in cons.into_inner() {
+            match p.as_rule() {
+                Rule::at_point => {
+                    let aspan = self.span(&p);
+                    let args = p
+                        .into_inner()
+                        .filter(|q| q.as_rule() == Rule::named_arg)
+                        .map(|q| self.named_arg(q))
+                        .collect::<PResult<_>>()?;
+                    at = Some((args, aspan));
+                }
+                _ => matrices.push(self.named_arg(p)?),
+            }
+        }
+        Ok(ItemKind::Rule { name, clauses, at, matrices })
+    }
+
+    fn objective(&self, mut it: pest::iterators::Pairs<Rule>, span: Span) -> PResult<ItemKind> {
+        let name = self.ident(next(&mut it, span)?);
+        let mut signals = Vec::new();
+        let mut goal = None;
+        let mut for_ = None;
+        let mut with = Vec::new();
+        for p in it {
+            match p.as_rule() {
+                Rule::signals => signals = p.into_inner().map(|i| self.ident(i)).collect(),
+                Rule::goal => {
+                    let g = first(p, span)?;
+                    goal = Some(match g.as_rule() {
+                        Rule::goal_le => Goal::AtMost(self.expr(first(g, span)?)?),
+                        Rule::goal_ge => Goal::AtLeast(self.expr(first(g, span)?)?),
+                        _ => Goal::Word(self.ident(first(g, span)?)),
+                    });
+                }
+                Rule::obj_for => {
+                    let mut parts = p.into_inner().filter(|q| q.as_rule() != Rule::kw_for);
+                    let name = self.ident(next(&mut parts, span)?);
+                    let mut is_in = false;
+                    let mut value = None;
+                    for q in parts {
+                        match q.as_rule() {
+                            Rule::kw_in => is_in = true,
+                            _ => value = Some(self.expr(q)?),
+                        }
+                    }
+                    let value = value.ok_or_else(|| Diagnostic::error(span, "`for` without a value"))?;
+                    for_ = Some(ObjectiveFor { name, is_in, value });
+                }
+                Rule::obj_with => {
+                    with = p
+                        .into_inner()
+                        .filter(|q| q.as_rule() == Rule::named_arg)
+                        .map(|q| self.named_arg(q))
+                        .collect::<PResult<_>>()?;
+                }
+                _ => {}
+            }
+        }
+        Ok(ItemKind::Objective { name, signals, goal, for_, with })
+    }
+
+    fn setting(&self, p: Pair<Rule>) -> PResult<Setting> {
+        let span = self.span(&p);
+        let mut key = None;
+        let mut qualifier = None;
+        let mut value = None;
+        let mut modifiers = Vec::new();
+        for q in p.into_inner() {
+            match q.as_rule() {
+                Rule::ident if key.is_none() => key = Some(self.ident(q)),
+                Rule::ident => qualifier = Some(self.ident(q)),
+                Rule::value => value = Some(self.value(q, span)?),
+                Rule::modifier => {
+                    let mut m = q.into_inner();
+                    let name = self.ident(next(&mut m, span)?);
+                    let args = m.map(|a| self.named_arg(a)).collect::<PResult<_>>()?;
+                    modifiers.push(Modifier { name, args });
+                }
+                _ => {}
+            }
+        }
+        let key = key.ok_or_else(|| Diagnostic::error(span, "setting without a name"))?;
+        let value = value.ok_or_else(|| Diagnostic::error(span, "setting without a value"))?;
+        Ok(Setting { key, qualifier, value, modifiers, span })
+    }
+
+    fn value(&self, p: Pair<Rule>, span: Span) -> PResult<Value> {
+        let v = first(p, span)?;
+        if v.as_rule() == Rule::range_value {
+            let mut parts = v.into_inner().filter(|q| q.as_rule() == Rule::expr);
+            let lo = self.expr(next(&mut parts, span)?)?;
+            let hi = self.expr(next(&mut parts, span)?)?;
+            let step = match parts.next() {
+                Some(s) => Some(self.expr(s)?),
+                None => None,
+            };
+            Ok(Value::Range(lo, hi, step))
+        } else {
+            Ok(Value::Expr(self.expr(v)?))
+        }
+    }
+
+    fn sim_stmt(&self, p: Pair<Rule>) -> PResult<SimStmt> {
+        let span = self.span(&p);
+        let s = first(p, span)?;
+        match s.as_rule() {
+            Rule::setting => Ok(SimStmt::Setting(self.setting(s)?)),
+            Rule::signal_def => {
+                let mut parts = s.into_inner();
+                let name = self.ident(next(&mut parts, span)?);
+                let param = self.ident(next(&mut parts, span)?);
+                let value = self.expr(next(&mut parts, span)?)?;
+                Ok(SimStmt::Signal { name, param, value })
+            }
+            _ => {
+                let dspan = self.span(&s);
+                let mut stmts = Vec::new();
+                for d in s.into_inner() {
+                    let ds = self.span(&d);
+                    let rule = d.as_rule();
+                    let mut parts = d.into_inner();
+                    let stmt = match rule {
+                        Rule::state_decl => DynStmt::State(self.var_list(next(&mut parts, ds)?)?),
+                        Rule::const_def => {
+                            let n = self.ident(next(&mut parts, ds)?);
+                            DynStmt::Const(n, self.expr(next(&mut parts, ds)?)?)
+                        }
+                        _ => {
+                            let n = self.ident(next(&mut parts, ds)?);
+                            DynStmt::Derivative(n, self.expr(next(&mut parts, ds)?)?)
+                        }
+                    };
+                    stmts.push(Spanned::new(stmt, ds));
+                }
+                Ok(SimStmt::Dynamics(stmts, dspan))
+            }
+        }
+    }
+
+    fn named_arg(&self, p: Pair<Rule>) -> PResult<NamedArg> {
+        let span = self.span(&p);
+        let mut parts = p.into_inner();
+        let name = self.ident(next(&mut parts, span)?);
+        let value = self.expr(next(&mut parts, span)?)?;
+        Ok(NamedArg { name, value })
+    }
+
+    fn arg(&self, p: Pair<Rule>) -> PResult<Arg> {
+        if p.as_rule() == Rule::named_arg {
+            let na = self.named_arg(p)?;
+            Ok(Arg { name: Some(na.name), value: na.value })
+        } else {
+            Ok(Arg { name: None, value: self.expr(p)? })
+        }
+    }
+
+    fn expr(&self, p: Pair<Rule>) -> PResult<Expr> {
+        let span = self.span(&p);
+        pratt()
+            .map_primary(|q| self.primary(q))
+            .map_prefix(|op, rhs| {
+                let rhs = rhs?;
+                let s = self.span(&op).join(rhs.span);
+                Ok(match op.as_rule() {
+                    Rule::neg => Expr { kind: ExprKind::Neg(Box::new(rhs)), span: s },
+                    _ => rhs,
+                })
+            })
+            .map_postfix(|lhs, op| {
+                let lhs = lhs?;
+                let s = lhs.span.join(self.span(&op));
+                Ok(match op.as_rule() {
+                    Rule::transpose => Expr { kind: ExprKind::Transpose(Box::new(lhs)), span: s },
+                    _ => {
+                        let args = op.into_inner().map(|a| self.index_arg(a, s)).collect::<PResult<_>>()?;
+                        Expr { kind: ExprKind::Index(Box::new(lhs), args), span: s }
+                    }
+                })
+            })
+            .map_infix(|lhs, op, rhs| {
+                let (lhs, rhs) = (lhs?, rhs?);
+                let bop = match op.as_rule() {
+                    Rule::add => BinOp::Add,
+                    Rule::sub => BinOp::Sub,
+                    Rule::mul => BinOp::Mul,
+                    Rule::emul => BinOp::EMul,
+                    Rule::div => BinOp::Div,
+                    _ => BinOp::Pow,
+                };
+                let s = lhs.span.join(rhs.span);
+                Ok(Expr { kind: ExprKind::Binary(bop, Box::new(lhs), Box::new(rhs)), span: s })
+            })
+            .parse(p.into_inner())
+            .map_err(|d: Diagnostic| if d.span == Span::default() { Diagnostic { span, ..d } } else { d })
+    }
+
+    fn index_arg(&self, p: Pair<Rule>, span: Span) -> PResult<IndexArg> {
+        let a = first(p, span)?;
+        match a.as_rule() {
+            Rule::full_range => Ok(IndexArg::Full),
+            Rule::slice => {
+                let mut parts = a.into_inner();
+                let lo = self.expr(next(&mut parts, span)?)?;
+                let hi = self.expr(next(&mut parts, span)?)?;
+                Ok(IndexArg::Range(lo, hi))
+            }
+            _ => Ok(IndexArg::One(self.expr(a)?)),
+        }
+    }
+
+    fn primary(&self, p: Pair<Rule>) -> PResult<Expr> {
+        let span = self.span(&p);
+        let kind = match p.as_rule() {
+            Rule::number => ExprKind::Number(self.number(&p)?),
+            Rule::ident => ExprKind::Name(p.as_str().to_string()),
+            Rule::paren => return self.expr(first(p, span)?),
+            Rule::call => {
+                let mut parts = p.into_inner();
+                let name = self.ident(next(&mut parts, span)?);
+                let args = parts.map(|a| self.arg(a)).collect::<PResult<_>>()?;
+                ExprKind::Call(name, args)
+            }
+            _ => {
+                let rows = p
+                    .into_inner()
+                    .map(|row| row.into_inner().map(|e| self.expr(e)).collect::<PResult<Vec<_>>>())
+                    .collect::<PResult<Vec<_>>>()?;
+                ExprKind::Matrix(rows)
+            }
+        };
+        Ok(Expr { kind, span })
+    }
+}
+
+fn next<'a>(it: &mut impl Iterator<Item = Pair<'a, Rule>>, span: Span) -> PResult<Pair<'a, Rule>> {
+    it.next().ok_or_else(|| Diagnostic::error(span, "internal parser error: incomplete item"))
+}
+
+fn first(p: Pair<Rule>, span: Span) -> PResult<Pair<Rule>> {
+    p.into_inner().next().ok_or_else(|| Diagnostic::error(span, "internal parser error: empty node"))
+}

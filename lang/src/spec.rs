@@ -1,0 +1,410 @@
+//! The checked specification: names resolved, shapes checked, constants
+//! evaluated. This is what the compiler's model stage consumes.
+
+use crate::ast::Expr;
+use crate::eval::{Env, FnDef, Mat, Mode};
+use crate::span::{Span, Spanned};
+use std::collections::HashMap;
+
+/// A declared signal (state, input or disturbance) and its place in the vector.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Signal {
+    /// The name.
+    pub name: String,
+    /// Number of components (1 for a scalar).
+    pub len: usize,
+    /// Whether it was declared as a vector (`w[3]`) rather than a scalar.
+    pub is_vector: bool,
+    /// Index of its first component in the stacked vector.
+    pub offset: usize,
+    /// Where it was declared.
+    pub span: Span,
+}
+
+/// A performance output `y = C x + E u + G w`, linear by construction.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Output {
+    /// The name.
+    pub name: String,
+    /// p x n.
+    pub c: Mat,
+    /// p x m.
+    pub e: Mat,
+    /// p x q.
+    pub g: Mat,
+    /// Where it was declared.
+    pub span: Span,
+}
+
+/// A model matrix `A`, `B` or `D`, constant or state-dependent.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelMatrix {
+    /// The defining expression.
+    pub expr: Expr,
+    /// `true` for `A(x) = ...`.
+    pub state_dependent: bool,
+    /// The whole definition.
+    pub span: Span,
+}
+
+/// The shape of a scalar fuzzy set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SetShape {
+    /// Triangle with feet `a`, `c` and peak `b`.
+    Tri(f64, f64, f64),
+    /// Trapezoid with feet `a`, `d` and plateau `b..c`.
+    Trap(f64, f64, f64, f64),
+    /// Gaussian `exp(-0.5 ((z - c) / sigma)^2)`: (center, sigma).
+    Gauss(f64, f64),
+    /// Logistic `1 / (1 + exp(-slope (z - center)))`: (slope, center).
+    Sigmoid(f64, f64),
+}
+
+impl SetShape {
+    /// The finite breakpoints of the shape (used by the coverage check).
+    pub fn breakpoints(&self) -> Vec<f64> {
+        match *self {
+            SetShape::Tri(a, b, c) => vec![a, b, c],
+            SetShape::Trap(a, b, c, d) => vec![a, b, c, d],
+            SetShape::Gauss(c, _) => vec![c],
+            SetShape::Sigmoid(_, c) => vec![c],
+        }
+    }
+}
+
+/// A named fuzzy set of a premise.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FuzzySet {
+    /// The set's name.
+    pub name: String,
+    /// Its shape.
+    pub shape: SetShape,
+    /// Where it was defined.
+    pub span: Span,
+}
+
+/// A premise variable z (scalar or vector), a function of the state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Premise {
+    /// The name used in rules.
+    pub name: String,
+    /// The expression of the state it is bound to.
+    pub expr: Expr,
+    /// For `premise a, b = v`: which component of `expr` this premise is.
+    pub component: Option<usize>,
+    /// Number of components (1 for scalar premises).
+    pub dim: usize,
+    /// Operating range per component (lo, hi), if known.
+    pub range: Option<(f64, f64)>,
+    /// Width of `about` sets, if given.
+    pub sigma: Option<f64>,
+    /// Named sets.
+    pub sets: Vec<FuzzySet>,
+    /// Where it was declared.
+    pub span: Span,
+}
+
+/// The set of a rule clause.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClauseSet {
+    /// Index into the premise's `sets`.
+    Named(usize),
+    /// An `about` point (length = premise dim).
+    About(Vec<f64>),
+}
+
+/// One clause `premise is set` of a rule.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RuleClause {
+    /// Index into [`Spec::premises`].
+    pub premise: usize,
+    /// The set.
+    pub set: ClauseSet,
+    /// Where the clause is.
+    pub span: Span,
+}
+
+/// A rule of the T-S model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RuleSpec {
+    /// The rule's name.
+    pub name: String,
+    /// The premise (product t-norm over clauses).
+    pub clauses: Vec<RuleClause>,
+    /// Operating point (full state vector) and the span of `at(...)`.
+    pub at: Option<(Vec<f64>, Span)>,
+    /// Direct matrices given in the rule, by name (`A`, `B`, `D`), with spans.
+    pub overrides: Vec<(String, Mat, Span)>,
+    /// Where the rule is.
+    pub span: Span,
+}
+
+/// Whether a bound is fixed, or optimized.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    /// Minimize (gains) or maximize (decay rate).
+    Optimize,
+    /// `<= v` or `>= v`.
+    Fixed(f64),
+}
+
+/// Initial condition of a norm objective.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InitialSet {
+    /// A single x0.
+    Point(Vec<f64>),
+    /// The ellipsoid {x : x' R x <= 1}.
+    Ellipsoid(Mat),
+}
+
+/// A performance objective.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Objective {
+    /// Closed-loop (quadratic) stability.
+    Stability,
+    /// Decay rate alpha.
+    DecayRate(Target),
+    /// H-inf gain from a disturbance (index into disturbances) to an output.
+    Hinf {
+        /// Disturbance index.
+        from: usize,
+        /// Output index.
+        to: usize,
+        /// Bound or minimize.
+        target: Target,
+    },
+    /// Peak-to-peak gain.
+    Linf {
+        /// Disturbance index.
+        from: usize,
+        /// Output index.
+        to: usize,
+        /// Bound or minimize.
+        target: Target,
+        /// Fixed xi, if given.
+        xi: Option<f64>,
+        /// Fixed phi, if given (else line search).
+        phi: Option<f64>,
+    },
+    /// ||u(t)|| <= bound.
+    InputNorm {
+        /// The bound (or minimize).
+        target: Target,
+        /// x0 set.
+        initial: InitialSet,
+    },
+    /// ||y(t)|| <= bound.
+    OutputNorm {
+        /// Output index.
+        output: usize,
+        /// The bound (or minimize).
+        target: Target,
+        /// x0 set.
+        initial: InitialSet,
+    },
+    /// Actuator saturation with an estimated region of attraction.
+    SaturationRegion,
+}
+
+/// An objective with its span.
+pub type SpannedObjective = Spanned<Objective>;
+
+/// The double-sum relaxation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Relaxation {
+    /// Tanaka & Wang.
+    Basic,
+    /// At most `s` rules fire at once.
+    Tanaka {
+        /// s.
+        s: usize,
+    },
+    /// Tuan et al. 2001.
+    Tuan,
+    /// Controller memberships evaluated at sampling instants.
+    MembershipMismatch {
+        /// Mismatch bound.
+        kappa: f64,
+    },
+}
+
+/// Threshold of an event trigger.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Threshold {
+    /// Initial / static threshold nu.
+    pub nu: f64,
+    /// Adaptive law parameters (mu1, mu2, mu3), if adaptive.
+    pub adaptive: Option<(f64, f64, f64)>,
+}
+
+/// Trigger weight: given, or synthesized.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Weight {
+    /// Synthesized with the gains.
+    Synthesize,
+    /// Given n x n matrix.
+    Given(Mat),
+}
+
+/// A triggering law.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Trigger {
+    /// Control updated at every integration step.
+    Continuous,
+    /// Every h seconds.
+    Periodic {
+        /// The period.
+        every: f64,
+    },
+    /// Aperiodic sampling with a relative event trigger.
+    Aperiodic {
+        /// h_min, h_max.
+        sampling: (f64, f64),
+        /// Threshold, if any (else every sample is sent).
+        threshold: Option<Threshold>,
+        /// Weight U.
+        weight: Weight,
+    },
+    /// ||e|| >= beta ||sigma|| + rho.
+    Mixed {
+        /// h_min, h_max.
+        sampling: (f64, f64),
+        /// beta.
+        beta: f64,
+        /// rho.
+        rho: f64,
+    },
+}
+
+/// Code targets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Emit {
+    /// Rust.
+    Rust,
+    /// C99.
+    C,
+}
+
+/// Floating-point precision of generated code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Precision {
+    /// f64 / double.
+    F64,
+    /// f32 / float.
+    F32,
+}
+
+/// Integrator for the simulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Integrator {
+    /// Fixed-step RK4.
+    Rk4,
+    /// Adaptive Dormand-Prince 5(4).
+    Dopri5,
+}
+
+/// The truth plant of a simulation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dynamics {
+    /// States the controller does not see.
+    pub extra_states: Vec<Signal>,
+    /// Local constants.
+    pub consts: Vec<(String, Mat)>,
+    /// Derivatives by state name (declared states first, then extra states).
+    pub derivatives: Vec<(String, Expr)>,
+    /// Where the block is.
+    pub span: Span,
+}
+
+/// The `simulate` scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Simulation {
+    /// Initial state.
+    pub x0: Vec<f64>,
+    /// Start, end, step.
+    pub time: (f64, f64, f64),
+    /// Disturbance signals: (disturbance index, expression of t).
+    pub signals: Vec<(usize, Expr)>,
+    /// Seed for random sampling patterns.
+    pub seed: u64,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Truth dynamics, if given.
+    pub dynamics: Option<Dynamics>,
+    /// Where the block is.
+    pub span: Span,
+}
+
+/// A checked specification.
+#[derive(Debug, Clone)]
+pub struct Spec {
+    /// The controller name.
+    pub controller: Spanned<String>,
+    /// Evaluated constants.
+    pub consts: HashMap<String, Mat>,
+    /// User functions.
+    pub fns: HashMap<String, FnDef>,
+    /// States in order.
+    pub states: Vec<Signal>,
+    /// Inputs in order.
+    pub inputs: Vec<Signal>,
+    /// Per-channel saturation levels (length m), if given.
+    pub saturation: Option<Vec<f64>>,
+    /// Disturbances in order.
+    pub disturbances: Vec<Signal>,
+    /// Bound on ||w(t)||, if given.
+    pub disturbance_bound: Option<f64>,
+    /// Performance outputs.
+    pub outputs: Vec<Output>,
+    /// `A`.
+    pub a: Option<ModelMatrix>,
+    /// `B`.
+    pub b: Option<ModelMatrix>,
+    /// `D`.
+    pub d: Option<ModelMatrix>,
+    /// Premise variables.
+    pub premises: Vec<Premise>,
+    /// Rules.
+    pub rules: Vec<RuleSpec>,
+    /// Objectives.
+    pub objectives: Vec<SpannedObjective>,
+    /// Relaxation (default basic).
+    pub relaxation: Spanned<Relaxation>,
+    /// Trigger (default continuous).
+    pub trigger: Option<Spanned<Trigger>>,
+    /// Code targets.
+    pub emit: Vec<Emit>,
+    /// Precision.
+    pub precision: Precision,
+    /// Scenario.
+    pub simulate: Option<Simulation>,
+}
+
+impl Spec {
+    /// n: total state dimension.
+    pub fn n(&self) -> usize {
+        self.states.iter().map(|s| s.len).sum()
+    }
+
+    /// m: total input dimension.
+    pub fn m(&self) -> usize {
+        self.inputs.iter().map(|s| s.len).sum()
+    }
+
+    /// q: total disturbance dimension.
+    pub fn q(&self) -> usize {
+        self.disturbances.iter().map(|s| s.len).sum()
+    }
+
+    /// An environment in which the states are bound to the components of `x`
+    /// (and `x` to the whole vector).
+    pub fn state_env(&self, x: &[f64], mode: Mode) -> Env<'_> {
+        let mut locals = Vec::with_capacity(self.states.len() + 1);
+        locals.push(("x".to_string(), Mat::from_column_slice(x.len(), 1, x)));
+        for s in &self.states {
+            let v = x.get(s.offset..s.offset + s.len).unwrap_or(&[]);
+            locals.push((s.name.clone(), Mat::from_column_slice(v.len(), 1, v)));
+        }
+        Env { consts: &self.consts, fns: &self.fns, locals, unavailable: Vec::new(), mode }
+    }
+}
