@@ -293,9 +293,23 @@ pub struct Item {
     pub span: Span,
 }
 
-/// A parsed file: the items that parsed (items with syntax errors are left out).
+/// An item that could not be parsed: what it seems to declare, so that the
+/// checker does not report every later use of those names as unknown.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BrokenItem {
+    /// Its first word (`const`, `state`, `rule`, a matrix name, ...).
+    pub keyword: String,
+    /// The names it seems to declare.
+    pub names: Vec<String>,
+    /// Where it is.
+    pub span: Span,
+}
+
+/// A parsed file: the items that parsed, and what the broken ones seem to declare.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct File {
     /// The items in source order.
     pub items: Vec<Item>,
+    /// Items with syntax errors (reported separately).
+    pub broken: Vec<BrokenItem>,
 }

@@ -7,7 +7,7 @@ use crate::diag::Diagnostic;
 use crate::eval::{suggest, Env, FnDef, Mat, Mode, BUILTINS};
 use crate::span::{Span, Spanned};
 use crate::spec::*;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The language versions this checker reads.
 pub const SUPPORTED_VERSION: f64 = 1.0;
@@ -47,6 +47,10 @@ struct Checker<'a> {
     states: Vec<Signal>,
     inputs: Vec<Signal>,
     disturbances: Vec<Signal>,
+    /// Names whose definitions failed: uses of them are not reported again.
+    poisoned: HashSet<String>,
+    /// First words of items that failed to parse.
+    broken_keywords: HashSet<String>,
 }
 
 /// Checks a parsed file. Returns the spec when there is no error, and all diagnostics.
@@ -60,6 +64,8 @@ pub fn check(file: &File) -> (Option<Spec>, Vec<Diagnostic>) {
         states: Vec::new(),
         inputs: Vec::new(),
         disturbances: Vec::new(),
+        poisoned: file.broken.iter().flat_map(|b| b.names.iter().cloned()).collect(),
+        broken_keywords: file.broken.iter().map(|b| b.keyword.clone()).collect(),
     };
     let spec = c.run();
     let has_error = c.diags.iter().any(Diagnostic::is_error);
@@ -110,6 +116,19 @@ impl<'a> Checker<'a> {
                 unavailable.push((n.clone(), format!("a {} is not a constant; only constants may appear here", k.word())));
             }
         }
+        for it in &self.file.items {
+            let (vars, kind): (&[VarDecl], Kind) = match &it.kind {
+                ItemKind::State(v) => (v, Kind::State),
+                ItemKind::Input(v, _) => (v, Kind::Input),
+                ItemKind::Disturbance(v, _) => (v, Kind::Disturbance),
+                _ => continue,
+            };
+            for v in vars {
+                if !self.names.contains_key(&v.name.node) {
+                    unavailable.push((v.name.node.clone(), format!("a {} is not a constant; only constants may appear here", kind.word())));
+                }
+            }
+        }
         unavailable.push(("x".into(), "the state is not a constant; only constants may appear here".into()));
         unavailable.push(("t".into(), "time `t` is only available in `simulate` signals and dynamics".into()));
         Env { consts: &self.consts, fns: &self.fns, locals: Vec::new(), unavailable, mode: Mode::Exact }
@@ -139,7 +158,33 @@ impl<'a> Checker<'a> {
         env
     }
 
+    /// Whether `e` uses a name whose definition failed (errors already reported).
+    fn poisoned(&self, e: &Expr) -> bool {
+        self.poisoned_depth(e, 0)
+    }
+
+    fn poisoned_depth(&self, e: &Expr, depth: usize) -> bool {
+        let mut hit = false;
+        let mut called = Vec::new();
+        walk_names(e, &mut |n, _, is_call| {
+            hit |= self.poisoned.contains(n);
+            if is_call {
+                called.push(n.to_string());
+            }
+        });
+        // Through user functions too (a function using a failed constant).
+        hit || (depth < 16 && called.iter().any(|f| self.fns.get(f).is_some_and(|d| self.poisoned_depth(&d.body, depth + 1))))
+    }
+
+    /// Whether a missing-declaration error would only repeat a syntax error.
+    fn broken(&self, keyword: &str) -> bool {
+        self.broken_keywords.contains(keyword)
+    }
+
     fn eval_const(&mut self, e: &Expr) -> Option<Mat> {
+        if self.poisoned(e) {
+            return None;
+        }
         let r = self.const_env().eval(e);
         match r {
             Ok(v) if v.iter().all(|x| x.is_finite()) => Some(v),
@@ -205,10 +250,10 @@ impl<'a> Checker<'a> {
                     continue;
                 }
             };
-            if self.declare(&v.name, kind) {
-                out.push(Signal { name: v.name.node.clone(), len, is_vector: v.len.is_some(), offset, span: v.name.span });
-                offset += len;
-            }
+            // A duplicate is reported but kept, so dimensions stay as written.
+            self.declare(&v.name, kind);
+            out.push(Signal { name: v.name.node.clone(), len, is_vector: v.len.is_some(), offset, span: v.name.span });
+            offset += len;
         }
         out
     }
@@ -255,7 +300,7 @@ impl<'a> Checker<'a> {
                 _ => {}
             }
         }
-        if version_seen.is_none() {
+        if version_seen.is_none() && !self.broken("tsf") {
             let at = items.first().map_or(Span::new(0, 0), |i| Span::new(i.span.start, i.span.start));
             self.err(
                 Diagnostic::error(at, "missing language version")
@@ -263,7 +308,7 @@ impl<'a> Checker<'a> {
                     .with_help("add `tsf 1;` as the first line"),
             );
         }
-        if controller.is_none() {
+        if controller.is_none() && !self.broken("controller") {
             self.err(
                 Diagnostic::error(Span::new(0, 0), "missing controller name")
                     .with_help("add `controller my_controller;` (it names the generated module)"),
@@ -285,14 +330,16 @@ impl<'a> Checker<'a> {
         for it in items {
             match &it.kind {
                 ItemKind::Const(name, e) => {
-                    if let Some(v) = self.eval_const(e) {
-                        if self.declare(name, Kind::Const) {
-                            self.consts.insert(name.node.clone(), v);
-                        }
-                    } else {
-                        // Declare anyway so later uses are not reported as unknown.
-                        if self.declare(name, Kind::Const) {
-                            self.consts.insert(name.node.clone(), Mat::from_element(1, 1, f64::NAN));
+                    let v = self.eval_const(e);
+                    if self.declare(name, Kind::Const) {
+                        match v {
+                            Some(v) => {
+                                self.consts.insert(name.node.clone(), v);
+                            }
+                            // Later uses are not reported again.
+                            None => {
+                                self.poisoned.insert(name.node.clone());
+                            }
                         }
                     }
                 }
@@ -321,10 +368,10 @@ impl<'a> Checker<'a> {
             }
         }
         self.check_fn_bodies();
-        if self.states.is_empty() {
+        if self.states.is_empty() && !self.broken("state") {
             self.err(Diagnostic::error(Span::new(0, 0), "no states declared").with_help("declare the state, e.g. `state w[3], q[3];`"));
         }
-        if self.inputs.is_empty() {
+        if self.inputs.is_empty() && !self.broken("input") {
             self.err(Diagnostic::error(Span::new(0, 0), "no inputs declared").with_help("declare the control input, e.g. `input u[3];`"));
         }
         let n: usize = self.states.iter().map(|s| s.len).sum();
@@ -366,8 +413,11 @@ impl<'a> Checker<'a> {
             match &it.kind {
                 ItemKind::Output(name, e) => {
                     if self.declare(name, Kind::Output) {
-                        if let Some(o) = self.output(name, e, n, m, q) {
-                            outputs.push(o);
+                        match self.output(name, e, n, m, q) {
+                            Some(o) => outputs.push(o),
+                            None => {
+                                self.poisoned.insert(name.node.clone());
+                            }
                         }
                     }
                 }
@@ -405,9 +455,15 @@ impl<'a> Checker<'a> {
                     }
                     if param.is_none() {
                         // A constant model matrix can be referred to by later expressions (`D = B;`).
-                        if let Some(v) = self.eval_const(value) {
-                            if self.declare(name, Kind::Const) {
-                                self.consts.insert(name.node.clone(), v);
+                        match self.eval_const(value) {
+                            Some(v) => {
+                                if self.declare(name, Kind::Const) {
+                                    self.consts.insert(name.node.clone(), v);
+                                }
+                            }
+                            None => {
+                                self.poisoned.insert(name.node.clone());
+                                continue;
                             }
                         }
                     }
@@ -472,13 +528,13 @@ impl<'a> Checker<'a> {
             !rule_items.is_empty()
                 && rule_items.iter().all(|r| matches!(&r.kind, ItemKind::Rule { matrices, .. } if matrices.iter().any(|m| m.name.node == mat)))
         };
-        if a.is_none() && !rules_give("A") {
+        if a.is_none() && !rules_give("A") && !self.broken("A") && !self.poisoned.contains("A") {
             self.err(Diagnostic::error(Span::new(0, 0), "no state matrix `A`").with_help("define `A = ...;` or `A(x) = ...;`, or give `A = ...` in every rule"));
         }
-        if b.is_none() && !rules_give("B") {
+        if b.is_none() && !rules_give("B") && !self.broken("B") && !self.poisoned.contains("B") {
             self.err(Diagnostic::error(Span::new(0, 0), "no input matrix `B`").with_help("define `B = ...;` or `B(x) = ...;`, or give `B = ...` in every rule"));
         }
-        if q > 0 && d.is_none() && !rules_give("D") {
+        if q > 0 && d.is_none() && !rules_give("D") && !self.broken("D") && !self.poisoned.contains("D") {
             let span = self.disturbances.first().map_or(Span::new(0, 0), |s| s.span);
             self.err(
                 Diagnostic::error(span, "a disturbance is declared but there is no disturbance matrix `D`")
@@ -563,6 +619,9 @@ impl<'a> Checker<'a> {
                     seen.push(p.node.as_str());
                 }
                 ps.extend(self.consts.keys().map(String::as_str));
+                if self.poisoned(body) {
+                    continue;
+                }
                 walk_names(body, &mut |name, span, is_call| {
                     let ok = if is_call {
                         BUILTINS.contains(&name) || self.fns.contains_key(name)
@@ -585,6 +644,9 @@ impl<'a> Checker<'a> {
     }
 
     fn check_model_matrix(&mut self, name: &str, mm: &ModelMatrix, rows: usize, cols: usize, what: &str) {
+        if self.poisoned(&mm.expr) {
+            return;
+        }
         let env = if mm.state_dependent { self.state_env(Mode::Shapes, &[], &[]) } else { self.state_env(Mode::Exact, &[], &[]) };
         let r = env.eval(&mm.expr);
         match r {
@@ -625,6 +687,9 @@ impl<'a> Checker<'a> {
             }
             env.eval(e)
         };
+        if self.poisoned(e) {
+            return None;
+        }
         let zero = vec![0.0; total];
         let y0 = match eval_at(self, &zero) {
             Ok(v) => v,
@@ -698,7 +763,11 @@ impl<'a> Checker<'a> {
                     Expr { kind: ExprKind::Name(first.node.clone()), span: first.span }
                 }
             };
-            let v = match self.state_env(Mode::Shapes, &[], &[]).eval(&bound) {
+            if self.poisoned(&bound) {
+                continue;
+            }
+            let r = self.state_env(Mode::Shapes, &[], &[]).eval(&bound);
+            let v = match r {
                 Ok(v) => v,
                 Err(d) => {
                     self.err(d);
@@ -736,8 +805,13 @@ impl<'a> Checker<'a> {
                     self.err(d);
                     continue;
                 }
-                if let Some(shape) = self.set_shape(s) {
-                    checked_sets.push(FuzzySet { name: s.name.node.clone(), shape, span: s.span });
+                match self.set_shape(s) {
+                    Some(shape) => checked_sets.push(FuzzySet { name: s.name.node.clone(), shape, span: s.span }),
+                    None => {
+                        for n in names {
+                            self.poisoned.insert(format!("{}.{}", n.node, s.name.node));
+                        }
+                    }
                 }
             }
             let dim = if names.len() > 1 { 1 } else { len };
@@ -858,6 +932,10 @@ impl<'a> Checker<'a> {
             let mut rc = Vec::new();
             for c in clauses {
                 let Some(pi) = premises.iter().position(|p| p.name == c.premise.node) else {
+                    ok = false;
+                    if self.poisoned.contains(&c.premise.node) {
+                        continue;
+                    }
                     let mut d = Diagnostic::error(c.premise.span, format!("unknown premise `{}`", c.premise.node)).with_label("not declared as a premise");
                     if let Some(s) = suggest(&c.premise.node, premises.iter().map(|p| p.name.as_str())) {
                         d = d.with_help(format!("did you mean `{s}`?"));
@@ -877,6 +955,10 @@ impl<'a> Checker<'a> {
                 let set = match &c.set {
                     SetRef::Named(s) => match p.sets.iter().position(|x| x.name == s.node) {
                         Some(i) => ClauseSet::Named(i),
+                        None if self.poisoned.contains(&format!("{}.{}", p.name, s.node)) => {
+                            ok = false;
+                            continue;
+                        }
                         None => {
                             let mut d = Diagnostic::error(s.span, format!("premise `{}` has no set `{}`", p.name, s.node))
                                 .with_label("unknown fuzzy set")
@@ -1012,7 +1094,7 @@ impl<'a> Checker<'a> {
         if out.is_empty() && !items.is_empty() {
             return out;
         }
-        if items.is_empty() {
+        if items.is_empty() && !self.broken("rule") {
             self.err(Diagnostic::error(Span::new(0, 0), "no rules").with_help("add at least one rule, e.g. `rule R1: z is near => at(theta = 0);`"));
         }
         out
@@ -1042,7 +1124,7 @@ impl<'a> Checker<'a> {
         };
         let disturbance = |this: &mut Self, s: &Ident| -> Option<usize> {
             let found = this.disturbances.iter().position(|d| d.name == s.node);
-            if found.is_none() {
+            if found.is_none() && !this.poisoned.contains(&s.node) {
                 let mut d = Diagnostic::error(s.span, format!("`{}` is not a disturbance", s.node)).with_label("expected a declared disturbance");
                 if let Some(c) = suggest(&s.node, this.disturbances.iter().map(|d| d.name.as_str())) {
                     d = d.with_help(format!("did you mean `{c}`?"));
@@ -1053,7 +1135,7 @@ impl<'a> Checker<'a> {
         };
         let output = |this: &mut Self, s: &Ident| -> Option<usize> {
             let found = outputs.iter().position(|o| o.name == s.node);
-            if found.is_none() {
+            if found.is_none() && !this.poisoned.contains(&s.node) {
                 let mut d = Diagnostic::error(s.span, format!("`{}` is not an output", s.node)).with_label("expected a declared output");
                 if let Some(c) = suggest(&s.node, outputs.iter().map(|o| o.name.as_str())) {
                     d = d.with_help(format!("did you mean `{c}`?"));
@@ -1315,7 +1397,7 @@ impl<'a> Checker<'a> {
         }
         let require = |this: &mut Self, key: &str| -> Option<&Setting> {
             let s = get.get(key).copied();
-            if s.is_none() {
+            if s.is_none() && ok {
                 this.err(Diagnostic::error(kind.span, format!("trigger `{}` needs `{key} = ...;`", kind.node)));
             }
             s
@@ -1496,13 +1578,13 @@ impl<'a> Checker<'a> {
             }
         }
         let Some(x0) = x0 else {
-            if ok {
+            if ok && !seen.iter().any(|k| k == "x0") {
                 self.err(Diagnostic::error(span, "`simulate` needs an initial state").with_help("add `x0 = [...];`"));
             }
             return None;
         };
         let Some(time) = time else {
-            if ok {
+            if ok && !seen.iter().any(|k| k == "time") {
                 self.err(Diagnostic::error(span, "`simulate` needs a time span").with_help("add `time = 0 .. 10 step 0.01;`"));
             }
             return None;

@@ -24,6 +24,8 @@ pub fn check_source(source: &str) -> (Option<Spec>, Vec<Diagnostic>) {
     let (spec, more) = check::check(&file);
     diags.extend(more);
     diags.sort_by_key(|d| (d.span.start, d.span.end));
+    // The same mistake reached twice (e.g. through two uses) is reported once.
+    diags.dedup_by(|a, b| a.span == b.span && a.message == b.message);
     let has_error = diags.iter().any(Diagnostic::is_error);
     (if has_error { None } else { spec }, diags)
 }

@@ -37,20 +37,76 @@ pub fn parse_file(source: &str) -> (File, Vec<Diagnostic>) {
     let mut file = File::default();
     for chunk in chunks {
         let text = &source[chunk.span.start..chunk.span.end];
+        if chunk.broken {
+            file.broken.push(broken_item(text, chunk.span));
+            continue;
+        }
         match TsfParser::parse(Rule::item, text) {
             Ok(mut pairs) => {
                 let cx = Cx { offset: chunk.span.start };
                 if let Some(item) = pairs.next() {
                     match cx.item(item) {
                         Ok(it) => file.items.push(it),
-                        Err(d) => diags.push(d),
+                        Err(d) => {
+                            diags.push(d);
+                            file.broken.push(broken_item(text, chunk.span));
+                        }
                     }
                 }
             }
-            Err(e) => diags.push(syntax_error(&e, chunk.span.start, text)),
+            Err(e) => {
+                diags.push(syntax_error(&e, chunk.span.start, text));
+                file.broken.push(broken_item(text, chunk.span));
+            }
         }
     }
     (file, diags)
+}
+
+/// What a broken item seems to declare: its first word and the names after it.
+fn broken_item(text: &str, span: Span) -> BrokenItem {
+    let mut words = Vec::new();
+    let mut cur = String::new();
+    let mut in_comment = false;
+    let mut prev = ' ';
+    for ch in text.chars() {
+        if in_comment {
+            in_comment = ch != '\n';
+            continue;
+        }
+        if ch == '/' && prev == '/' {
+            cur.clear();
+            in_comment = true;
+            prev = ' ';
+            continue;
+        }
+        prev = ch;
+        if ch.is_ascii_alphanumeric() || ch == '_' {
+            cur.push(ch);
+        } else {
+            if !cur.is_empty() {
+                words.push(std::mem::take(&mut cur));
+            }
+            if matches!(ch, '=' | '{' | ';' | ':') {
+                break;
+            }
+        }
+    }
+    if !cur.is_empty() {
+        words.push(cur);
+    }
+    let keyword = words.first().cloned().unwrap_or_default();
+    let names = match keyword.as_str() {
+        "const" | "fn" | "output" | "rule" | "controller" => words.get(1).cloned().into_iter().collect(),
+        "state" | "input" | "disturbance" | "premise" => words
+            .iter()
+            .skip(1)
+            .filter(|w| w.chars().next().is_some_and(|c| !c.is_ascii_digit()) && !matches!(w.as_str(), "saturate" | "bound" | "range" | "sigma"))
+            .cloned()
+            .collect(),
+        other => vec![other.to_string()],
+    };
+    BrokenItem { keyword, names, span }
 }
 
 /// A readable name for a grammar rule in "expected ..." messages.

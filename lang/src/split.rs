@@ -13,6 +13,8 @@ use crate::span::Span;
 pub struct Chunk {
     /// Where the item is.
     pub span: Span,
+    /// Whether a bracket error was found in it (it is not parsed then).
+    pub broken: bool,
 }
 
 fn closer(open: u8) -> u8 {
@@ -70,7 +72,7 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
                 Some(&(open, _)) if closer(open) == b => {
                     stack.pop();
                     if b == b'}' && stack.is_empty() {
-                        chunks.push(Chunk { span: Span::new(item_start, i + 1) });
+                        chunks.push(Chunk { span: Span::new(item_start, i + 1), broken: false });
                         start = None;
                     }
                 }
@@ -86,6 +88,7 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
                     // Recover: drop the rest of this item.
                     stack.clear();
                     i = skip_to_item_end(bytes, i + 1);
+                    chunks.push(Chunk { span: Span::new(item_start, i), broken: true });
                     start = None;
                     continue;
                 }
@@ -98,12 +101,13 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
                         .with_label("nothing opened this bracket"),
                     );
                     i = skip_to_item_end(bytes, i + 1);
+                    chunks.push(Chunk { span: Span::new(item_start, i), broken: true });
                     start = None;
                     continue;
                 }
             },
             b';' if stack.is_empty() => {
-                chunks.push(Chunk { span: Span::new(item_start, i + 1) });
+                chunks.push(Chunk { span: Span::new(item_start, i + 1), broken: false });
                 start = None;
             }
             _ => {}
@@ -111,6 +115,9 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
         i += 1;
     }
     if let Some(&(open, at)) = stack.first() {
+        if let Some(s) = start {
+            chunks.push(Chunk { span: Span::new(s, bytes.len()), broken: true });
+        }
         let what = if open == b'{' { "block" } else { "bracket" };
         diags.push(
             Diagnostic::error(Span::new(at, at + 1), format!("unterminated {what}"))
@@ -120,7 +127,7 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
     } else if let Some(s) = start {
         // Trailing text without a terminating `;`: parse it anyway so the
         // parser can say what is missing.
-        chunks.push(Chunk { span: Span::new(s, bytes.len()) });
+        chunks.push(Chunk { span: Span::new(s, bytes.len()), broken: false });
     }
     chunks
 }
@@ -143,7 +150,7 @@ mod tests {
     fn texts(src: &str) -> (Vec<&str>, usize) {
         let mut d = Vec::new();
         let c = split_items(src, &mut d);
-        (c.iter().map(|c| &src[c.span.start..c.span.end]).collect(), d.len())
+        (c.iter().filter(|c| !c.broken).map(|c| &src[c.span.start..c.span.end]).collect(), d.len())
     }
 
     #[test]

@@ -1,0 +1,75 @@
+//! The `tsfc` binary: exit codes, output formats, help and version.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn tsfc() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tsfc"))
+}
+
+fn fixture(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(rel)
+}
+
+#[test]
+fn check_exit_codes() {
+    let ok = tsfc().arg("check").arg(fixture("specs/inverted_pendulum.tsf")).output().expect("runs");
+    assert_eq!(ok.status.code(), Some(0), "{}", String::from_utf8_lossy(&ok.stderr));
+    let bad = tsfc().arg("check").arg(fixture("tests/bad/unknown_name.tsf")).output().expect("runs");
+    assert_eq!(bad.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(stderr.contains("unknown_name.tsf:"), "{stderr}");
+    assert!(stderr.contains("unknown name `gg`"), "{stderr}");
+    let missing = tsfc().arg("check").arg(fixture("specs/does_not_exist.tsf")).output().expect("runs");
+    assert_eq!(missing.status.code(), Some(2));
+    let usage = tsfc().arg("check").output().expect("runs");
+    assert_eq!(usage.status.code(), Some(2));
+    let unknown = tsfc().arg("frobnicate").output().expect("runs");
+    assert_eq!(unknown.status.code(), Some(2));
+}
+
+#[test]
+fn worst_exit_code_wins_over_several_files() {
+    let out = tsfc()
+        .arg("check")
+        .arg(fixture("specs/inverted_pendulum.tsf"))
+        .arg(fixture("tests/bad/wrong_version.tsf"))
+        .arg(fixture("nope.tsf"))
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn json_format_is_machine_readable() {
+    let out = tsfc().args(["check", "--format", "json"]).arg(fixture("tests/bad/wrong_shape_A.tsf")).output().expect("runs");
+    assert_eq!(out.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("valid JSON");
+    let d = &v["files"][0]["diagnostics"][0];
+    assert_eq!(v["files"][0]["ok"], false);
+    assert_eq!(d["severity"], "error");
+    assert!(d["line"].as_u64().expect("line") >= 1);
+    assert!(d["message"].as_str().expect("message").contains("`A` must be n x n"));
+}
+
+#[test]
+fn help_and_version() {
+    let v = tsfc().arg("--version").output().expect("runs");
+    assert_eq!(v.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&v.stdout).contains(env!("CARGO_PKG_VERSION")));
+    let h = tsfc().arg("--help").output().expect("runs");
+    assert_eq!(h.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&h.stdout).contains("check"));
+}
+
+#[test]
+fn binary_garbage_is_a_spec_error_not_a_crash() {
+    let dir = std::env::temp_dir().join(format!("tsfc-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp dir");
+    let f = dir.join("garbage.tsf");
+    std::fs::write(&f, [0xff, 0xfe, 0x00, b'{', 0x80, b';']).expect("write");
+    let out = tsfc().arg("check").arg(&f).output().expect("runs");
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not valid UTF-8"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
