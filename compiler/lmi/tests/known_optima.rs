@@ -21,7 +21,10 @@ fn min_trace_over_density_matrices_is_lambda_min() -> TestResult {
     let sol = solve_ok(&pr, "lambda_min 5x5")?;
     let expected = c.symmetric_eigenvalues().min();
     let err = (sol.objective - expected).abs();
-    println!("lambda_min: got {}, expected {expected}, error {err:.2e}", sol.objective);
+    println!(
+        "lambda_min: got {}, expected {expected}, error {err:.2e}",
+        sol.objective
+    );
     assert!(err < 1e-7, "error {err:e}");
     // The optimal X is the projector on the bottom eigenvector.
     let xv = sol.value(x)?;
@@ -41,7 +44,9 @@ fn max_eigenvalue_via_epigraph() -> TestResult {
         let lmi = Expr::scaled(t, &DMatrix::identity(6, 6))?.sub(Expr::constant(&a)?)?;
         pr.psd("tI - A", lmi, 0.0)?;
         let (got, label) = if maximize {
-            let obj = Expr::var(t).scale(-1.0)?.add_constant(&DMatrix::from_element(1, 1, 3.0))?;
+            let obj = Expr::var(t)
+                .scale(-1.0)?
+                .add_constant(&DMatrix::from_element(1, 1, 3.0))?;
             pr.maximize(obj)?;
             let sol = solve_ok(&pr, "lambda_max 6x6 (maximize)")?;
             (3.0 - sol.objective, "maximize")
@@ -88,12 +93,20 @@ fn full_and_diagonal_variables_with_transposed_terms() -> TestResult {
     let mv = k.transpose() * &w;
     let l1: f64 = mv.iter().map(|v| v.abs()).sum();
     let err = rel_err(sol.objective, l1 * l1);
-    println!("full+diag: got {}, expected {}, rel error {err:.2e}", sol.objective, l1 * l1);
+    println!(
+        "full+diag: got {}, expected {}, rel error {err:.2e}",
+        sol.objective,
+        l1 * l1
+    );
     assert!(err < 1e-7, "objective error {err:e}");
     let dv = sol.value(d)?;
     for i in 0..3 {
         let expected = mv[i].abs() * l1;
-        assert!((dv[(i, i)] - expected).abs() < 1e-5, "d[{i}] = {}", dv[(i, i)]);
+        assert!(
+            (dv[(i, i)] - expected).abs() < 1e-5,
+            "d[{i}] = {}",
+            dv[(i, i)]
+        );
     }
     assert!((sol.value(m)? - &k).abs().max() < 1e-7);
     Ok(())

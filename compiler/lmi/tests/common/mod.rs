@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use nalgebra::DMatrix;
-use tsf_lmi::{Problem, SolveSettings, SolveStatus, Solution};
+use tsf_lmi::{Problem, Solution, SolveSettings, SolveStatus};
 
 /// Deterministic pseudo-random matrix with entries in [-1, 1) (xorshift64).
 pub fn pseudo_random(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
