@@ -25,9 +25,15 @@ pub struct IoFailure {
 
 /// Reads a spec file.
 pub fn read_source(path: &Path) -> Result<Source, IoFailure> {
-    let bytes = std::fs::read(path).map_err(|e| IoFailure { message: format!("cannot read `{}`: {e}", path.display()) })?;
+    let bytes = std::fs::read(path).map_err(|e| IoFailure {
+        message: format!("cannot read `{}`: {e}", path.display()),
+    })?;
     let text = String::from_utf8_lossy(&bytes).into_owned();
-    Ok(Source { name: path.display().to_string(), text, bytes })
+    Ok(Source {
+        name: path.display().to_string(),
+        text,
+        bytes,
+    })
 }
 
 /// The outcome of checking one source.
@@ -67,10 +73,20 @@ pub fn check(source: &Source) -> Checked {
     let parse_time = t0.elapsed();
     let t1 = Instant::now();
     let model = match spec {
-        Some(spec) if diagnostics.iter().all(|d| !d.is_error()) => model::build(spec, &mut diagnostics),
+        Some(spec) if diagnostics.iter().all(|d| !d.is_error()) => {
+            model::build(spec, &mut diagnostics)
+        }
         _ => None,
     };
     let model_time = t1.elapsed();
-    let diagnostics = diagnostics.into_iter().map(|d| d.clamped(&source.text)).collect();
-    Checked { model, diagnostics, parse_time, model_time }
+    let diagnostics = diagnostics
+        .into_iter()
+        .map(|d| d.clamped(&source.text))
+        .collect();
+    Checked {
+        model,
+        diagnostics,
+        parse_time,
+        model_time,
+    }
 }

@@ -14,7 +14,11 @@ mod exit {
 }
 
 #[derive(Parser)]
-#[command(name = "tsfc", version, about = "Compiler for Takagi-Sugeno fuzzy controllers: .tsf spec -> certified PDC gains -> Rust/C")]
+#[command(
+    name = "tsfc",
+    version,
+    about = "Compiler for Takagi-Sugeno fuzzy controllers: .tsf spec -> certified PDC gains -> Rust/C"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -67,7 +71,10 @@ fn check(specs: &[PathBuf], format: Format) -> ExitCode {
         }
         match format {
             Format::Human => {
-                eprint!("{}", diag::render(&source.name, &source.text, &checked.diagnostics, color));
+                eprint!(
+                    "{}",
+                    diag::render(&source.name, &source.text, &checked.diagnostics, color)
+                );
                 if let Some(m) = &checked.model {
                     eprintln!(
                         "ok: {} — controller `{}`: n = {}, m = {}, {} rules, {} premise components; coverage checked at {} points{}",
@@ -83,7 +90,11 @@ fn check(specs: &[PathBuf], format: Format) -> ExitCode {
                 }
             }
             Format::Json => {
-                let diags: Vec<_> = checked.diagnostics.iter().map(|d| diag::to_json(&source.name, &source.text, d)).collect();
+                let diags: Vec<_> = checked
+                    .diagnostics
+                    .iter()
+                    .map(|d| diag::to_json(&source.name, &source.text, d))
+                    .collect();
                 json_files.push(serde_json::json!({
                     "file": source.name,
                     "ok": !checked.has_errors(),
@@ -95,7 +106,13 @@ fn check(specs: &[PathBuf], format: Format) -> ExitCode {
     if matches!(format, Format::Json) {
         let doc = serde_json::json!({ "files": json_files });
         let mut out = std::io::stdout().lock();
-        if writeln!(out, "{}", serde_json::to_string_pretty(&doc).unwrap_or_default()).is_err() {
+        if writeln!(
+            out,
+            "{}",
+            serde_json::to_string_pretty(&doc).unwrap_or_default()
+        )
+        .is_err()
+        {
             return ExitCode::from(exit::IO);
         }
     }

@@ -8,19 +8,38 @@ fn tsfc() -> Command {
 }
 
 fn fixture(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(rel)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel)
 }
 
 #[test]
 fn check_exit_codes() {
-    let ok = tsfc().arg("check").arg(fixture("specs/inverted_pendulum.tsf")).output().expect("runs");
-    assert_eq!(ok.status.code(), Some(0), "{}", String::from_utf8_lossy(&ok.stderr));
-    let bad = tsfc().arg("check").arg(fixture("tests/bad/unknown_name.tsf")).output().expect("runs");
+    let ok = tsfc()
+        .arg("check")
+        .arg(fixture("specs/inverted_pendulum.tsf"))
+        .output()
+        .expect("runs");
+    assert_eq!(
+        ok.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let bad = tsfc()
+        .arg("check")
+        .arg(fixture("tests/bad/unknown_name.tsf"))
+        .output()
+        .expect("runs");
     assert_eq!(bad.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&bad.stderr);
     assert!(stderr.contains("unknown_name.tsf:"), "{stderr}");
     assert!(stderr.contains("unknown name `gg`"), "{stderr}");
-    let missing = tsfc().arg("check").arg(fixture("specs/does_not_exist.tsf")).output().expect("runs");
+    let missing = tsfc()
+        .arg("check")
+        .arg(fixture("specs/does_not_exist.tsf"))
+        .output()
+        .expect("runs");
     assert_eq!(missing.status.code(), Some(2));
     let usage = tsfc().arg("check").output().expect("runs");
     assert_eq!(usage.status.code(), Some(2));
@@ -42,14 +61,21 @@ fn worst_exit_code_wins_over_several_files() {
 
 #[test]
 fn json_format_is_machine_readable() {
-    let out = tsfc().args(["check", "--format", "json"]).arg(fixture("tests/bad/wrong_shape_A.tsf")).output().expect("runs");
+    let out = tsfc()
+        .args(["check", "--format", "json"])
+        .arg(fixture("tests/bad/wrong_shape_A.tsf"))
+        .output()
+        .expect("runs");
     assert_eq!(out.status.code(), Some(1));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("valid JSON");
     let d = &v["files"][0]["diagnostics"][0];
     assert_eq!(v["files"][0]["ok"], false);
     assert_eq!(d["severity"], "error");
     assert!(d["line"].as_u64().expect("line") >= 1);
-    assert!(d["message"].as_str().expect("message").contains("`A` must be n x n"));
+    assert!(d["message"]
+        .as_str()
+        .expect("message")
+        .contains("`A` must be n x n"));
 }
 
 #[test]

@@ -64,7 +64,11 @@ pub fn check(file: &File) -> (Option<Spec>, Vec<Diagnostic>) {
         states: Vec::new(),
         inputs: Vec::new(),
         disturbances: Vec::new(),
-        poisoned: file.broken.iter().flat_map(|b| b.names.iter().cloned()).collect(),
+        poisoned: file
+            .broken
+            .iter()
+            .flat_map(|b| b.names.iter().cloned())
+            .collect(),
         broken_keywords: file.broken.iter().map(|b| b.keyword.clone()).collect(),
     };
     let spec = c.run();
@@ -83,7 +87,11 @@ impl<'a> Checker<'a> {
 
     fn declare(&mut self, name: &Ident, kind: Kind) -> bool {
         if matches!(name.node.as_str(), "x" | "t") {
-            let what = if name.node == "x" { "the whole state vector" } else { "time in `simulate`" };
+            let what = if name.node == "x" {
+                "the whole state vector"
+            } else {
+                "time in `simulate`"
+            };
             self.err(
                 Diagnostic::error(name.span, format!("`{}` is a reserved name", name.node))
                     .with_label(format!("`{}` means {what}", name.node))
@@ -93,8 +101,11 @@ impl<'a> Checker<'a> {
         }
         if BUILTINS.contains(&name.node.as_str()) {
             self.err(
-                Diagnostic::error(name.span, format!("`{}` is the name of a built-in function", name.node))
-                    .with_help("choose another name"),
+                Diagnostic::error(
+                    name.span,
+                    format!("`{}` is the name of a built-in function", name.node),
+                )
+                .with_help("choose another name"),
             );
             return false;
         }
@@ -112,8 +123,17 @@ impl<'a> Checker<'a> {
     fn const_env(&self) -> Env<'_> {
         let mut unavailable = Vec::new();
         for (n, (k, _)) in &self.names {
-            if matches!(k, Kind::State | Kind::Input | Kind::Disturbance | Kind::Output | Kind::Premise) {
-                unavailable.push((n.clone(), format!("a {} is not a constant; only constants may appear here", k.word())));
+            if matches!(
+                k,
+                Kind::State | Kind::Input | Kind::Disturbance | Kind::Output | Kind::Premise
+            ) {
+                unavailable.push((
+                    n.clone(),
+                    format!(
+                        "a {} is not a constant; only constants may appear here",
+                        k.word()
+                    ),
+                ));
             }
         }
         for it in &self.file.items {
@@ -125,13 +145,31 @@ impl<'a> Checker<'a> {
             };
             for v in vars {
                 if !self.names.contains_key(&v.name.node) {
-                    unavailable.push((v.name.node.clone(), format!("a {} is not a constant; only constants may appear here", kind.word())));
+                    unavailable.push((
+                        v.name.node.clone(),
+                        format!(
+                            "a {} is not a constant; only constants may appear here",
+                            kind.word()
+                        ),
+                    ));
                 }
             }
         }
-        unavailable.push(("x".into(), "the state is not a constant; only constants may appear here".into()));
-        unavailable.push(("t".into(), "time `t` is only available in `simulate` signals and dynamics".into()));
-        Env { consts: &self.consts, fns: &self.fns, locals: Vec::new(), unavailable, mode: Mode::Exact }
+        unavailable.push((
+            "x".into(),
+            "the state is not a constant; only constants may appear here".into(),
+        ));
+        unavailable.push((
+            "t".into(),
+            "time `t` is only available in `simulate` signals and dynamics".into(),
+        ));
+        Env {
+            consts: &self.consts,
+            fns: &self.fns,
+            locals: Vec::new(),
+            unavailable,
+            mode: Mode::Exact,
+        }
     }
 
     /// An environment with the states (zeros) bound, for expressions of x.
@@ -141,12 +179,17 @@ impl<'a> Checker<'a> {
         env.mode = mode;
         env.unavailable.retain(|(name, _)| {
             let k = self.names.get(name).map(|p| p.0);
-            !(name == "x" || k == Some(Kind::State) || k.is_some_and(|k| allowed_signals.contains(&k)))
+            !(name == "x"
+                || k == Some(Kind::State)
+                || k.is_some_and(|k| allowed_signals.contains(&k)))
         });
         for (name, (k, _)) in &self.names {
             if matches!(k, Kind::Input | Kind::Disturbance) && !allowed_signals.contains(k) {
                 if let Some(u) = env.unavailable.iter_mut().find(|(n, _)| n == name) {
-                    u.1 = format!("a {} cannot appear here: only states and constants can", k.word());
+                    u.1 = format!(
+                        "a {} cannot appear here: only states and constants can",
+                        k.word()
+                    );
                 }
             }
         }
@@ -173,7 +216,12 @@ impl<'a> Checker<'a> {
             }
         });
         // Through user functions too (a function using a failed constant).
-        hit || (depth < 16 && called.iter().any(|f| self.fns.get(f).is_some_and(|d| self.poisoned_depth(&d.body, depth + 1))))
+        hit || (depth < 16
+            && called.iter().any(|f| {
+                self.fns
+                    .get(f)
+                    .is_some_and(|d| self.poisoned_depth(&d.body, depth + 1))
+            }))
     }
 
     /// Whether a missing-declaration error would only repeat a syntax error.
@@ -189,7 +237,10 @@ impl<'a> Checker<'a> {
         match r {
             Ok(v) if v.iter().all(|x| x.is_finite()) => Some(v),
             Ok(_) => {
-                self.err(Diagnostic::error(e.span, "value is not finite").with_label("evaluates to NaN or infinity"));
+                self.err(
+                    Diagnostic::error(e.span, "value is not finite")
+                        .with_label("evaluates to NaN or infinity"),
+                );
                 None
             }
             Err(d) => {
@@ -205,8 +256,11 @@ impl<'a> Checker<'a> {
             Some(v[(0, 0)])
         } else {
             self.err(
-                Diagnostic::error(e.span, format!("{what} must be a scalar"))
-                    .with_label(format!("this is {}x{}", v.nrows(), v.ncols())),
+                Diagnostic::error(e.span, format!("{what} must be a scalar")).with_label(format!(
+                    "this is {}x{}",
+                    v.nrows(),
+                    v.ncols()
+                )),
             );
             None
         }
@@ -217,7 +271,10 @@ impl<'a> Checker<'a> {
         if v > 0.0 {
             Some(v)
         } else {
-            self.err(Diagnostic::error(num_span(e), format!("{what} must be positive")).with_label(format!("this is {v}")));
+            self.err(
+                Diagnostic::error(num_span(e), format!("{what} must be positive"))
+                    .with_label(format!("this is {v}")),
+            );
             None
         }
     }
@@ -228,8 +285,14 @@ impl<'a> Checker<'a> {
             Some(v.iter().copied().collect())
         } else {
             self.err(
-                Diagnostic::error(e.span, format!("{what} must have {len} component{}", if len == 1 { "" } else { "s" }))
-                    .with_label(format!("this is {}x{}", v.nrows(), v.ncols())),
+                Diagnostic::error(
+                    e.span,
+                    format!(
+                        "{what} must have {len} component{}",
+                        if len == 1 { "" } else { "s" }
+                    ),
+                )
+                .with_label(format!("this is {}x{}", v.nrows(), v.ncols())),
             );
             None
         }
@@ -241,24 +304,40 @@ impl<'a> Checker<'a> {
         for v in vars {
             let len = match &v.len {
                 None => 1,
-                Some(n) if n.node.fract() == 0.0 && n.node >= 1.0 && n.node <= 1000.0 => n.node as usize,
+                Some(n) if n.node.fract() == 0.0 && n.node >= 1.0 && n.node <= 1000.0 => {
+                    n.node as usize
+                }
                 Some(n) => {
                     self.err(
-                        Diagnostic::error(n.span, format!("invalid size `{}` for {} `{}`", n.node, kind.word(), v.name.node))
-                            .with_label("a size is a whole number from 1 to 1000"),
+                        Diagnostic::error(
+                            n.span,
+                            format!(
+                                "invalid size `{}` for {} `{}`",
+                                n.node,
+                                kind.word(),
+                                v.name.node
+                            ),
+                        )
+                        .with_label("a size is a whole number from 1 to 1000"),
                     );
                     continue;
                 }
             };
             // A duplicate is reported but kept, so dimensions stay as written.
             self.declare(&v.name, kind);
-            out.push(Signal { name: v.name.node.clone(), len, is_vector: v.len.is_some(), offset, span: v.name.span });
+            out.push(Signal {
+                name: v.name.node.clone(),
+                len,
+                is_vector: v.len.is_some(),
+                offset,
+                span: v.name.span,
+            });
             offset += len;
         }
         out
     }
 
-    fn singleton<'b>(&mut self, found: &mut Option<Span>, span: Span, what: &str) -> bool {
+    fn singleton(&mut self, found: &mut Option<Span>, span: Span, what: &str) -> bool {
         if let Some(first) = *found {
             self.err(
                 Diagnostic::error(span, format!("{what} is given twice"))
@@ -279,20 +358,27 @@ impl<'a> Checker<'a> {
         let mut controller: Option<Spanned<String>> = None;
         for it in items {
             match &it.kind {
-                ItemKind::Version(v) => {
-                    if self.singleton(&mut version_seen, it.span, "the language version") && v.node != SUPPORTED_VERSION {
-                        self.err(
-                            Diagnostic::error(v.span, format!("unsupported language version {}", v.node))
-                                .with_label("this tsfc reads version 1")
-                                .with_help("write `tsf 1;`"),
-                        );
-                    }
+                ItemKind::Version(v)
+                    if self.singleton(&mut version_seen, it.span, "the language version")
+                        && v.node != SUPPORTED_VERSION =>
+                {
+                    self.err(
+                        Diagnostic::error(
+                            v.span,
+                            format!("unsupported language version {}", v.node),
+                        )
+                        .with_label("this tsfc reads version 1")
+                        .with_help("write `tsf 1;`"),
+                    );
                 }
                 ItemKind::Controller(n) => {
                     let mut seen = controller.as_ref().map(|c| c.span);
                     if self.singleton(&mut seen, it.span, "the controller name") {
                         if !is_c_identifier(&n.node) {
-                            self.err(Diagnostic::error(n.span, "controller name is not a valid Rust and C identifier"));
+                            self.err(Diagnostic::error(
+                                n.span,
+                                "controller name is not a valid Rust and C identifier",
+                            ));
                         }
                         controller = Some(n.clone());
                     }
@@ -301,7 +387,9 @@ impl<'a> Checker<'a> {
             }
         }
         if version_seen.is_none() && !self.broken("tsf") {
-            let at = items.first().map_or(Span::new(0, 0), |i| Span::new(i.span.start, i.span.start));
+            let at = items
+                .first()
+                .map_or(Span::new(0, 0), |i| Span::new(i.span.start, i.span.start));
             self.err(
                 Diagnostic::error(at, "missing language version")
                     .with_label("the file should start with the version")
@@ -320,7 +408,10 @@ impl<'a> Checker<'a> {
                 if self.declare(name, Kind::Fn) {
                     self.fns.insert(
                         name.node.clone(),
-                        FnDef { params: params.iter().map(|p| p.node.clone()).collect(), body: body.clone() },
+                        FnDef {
+                            params: params.iter().map(|p| p.node.clone()).collect(),
+                            body: body.clone(),
+                        },
                     );
                 }
             }
@@ -352,7 +443,10 @@ impl<'a> Checker<'a> {
                     let off = self.inputs.iter().map(|s| s.len).sum();
                     let s = self.signals(vars, Kind::Input, off);
                     if let Some(e) = sat {
-                        sat_expr = Some((s.iter().map(|x| (x.offset, x.len)).collect::<Vec<_>>(), e.clone()));
+                        sat_expr = Some((
+                            s.iter().map(|x| (x.offset, x.len)).collect::<Vec<_>>(),
+                            e.clone(),
+                        ));
                     }
                     self.inputs.extend(s);
                 }
@@ -369,10 +463,16 @@ impl<'a> Checker<'a> {
         }
         self.check_fn_bodies();
         if self.states.is_empty() && !self.broken("state") {
-            self.err(Diagnostic::error(Span::new(0, 0), "no states declared").with_help("declare the state, e.g. `state w[3], q[3];`"));
+            self.err(
+                Diagnostic::error(Span::new(0, 0), "no states declared")
+                    .with_help("declare the state, e.g. `state w[3], q[3];`"),
+            );
         }
         if self.inputs.is_empty() && !self.broken("input") {
-            self.err(Diagnostic::error(Span::new(0, 0), "no inputs declared").with_help("declare the control input, e.g. `input u[3];`"));
+            self.err(
+                Diagnostic::error(Span::new(0, 0), "no inputs declared")
+                    .with_help("declare the control input, e.g. `input u[3];`"),
+            );
         }
         let n: usize = self.states.iter().map(|s| s.len).sum();
         let m: usize = self.inputs.iter().map(|s| s.len).sum();
@@ -385,11 +485,17 @@ impl<'a> Checker<'a> {
             } else if v.len() == m && (v.ncols() == 1 || v.nrows() == 1) {
                 v.iter().copied().collect()
             } else {
-                self.err(Diagnostic::error(e.span, format!("saturation needs a scalar or {m} levels (one per input channel)")));
+                self.err(Diagnostic::error(
+                    e.span,
+                    format!("saturation needs a scalar or {m} levels (one per input channel)"),
+                ));
                 return None;
             };
             if levels.iter().any(|l| *l <= 0.0) {
-                self.err(Diagnostic::error(e.span, "saturation levels must be positive"));
+                self.err(Diagnostic::error(
+                    e.span,
+                    "saturation levels must be positive",
+                ));
                 return None;
             }
             Some(levels)
@@ -411,13 +517,11 @@ impl<'a> Checker<'a> {
         let mut simulate_seen = None;
         for it in items {
             match &it.kind {
-                ItemKind::Output(name, e) => {
-                    if self.declare(name, Kind::Output) {
-                        match self.output(name, e, n, m, q) {
-                            Some(o) => outputs.push(o),
-                            None => {
-                                self.poisoned.insert(name.node.clone());
-                            }
+                ItemKind::Output(name, e) if self.declare(name, Kind::Output) => {
+                    match self.output(name, e, n, m, q) {
+                        Some(o) => outputs.push(o),
+                        None => {
+                            self.poisoned.insert(name.node.clone());
                         }
                     }
                 }
@@ -427,28 +531,39 @@ impl<'a> Checker<'a> {
                         "B" => &mut b,
                         "D" => &mut d,
                         other => {
-                            let mut diag = Diagnostic::error(name.span, format!("unknown model matrix `{other}`"))
-                                .with_label("the model matrices are A, B and D");
+                            let mut diag = Diagnostic::error(
+                                name.span,
+                                format!("unknown model matrix `{other}`"),
+                            )
+                            .with_label("the model matrices are A, B and D");
                             diag = if param.is_some() {
                                 diag.with_help("state-dependent matrices are written `A(x) = ...`, `B(x) = ...`, `D(x) = ...`")
                             } else {
-                                diag.with_help(format!("for a constant write `const {other} = ...;`"))
+                                diag.with_help(format!(
+                                    "for a constant write `const {other} = ...;`"
+                                ))
                             };
                             self.err(diag);
                             continue;
                         }
                     };
                     if let Some(prev) = slot.as_ref().map(|p: &ModelMatrix| p.span) {
-                        let diag = Diagnostic::error(it.span, format!("model matrix `{}` is defined twice", name.node))
-                            .with_secondary(prev, "first definition here");
+                        let diag = Diagnostic::error(
+                            it.span,
+                            format!("model matrix `{}` is defined twice", name.node),
+                        )
+                        .with_secondary(prev, "first definition here");
                         self.diags.push(diag);
                         continue;
                     }
                     if let Some(p) = param {
                         if p.node != "x" {
                             self.diags.push(
-                                Diagnostic::error(p.span, format!("the parameter of `{}(...)` must be `x`", name.node))
-                                    .with_help(format!("write `{}(x) = ...`", name.node)),
+                                Diagnostic::error(
+                                    p.span,
+                                    format!("the parameter of `{}(...)` must be `x`", name.node),
+                                )
+                                .with_help(format!("write `{}(x) = ...`", name.node)),
                             );
                             continue;
                         }
@@ -467,7 +582,11 @@ impl<'a> Checker<'a> {
                             }
                         }
                     }
-                    *slot = Some(ModelMatrix { expr: value.clone(), state_dependent: param.is_some(), span: it.span });
+                    *slot = Some(ModelMatrix {
+                        expr: value.clone(),
+                        state_dependent: param.is_some(),
+                        span: it.span,
+                    });
                 }
                 ItemKind::Premise { .. } => premise_items.push(it),
                 ItemKind::Rule { .. } => rule_items.push(it),
@@ -488,38 +607,46 @@ impl<'a> Checker<'a> {
                         }
                     }
                 }
-                ItemKind::Emit(targets) => {
-                    if self.singleton(&mut emit_seen, it.span, "`emit`") {
-                        for t in targets {
-                            match t.node.as_str() {
-                                "rust" => emit.push(Emit::Rust),
-                                "c" => emit.push(Emit::C),
-                                _ => self.err(
-                                    Diagnostic::error(t.span, format!("unknown code target `{}`", t.node))
-                                        .with_label("targets are `rust` and `c`"),
-                                ),
-                            }
+                ItemKind::Emit(targets) if self.singleton(&mut emit_seen, it.span, "`emit`") => {
+                    for t in targets {
+                        match t.node.as_str() {
+                            "rust" => emit.push(Emit::Rust),
+                            "c" => emit.push(Emit::C),
+                            _ => self.err(
+                                Diagnostic::error(
+                                    t.span,
+                                    format!("unknown code target `{}`", t.node),
+                                )
+                                .with_label("targets are `rust` and `c`"),
+                            ),
                         }
                     }
                 }
-                ItemKind::Precision(p) => {
-                    if self.singleton(&mut precision_seen, it.span, "the precision") {
-                        match p.node.as_str() {
-                            "f64" | "double" => precision = Precision::F64,
-                            "f32" | "float" => precision = Precision::F32,
-                            _ => self.err(Diagnostic::error(p.span, format!("unknown precision `{}`", p.node)).with_label("use `f64` or `f32`")),
-                        }
+                ItemKind::Precision(p)
+                    if self.singleton(&mut precision_seen, it.span, "the precision") =>
+                {
+                    match p.node.as_str() {
+                        "f64" | "double" => precision = Precision::F64,
+                        "f32" | "float" => precision = Precision::F32,
+                        _ => self.err(
+                            Diagnostic::error(p.span, format!("unknown precision `{}`", p.node))
+                                .with_label("use `f64` or `f32`"),
+                        ),
                     }
                 }
-                ItemKind::Simulate(stmts) => {
-                    if self.singleton(&mut simulate_seen, it.span, "the `simulate` block") {
-                        simulate = self.simulate(stmts, it.span, n);
-                    }
+                ItemKind::Simulate(stmts)
+                    if self.singleton(&mut simulate_seen, it.span, "the `simulate` block") =>
+                {
+                    simulate = self.simulate(stmts, it.span, n);
                 }
                 _ => {}
             }
         }
-        for (slot, name, rows, cols, what) in [(&a, "A", n, n, "n x n"), (&b, "B", n, m, "n x m"), (&d, "D", n, q, "n x q")] {
+        for (slot, name, rows, cols, what) in [
+            (&a, "A", n, n, "n x n"),
+            (&b, "B", n, m, "n x m"),
+            (&d, "D", n, q, "n x q"),
+        ] {
             if let Some(mm) = slot {
                 self.check_model_matrix(name, mm, rows, cols, what);
             }
@@ -529,16 +656,35 @@ impl<'a> Checker<'a> {
                 && rule_items.iter().all(|r| matches!(&r.kind, ItemKind::Rule { matrices, .. } if matrices.iter().any(|m| m.name.node == mat)))
         };
         if a.is_none() && !rules_give("A") && !self.broken("A") && !self.poisoned.contains("A") {
-            self.err(Diagnostic::error(Span::new(0, 0), "no state matrix `A`").with_help("define `A = ...;` or `A(x) = ...;`, or give `A = ...` in every rule"));
+            self.err(
+                Diagnostic::error(Span::new(0, 0), "no state matrix `A`").with_help(
+                    "define `A = ...;` or `A(x) = ...;`, or give `A = ...` in every rule",
+                ),
+            );
         }
         if b.is_none() && !rules_give("B") && !self.broken("B") && !self.poisoned.contains("B") {
-            self.err(Diagnostic::error(Span::new(0, 0), "no input matrix `B`").with_help("define `B = ...;` or `B(x) = ...;`, or give `B = ...` in every rule"));
-        }
-        if q > 0 && d.is_none() && !rules_give("D") && !self.broken("D") && !self.poisoned.contains("D") {
-            let span = self.disturbances.first().map_or(Span::new(0, 0), |s| s.span);
             self.err(
-                Diagnostic::error(span, "a disturbance is declared but there is no disturbance matrix `D`")
-                    .with_help("define `D = ...;` (n x q)"),
+                Diagnostic::error(Span::new(0, 0), "no input matrix `B`").with_help(
+                    "define `B = ...;` or `B(x) = ...;`, or give `B = ...` in every rule",
+                ),
+            );
+        }
+        if q > 0
+            && d.is_none()
+            && !rules_give("D")
+            && !self.broken("D")
+            && !self.poisoned.contains("D")
+        {
+            let span = self
+                .disturbances
+                .first()
+                .map_or(Span::new(0, 0), |s| s.span);
+            self.err(
+                Diagnostic::error(
+                    span,
+                    "a disturbance is declared but there is no disturbance matrix `D`",
+                )
+                .with_help("define `D = ...;` (n x q)"),
             );
         }
 
@@ -547,7 +693,10 @@ impl<'a> Checker<'a> {
         let rules = self.rules(&rule_items, &premises, n, m, q);
         let objectives = objectives
             .into_iter()
-            .filter_map(|it| self.objective(it, n, &outputs).map(|o| Spanned::new(o, it.span)))
+            .filter_map(|it| {
+                self.objective(it, n, &outputs)
+                    .map(|o| Spanned::new(o, it.span))
+            })
             .collect::<Vec<_>>();
         let optimized: Vec<Span> = objectives
             .iter()
@@ -555,10 +704,22 @@ impl<'a> Checker<'a> {
                 matches!(
                     o.node,
                     Objective::DecayRate(Target::Optimize)
-                        | Objective::Hinf { target: Target::Optimize, .. }
-                        | Objective::Linf { target: Target::Optimize, .. }
-                        | Objective::InputNorm { target: Target::Optimize, .. }
-                        | Objective::OutputNorm { target: Target::Optimize, .. }
+                        | Objective::Hinf {
+                            target: Target::Optimize,
+                            ..
+                        }
+                        | Objective::Linf {
+                            target: Target::Optimize,
+                            ..
+                        }
+                        | Objective::InputNorm {
+                            target: Target::Optimize,
+                            ..
+                        }
+                        | Objective::OutputNorm {
+                            target: Target::Optimize,
+                            ..
+                        }
                 )
             })
             .map(|o| o.span)
@@ -575,8 +736,11 @@ impl<'a> Checker<'a> {
         if let Relaxation::Tanaka { s } = relaxation.node {
             if rules.len() == rule_count && (s < 1 || s > rules.len()) {
                 self.err(
-                    Diagnostic::error(relaxation.span, format!("tanaka(s = {s}) needs 1 <= s <= r = {}", rules.len()))
-                        .with_label("s is the most rules that fire at once"),
+                    Diagnostic::error(
+                        relaxation.span,
+                        format!("tanaka(s = {s}) needs 1 <= s <= r = {}", rules.len()),
+                    )
+                    .with_label("s is the most rules that fire at once"),
                 );
             }
         }
@@ -614,7 +778,10 @@ impl<'a> Checker<'a> {
                 let mut seen = Vec::new();
                 for p in params {
                     if seen.contains(&p.node.as_str()) {
-                        found.push(Diagnostic::error(p.span, format!("parameter `{}` is repeated", p.node)));
+                        found.push(Diagnostic::error(
+                            p.span,
+                            format!("parameter `{}` is repeated", p.node),
+                        ));
                     }
                     seen.push(p.node.as_str());
                 }
@@ -629,7 +796,15 @@ impl<'a> Checker<'a> {
                         ps.contains(&name)
                     };
                     if !ok {
-                        let mut d = Diagnostic::error(span, format!("unknown name `{name}` in function body")).with_label(if is_call { "not a function" } else { "not a parameter or constant" });
+                        let mut d = Diagnostic::error(
+                            span,
+                            format!("unknown name `{name}` in function body"),
+                        )
+                        .with_label(if is_call {
+                            "not a function"
+                        } else {
+                            "not a parameter or constant"
+                        });
                         if let Some(s) = suggest(name, ps.iter().copied()) {
                             d = d.with_help(format!("did you mean `{s}`?"));
                         } else if !is_call {
@@ -643,24 +818,49 @@ impl<'a> Checker<'a> {
         self.diags.extend(found);
     }
 
-    fn check_model_matrix(&mut self, name: &str, mm: &ModelMatrix, rows: usize, cols: usize, what: &str) {
+    fn check_model_matrix(
+        &mut self,
+        name: &str,
+        mm: &ModelMatrix,
+        rows: usize,
+        cols: usize,
+        what: &str,
+    ) {
         if self.poisoned(&mm.expr) {
             return;
         }
-        let env = if mm.state_dependent { self.state_env(Mode::Shapes, &[], &[]) } else { self.state_env(Mode::Exact, &[], &[]) };
+        let env = if mm.state_dependent {
+            self.state_env(Mode::Shapes, &[], &[])
+        } else {
+            self.state_env(Mode::Exact, &[], &[])
+        };
         let r = env.eval(&mm.expr);
         match r {
             Ok(v) if v.nrows() == rows && v.ncols() == cols => {}
             Ok(v) => {
                 self.err(
-                    Diagnostic::error(mm.expr.span, format!("`{name}` must be {what} = {rows}x{cols}, but this is {}x{}", v.nrows(), v.ncols()))
-                        .with_label(format!("{}x{} matrix", v.nrows(), v.ncols()))
-                        .with_note(format!("n = {} states, m = {} inputs, q = {} disturbances", self.states.iter().map(|s| s.len).sum::<usize>(), self.inputs.iter().map(|s| s.len).sum::<usize>(), self.disturbances.iter().map(|s| s.len).sum::<usize>())),
+                    Diagnostic::error(
+                        mm.expr.span,
+                        format!(
+                            "`{name}` must be {what} = {rows}x{cols}, but this is {}x{}",
+                            v.nrows(),
+                            v.ncols()
+                        ),
+                    )
+                    .with_label(format!("{}x{} matrix", v.nrows(), v.ncols()))
+                    .with_note(format!(
+                        "n = {} states, m = {} inputs, q = {} disturbances",
+                        self.states.iter().map(|s| s.len).sum::<usize>(),
+                        self.inputs.iter().map(|s| s.len).sum::<usize>(),
+                        self.disturbances.iter().map(|s| s.len).sum::<usize>()
+                    )),
                 );
             }
             Err(d) => {
                 let d = if !mm.state_dependent && d.label.contains("cannot appear") {
-                    d.with_help(format!("`{name}` depends on the state: write `{name}(x) = ...`"))
+                    d.with_help(format!(
+                        "`{name}` depends on the state: write `{name}(x) = ...`"
+                    ))
                 } else {
                     d
                 };
@@ -675,15 +875,26 @@ impl<'a> Checker<'a> {
         let eval_at = |this: &Self, v: &[f64]| -> Result<Mat, Diagnostic> {
             let mut extra = Vec::new();
             for s in &this.inputs {
-                extra.push((s.name.clone(), Mat::from_column_slice(s.len, 1, &v[n + s.offset..n + s.offset + s.len])));
+                extra.push((
+                    s.name.clone(),
+                    Mat::from_column_slice(s.len, 1, &v[n + s.offset..n + s.offset + s.len]),
+                ));
             }
             for s in &this.disturbances {
-                extra.push((s.name.clone(), Mat::from_column_slice(s.len, 1, &v[n + m + s.offset..n + m + s.offset + s.len])));
+                extra.push((
+                    s.name.clone(),
+                    Mat::from_column_slice(
+                        s.len,
+                        1,
+                        &v[n + m + s.offset..n + m + s.offset + s.len],
+                    ),
+                ));
             }
             let mut env = this.state_env(Mode::Exact, &extra, &[Kind::Input, Kind::Disturbance]);
             env.locals[0].1 = Mat::from_column_slice(n, 1, &v[..n]);
             for (i, s) in this.states.iter().enumerate() {
-                env.locals[i + 1].1 = Mat::from_column_slice(s.len, 1, &v[s.offset..s.offset + s.len]);
+                env.locals[i + 1].1 =
+                    Mat::from_column_slice(s.len, 1, &v[s.offset..s.offset + s.len]);
             }
             env.eval(e)
         };
@@ -699,7 +910,15 @@ impl<'a> Checker<'a> {
             }
         };
         if y0.ncols() != 1 {
-            self.err(Diagnostic::error(e.span, format!("output `{}` must be a vector, found {}x{}", name.node, y0.nrows(), y0.ncols())));
+            self.err(Diagnostic::error(
+                e.span,
+                format!(
+                    "output `{}` must be a vector, found {}x{}",
+                    name.node,
+                    y0.nrows(),
+                    y0.ncols()
+                ),
+            ));
             return None;
         }
         let p = y0.nrows();
@@ -736,7 +955,16 @@ impl<'a> Checker<'a> {
     fn premises(&mut self, items: &[&Item], rules: &[&Item]) -> Vec<Premise> {
         let mut out = Vec::new();
         for it in items {
-            let ItemKind::Premise { names, expr, range, sigma, sets } = &it.kind else { continue };
+            let ItemKind::Premise {
+                names,
+                expr,
+                range,
+                sigma,
+                sets,
+            } = &it.kind
+            else {
+                continue;
+            };
             // The expression each premise is bound to.
             let bound = match expr {
                 Some(e) => e.clone(),
@@ -744,23 +972,44 @@ impl<'a> Checker<'a> {
                     let Some(first) = names.first() else { continue };
                     if names.len() > 1 {
                         self.err(
-                            Diagnostic::error(it.span, "several premise names need a vector expression")
-                                .with_help(format!("write `premise {} = <vector expression> ...`", names.iter().map(|n| n.node.as_str()).collect::<Vec<_>>().join(", "))),
+                            Diagnostic::error(
+                                it.span,
+                                "several premise names need a vector expression",
+                            )
+                            .with_help(format!(
+                                "write `premise {} = <vector expression> ...`",
+                                names
+                                    .iter()
+                                    .map(|n| n.node.as_str())
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            )),
                         );
                         continue;
                     }
                     if !self.states.iter().any(|s| s.name == first.node) {
-                        let mut d = Diagnostic::error(first.span, format!("premise `{}` is not a state", first.node))
-                            .with_label("a premise without `= expr` must be a state name");
-                        if let Some(s) = suggest(&first.node, self.states.iter().map(|s| s.name.as_str())) {
+                        let mut d = Diagnostic::error(
+                            first.span,
+                            format!("premise `{}` is not a state", first.node),
+                        )
+                        .with_label("a premise without `= expr` must be a state name");
+                        if let Some(s) =
+                            suggest(&first.node, self.states.iter().map(|s| s.name.as_str()))
+                        {
                             d = d.with_help(format!("did you mean `{s}`?"));
                         } else {
-                            d = d.with_help(format!("bind it to an expression of the state: `premise {} = ...`", first.node));
+                            d = d.with_help(format!(
+                                "bind it to an expression of the state: `premise {} = ...`",
+                                first.node
+                            ));
                         }
                         self.err(d);
                         continue;
                     }
-                    Expr { kind: ExprKind::Name(first.node.clone()), span: first.span }
+                    Expr {
+                        kind: ExprKind::Name(first.node.clone()),
+                        span: first.span,
+                    }
                 }
             };
             if self.poisoned(&bound) {
@@ -775,22 +1024,40 @@ impl<'a> Checker<'a> {
                 }
             };
             if v.ncols() != 1 {
-                self.err(Diagnostic::error(bound.span, "a premise must be a scalar or a vector").with_label(format!("this is {}x{}", v.nrows(), v.ncols())));
+                self.err(
+                    Diagnostic::error(bound.span, "a premise must be a scalar or a vector")
+                        .with_label(format!("this is {}x{}", v.nrows(), v.ncols())),
+                );
                 continue;
             }
             let len = v.nrows();
             if names.len() > 1 && names.len() != len {
                 self.err(
-                    Diagnostic::error(bound.span, format!("{} premise names but the expression has {len} components", names.len()))
-                        .with_label(format!("a {len}-vector")),
+                    Diagnostic::error(
+                        bound.span,
+                        format!(
+                            "{} premise names but the expression has {len} components",
+                            names.len()
+                        ),
+                    )
+                    .with_label(format!("a {len}-vector")),
                 );
                 continue;
             }
             let range = match range {
-                Some((lo, hi)) => match (self.scalar(lo, "a range bound"), self.scalar(hi, "a range bound")) {
+                Some((lo, hi)) => match (
+                    self.scalar(lo, "a range bound"),
+                    self.scalar(hi, "a range bound"),
+                ) {
                     (Some(l), Some(h)) if l < h => Some((l, h)),
                     (Some(l), Some(h)) => {
-                        self.err(Diagnostic::error(lo.span.join(hi.span), format!("empty premise range {l} .. {h}")).with_help("write `range lo .. hi` with lo < hi"));
+                        self.err(
+                            Diagnostic::error(
+                                lo.span.join(hi.span),
+                                format!("empty premise range {l} .. {h}"),
+                            )
+                            .with_help("write `range lo .. hi` with lo < hi"),
+                        );
                         None
                     }
                     _ => None,
@@ -801,12 +1068,20 @@ impl<'a> Checker<'a> {
             let mut checked_sets: Vec<FuzzySet> = Vec::new();
             for s in sets {
                 if let Some(prev) = checked_sets.iter().find(|c| c.name == s.name.node) {
-                    let d = Diagnostic::error(s.name.span, format!("set `{}` is defined twice", s.name.node)).with_secondary(prev.span, "first definition here");
+                    let d = Diagnostic::error(
+                        s.name.span,
+                        format!("set `{}` is defined twice", s.name.node),
+                    )
+                    .with_secondary(prev.span, "first definition here");
                     self.err(d);
                     continue;
                 }
                 match self.set_shape(s) {
-                    Some(shape) => checked_sets.push(FuzzySet { name: s.name.node.clone(), shape, span: s.span }),
+                    Some(shape) => checked_sets.push(FuzzySet {
+                        name: s.name.node.clone(),
+                        shape,
+                        span: s.span,
+                    }),
                     None => {
                         for n in names {
                             self.poisoned.insert(format!("{}.{}", n.node, s.name.node));
@@ -833,13 +1108,25 @@ impl<'a> Checker<'a> {
         }
         // Vector states used in rules with `about` but not declared as premises: implicit premises.
         for r in rules {
-            let ItemKind::Rule { clauses, .. } = &r.kind else { continue };
+            let ItemKind::Rule { clauses, .. } = &r.kind else {
+                continue;
+            };
             for c in clauses {
-                if matches!(c.set, SetRef::About(_)) && !out.iter().any(|p| p.name == c.premise.node) {
-                    if let Some(s) = self.states.iter().find(|s| s.name == c.premise.node).cloned() {
+                if matches!(c.set, SetRef::About(_))
+                    && !out.iter().any(|p| p.name == c.premise.node)
+                {
+                    if let Some(s) = self
+                        .states
+                        .iter()
+                        .find(|s| s.name == c.premise.node)
+                        .cloned()
+                    {
                         out.push(Premise {
                             name: s.name.clone(),
-                            expr: Expr { kind: ExprKind::Name(s.name.clone()), span: c.premise.span },
+                            expr: Expr {
+                                kind: ExprKind::Name(s.name.clone()),
+                                span: c.premise.span,
+                            },
                             component: None,
                             dim: s.len,
                             range: None,
@@ -868,8 +1155,11 @@ impl<'a> Checker<'a> {
             "trap" => 4,
             "gauss" | "sigmoid" => 2,
             other => {
-                let mut d = Diagnostic::error(s.shape.span, format!("unknown membership function `{other}`"))
-                    .with_label("use tri, trap, gauss or sigmoid");
+                let mut d = Diagnostic::error(
+                    s.shape.span,
+                    format!("unknown membership function `{other}`"),
+                )
+                .with_label("use tri, trap, gauss or sigmoid");
                 if let Some(c) = suggest(other, ["tri", "trap", "gauss", "sigmoid"]) {
                     d = d.with_help(format!("did you mean `{c}`?"));
                 }
@@ -879,17 +1169,28 @@ impl<'a> Checker<'a> {
         };
         if s.args.len() != want {
             self.err(
-                Diagnostic::error(s.span, format!("`{}` takes {want} parameters, {} given", s.shape.node, s.args.len()))
-                    .with_help(match s.shape.node.as_str() {
-                        "tri" => "tri(a, b, c): feet a and c, peak b",
-                        "trap" => "trap(a, b, c, d): feet a and d, plateau b..c",
-                        "gauss" => "gauss(center, sigma)",
-                        _ => "sigmoid(slope, center)",
-                    }),
+                Diagnostic::error(
+                    s.span,
+                    format!(
+                        "`{}` takes {want} parameters, {} given",
+                        s.shape.node,
+                        s.args.len()
+                    ),
+                )
+                .with_help(match s.shape.node.as_str() {
+                    "tri" => "tri(a, b, c): feet a and c, peak b",
+                    "trap" => "trap(a, b, c, d): feet a and d, plateau b..c",
+                    "gauss" => "gauss(center, sigma)",
+                    _ => "sigmoid(slope, center)",
+                }),
             );
             return None;
         }
-        let vals: Option<Vec<f64>> = s.args.iter().map(|a| self.scalar(&a.value, "a membership parameter")).collect();
+        let vals: Option<Vec<f64>> = s
+            .args
+            .iter()
+            .map(|a| self.scalar(&a.value, "a membership parameter"))
+            .collect();
         let v = vals?;
         let ordered = v.windows(2).all(|w| w[0] <= w[1]);
         let shape = match s.shape.node.as_str() {
@@ -899,14 +1200,20 @@ impl<'a> Checker<'a> {
             "sigmoid" if v[0] != 0.0 => SetShape::Sigmoid(v[0], v[1]),
             "tri" | "trap" => {
                 self.err(
-                    Diagnostic::error(s.span, format!("parameters of `{}` must be increasing", s.shape.node))
-                        .with_label(format!("{:?}", v))
-                        .with_help("the feet come first and last, e.g. tri(-1, 0, 1), with a < c"),
+                    Diagnostic::error(
+                        s.span,
+                        format!("parameters of `{}` must be increasing", s.shape.node),
+                    )
+                    .with_label(format!("{:?}", v))
+                    .with_help("the feet come first and last, e.g. tri(-1, 0, 1), with a < c"),
                 );
                 return None;
             }
             "gauss" => {
-                self.err(Diagnostic::error(s.span, "gauss width sigma must be positive").with_help("gauss(center, sigma) with sigma > 0"));
+                self.err(
+                    Diagnostic::error(s.span, "gauss width sigma must be positive")
+                        .with_help("gauss(center, sigma) with sigma > 0"),
+                );
                 return None;
             }
             _ => {
@@ -917,14 +1224,30 @@ impl<'a> Checker<'a> {
         Some(shape)
     }
 
-    fn rules(&mut self, items: &[&Item], premises: &[Premise], n: usize, m: usize, q: usize) -> Vec<RuleSpec> {
+    fn rules(
+        &mut self,
+        items: &[&Item],
+        premises: &[Premise],
+        n: usize,
+        m: usize,
+        q: usize,
+    ) -> Vec<RuleSpec> {
         let mut out: Vec<RuleSpec> = Vec::new();
         for it in items {
-            let ItemKind::Rule { name, clauses, at, matrices } = &it.kind else { continue };
+            let ItemKind::Rule {
+                name,
+                clauses,
+                at,
+                matrices,
+            } = &it.kind
+            else {
+                continue;
+            };
             if let Some(prev) = out.iter().find(|r| r.name == name.node) {
-                let d = Diagnostic::error(name.span, format!("rule `{}` is defined twice", name.node))
-                    .with_secondary(prev.span, "first definition here")
-                    .with_help("give each rule a unique name");
+                let d =
+                    Diagnostic::error(name.span, format!("rule `{}` is defined twice", name.node))
+                        .with_secondary(prev.span, "first definition here")
+                        .with_help("give each rule a unique name");
                 self.err(d);
                 continue;
             }
@@ -936,11 +1259,20 @@ impl<'a> Checker<'a> {
                     if self.poisoned.contains(&c.premise.node) {
                         continue;
                     }
-                    let mut d = Diagnostic::error(c.premise.span, format!("unknown premise `{}`", c.premise.node)).with_label("not declared as a premise");
-                    if let Some(s) = suggest(&c.premise.node, premises.iter().map(|p| p.name.as_str())) {
+                    let mut d = Diagnostic::error(
+                        c.premise.span,
+                        format!("unknown premise `{}`", c.premise.node),
+                    )
+                    .with_label("not declared as a premise");
+                    if let Some(s) =
+                        suggest(&c.premise.node, premises.iter().map(|p| p.name.as_str()))
+                    {
                         d = d.with_help(format!("did you mean `{s}`?"));
                     } else {
-                        d = d.with_help(format!("declare it: `premise {} range lo .. hi {{ ... }}`", c.premise.node));
+                        d = d.with_help(format!(
+                            "declare it: `premise {} range lo .. hi {{ ... }}`",
+                            c.premise.node
+                        ));
                     }
                     self.err(d);
                     ok = false;
@@ -948,7 +1280,10 @@ impl<'a> Checker<'a> {
                 };
                 let p = &premises[pi];
                 if rc.iter().any(|x: &RuleClause| x.premise == pi) {
-                    self.err(Diagnostic::error(c.span, format!("premise `{}` appears twice in rule `{}`", p.name, name.node)));
+                    self.err(Diagnostic::error(
+                        c.span,
+                        format!("premise `{}` appears twice in rule `{}`", p.name, name.node),
+                    ));
                     ok = false;
                     continue;
                 }
@@ -960,22 +1295,40 @@ impl<'a> Checker<'a> {
                             continue;
                         }
                         None => {
-                            let mut d = Diagnostic::error(s.span, format!("premise `{}` has no set `{}`", p.name, s.node))
-                                .with_label("unknown fuzzy set")
-                                .with_secondary(p.span, "premise declared here");
-                            if let Some(x) = suggest(&s.node, p.sets.iter().map(|x| x.name.as_str())) {
+                            let mut d = Diagnostic::error(
+                                s.span,
+                                format!("premise `{}` has no set `{}`", p.name, s.node),
+                            )
+                            .with_label("unknown fuzzy set")
+                            .with_secondary(p.span, "premise declared here");
+                            if let Some(x) =
+                                suggest(&s.node, p.sets.iter().map(|x| x.name.as_str()))
+                            {
                                 d = d.with_help(format!("did you mean `{x}`?"));
                             } else if p.sets.is_empty() {
-                                d = d.with_help("this premise has no named sets; use `is about <point>`");
+                                d = d.with_help(
+                                    "this premise has no named sets; use `is about <point>`",
+                                );
                             } else {
-                                d = d.with_help(format!("its sets are: {}", p.sets.iter().map(|x| x.name.as_str()).collect::<Vec<_>>().join(", ")));
+                                d = d.with_help(format!(
+                                    "its sets are: {}",
+                                    p.sets
+                                        .iter()
+                                        .map(|x| x.name.as_str())
+                                        .collect::<Vec<_>>()
+                                        .join(", ")
+                                ));
                             }
                             self.err(d);
                             ok = false;
                             continue;
                         }
                     },
-                    SetRef::About(e) => match self.vector(e, p.dim, &format!("the `about` point of premise `{}`", p.name)) {
+                    SetRef::About(e) => match self.vector(
+                        e,
+                        p.dim,
+                        &format!("the `about` point of premise `{}`", p.name),
+                    ) {
                         Some(v) => ClauseSet::About(v),
                         None => {
                             ok = false;
@@ -983,16 +1336,27 @@ impl<'a> Checker<'a> {
                         }
                     },
                 };
-                rc.push(RuleClause { premise: pi, set, span: c.span });
+                rc.push(RuleClause {
+                    premise: pi,
+                    set,
+                    span: c.span,
+                });
             }
             let at_point = at.as_ref().and_then(|(args, aspan)| {
                 let mut x = vec![0.0; n];
                 let mut good = true;
                 let mut seen: Vec<&str> = Vec::new();
                 for a in args {
-                    let Some(s) = self.states.iter().find(|s| s.name == a.name.node).cloned() else {
-                        let mut d = Diagnostic::error(a.name.span, format!("`{}` is not a state", a.name.node)).with_label("`at(...)` sets states");
-                        if let Some(c) = suggest(&a.name.node, self.states.iter().map(|s| s.name.as_str())) {
+                    let Some(s) = self.states.iter().find(|s| s.name == a.name.node).cloned()
+                    else {
+                        let mut d = Diagnostic::error(
+                            a.name.span,
+                            format!("`{}` is not a state", a.name.node),
+                        )
+                        .with_label("`at(...)` sets states");
+                        if let Some(c) =
+                            suggest(&a.name.node, self.states.iter().map(|s| s.name.as_str()))
+                        {
                             d = d.with_help(format!("did you mean `{c}`?"));
                         }
                         self.err(d);
@@ -1000,7 +1364,10 @@ impl<'a> Checker<'a> {
                         continue;
                     };
                     if seen.contains(&a.name.node.as_str()) {
-                        self.err(Diagnostic::error(a.name.span, format!("state `{}` is set twice", s.name)));
+                        self.err(Diagnostic::error(
+                            a.name.span,
+                            format!("state `{}` is set twice", s.name),
+                        ));
                         good = false;
                         continue;
                     }
@@ -1016,15 +1383,31 @@ impl<'a> Checker<'a> {
                                 "rule {} sets {} = {} but {} has {} component{}",
                                 name.node,
                                 s.name,
-                                if v.len() == 1 { format!("{}", v[(0, 0)]) } else { format!("a {}x{} value", v.nrows(), v.ncols()) },
+                                if v.len() == 1 {
+                                    format!("{}", v[(0, 0)])
+                                } else {
+                                    format!("a {}x{} value", v.nrows(), v.ncols())
+                                },
                                 s.name,
                                 s.len,
                                 if s.len == 1 { "" } else { "s" }
                             ),
                         )
-                        .with_label(format!("expected {}", if s.len == 1 { "a scalar".to_string() } else { format!("a {}-vector", s.len) }));
+                        .with_label(format!(
+                            "expected {}",
+                            if s.len == 1 {
+                                "a scalar".to_string()
+                            } else {
+                                format!("a {}-vector", s.len)
+                            }
+                        ));
                         if v.len() == 1 && s.len > 1 {
-                            d = d.with_help(format!("give every component, e.g. `{} = {} * ones({})`", s.name, v[(0, 0)], s.len));
+                            d = d.with_help(format!(
+                                "give every component, e.g. `{} = {} * ones({})`",
+                                s.name,
+                                v[(0, 0)],
+                                s.len
+                            ));
                         }
                         self.err(d);
                         good = false;
@@ -1046,7 +1429,13 @@ impl<'a> Checker<'a> {
                     "B" => (n, m),
                     "D" => (n, q),
                     other => {
-                        self.err(Diagnostic::error(mat.name.span, format!("unknown model matrix `{other}` in rule")).with_label("a rule may give A, B or D"));
+                        self.err(
+                            Diagnostic::error(
+                                mat.name.span,
+                                format!("unknown model matrix `{other}` in rule"),
+                            )
+                            .with_label("a rule may give A, B or D"),
+                        );
                         ok = false;
                         continue;
                     }
@@ -1057,67 +1446,135 @@ impl<'a> Checker<'a> {
                 };
                 if v.nrows() != rows || v.ncols() != cols {
                     self.err(
-                        Diagnostic::error(mat.value.span, format!("`{}` of rule {} must be {rows}x{cols}, but this is {}x{}", mat.name.node, name.node, v.nrows(), v.ncols()))
-                            .with_label(format!("{}x{} matrix", v.nrows(), v.ncols())),
+                        Diagnostic::error(
+                            mat.value.span,
+                            format!(
+                                "`{}` of rule {} must be {rows}x{cols}, but this is {}x{}",
+                                mat.name.node,
+                                name.node,
+                                v.nrows(),
+                                v.ncols()
+                            ),
+                        )
+                        .with_label(format!(
+                            "{}x{} matrix",
+                            v.nrows(),
+                            v.ncols()
+                        )),
                     );
                     ok = false;
                     continue;
                 }
-                if overrides.iter().any(|(n, _, _): &(String, Mat, Span)| *n == mat.name.node) {
-                    self.err(Diagnostic::error(mat.name.span, format!("`{}` is given twice in rule {}", mat.name.node, name.node)));
+                if overrides
+                    .iter()
+                    .any(|(n, _, _): &(String, Mat, Span)| *n == mat.name.node)
+                {
+                    self.err(Diagnostic::error(
+                        mat.name.span,
+                        format!("`{}` is given twice in rule {}", mat.name.node, name.node),
+                    ));
                     ok = false;
                     continue;
                 }
                 overrides.push((mat.name.node.clone(), v, mat.value.span));
-            }
-            if at.is_none() && !matrices.iter().any(|m| m.name.node == "A") && ok {
-                // A rule without an operating point uses constant model matrices only.
             }
             if !ok {
                 continue;
             }
             // Duplicate premise combination.
             let key = |r: &[RuleClause]| {
-                let mut k: Vec<String> = r.iter().map(|c| format!("{}:{:?}", c.premise, c.set)).collect();
+                let mut k: Vec<String> = r
+                    .iter()
+                    .map(|c| format!("{}:{:?}", c.premise, c.set))
+                    .collect();
                 k.sort();
                 k
             };
-            if let Some(prev) = out.iter().find(|r| !rc.is_empty() && key(&r.clauses) == key(&rc)) {
+            if let Some(prev) = out
+                .iter()
+                .find(|r| !rc.is_empty() && key(&r.clauses) == key(&rc))
+            {
                 let d = Diagnostic::error(name.span, format!("rule `{}` has the same premise as rule `{}`", name.node, prev.name))
                     .with_secondary(prev.span, "same premise here")
                     .with_help("two rules with one premise make the model ambiguous: merge them or change one premise");
                 self.err(d);
                 continue;
             }
-            out.push(RuleSpec { name: name.node.clone(), clauses: rc, at: at_point, overrides, span: it.span });
+            out.push(RuleSpec {
+                name: name.node.clone(),
+                clauses: rc,
+                at: at_point,
+                overrides,
+                span: it.span,
+            });
         }
         if out.is_empty() && !items.is_empty() {
             return out;
         }
         if items.is_empty() && !self.broken("rule") {
-            self.err(Diagnostic::error(Span::new(0, 0), "no rules").with_help("add at least one rule, e.g. `rule R1: z is near => at(theta = 0);`"));
+            self.err(
+                Diagnostic::error(Span::new(0, 0), "no rules").with_help(
+                    "add at least one rule, e.g. `rule R1: z is near => at(theta = 0);`",
+                ),
+            );
         }
         out
     }
 
     fn objective(&mut self, it: &Item, n: usize, outputs: &[Output]) -> Option<Objective> {
-        let ItemKind::Objective { name, signals, goal, for_, with } = &it.kind else { return None };
-        let kinds = ["stability", "decay_rate", "hinf", "linf", "input_norm", "output_norm", "saturation"];
+        let ItemKind::Objective {
+            name,
+            signals,
+            goal,
+            for_,
+            with,
+        } = &it.kind
+        else {
+            return None;
+        };
+        let kinds = [
+            "stability",
+            "decay_rate",
+            "hinf",
+            "linf",
+            "input_norm",
+            "output_norm",
+            "saturation",
+        ];
         let target = |this: &mut Self, word_ok: &str, bound_kind: &str| -> Option<Target> {
             match goal {
                 None => {
-                    this.err(Diagnostic::error(it.span, format!("objective `{}` needs a goal", name.node)).with_help(format!("write `{word_ok}` or `{bound_kind} value`")));
+                    this.err(
+                        Diagnostic::error(
+                            it.span,
+                            format!("objective `{}` needs a goal", name.node),
+                        )
+                        .with_help(format!("write `{word_ok}` or `{bound_kind} value`")),
+                    );
                     None
                 }
                 Some(Goal::Word(w)) if w.node == word_ok => Some(Target::Optimize),
-                Some(Goal::AtMost(e)) if bound_kind == "<=" => this.positive(e, "the bound").map(Target::Fixed),
-                Some(Goal::AtLeast(e)) if bound_kind == ">=" => this.positive(e, "the bound").map(Target::Fixed),
+                Some(Goal::AtMost(e)) if bound_kind == "<=" => {
+                    this.positive(e, "the bound").map(Target::Fixed)
+                }
+                Some(Goal::AtLeast(e)) if bound_kind == ">=" => {
+                    this.positive(e, "the bound").map(Target::Fixed)
+                }
                 Some(g) => {
                     let span = match g {
                         Goal::Word(w) => w.span,
                         Goal::AtMost(e) | Goal::AtLeast(e) => e.span,
                     };
-                    this.err(Diagnostic::error(span, format!("objective `{}` takes `{word_ok}` or `{bound_kind} value`", name.node)).with_label("not a valid goal here"));
+                    this.err(
+                        Diagnostic::error(
+                            span,
+                            format!(
+                                "objective `{}` takes `{word_ok}` or `{bound_kind} value`",
+                                name.node
+                            ),
+                        )
+                        .with_label("not a valid goal here"),
+                    );
                     None
                 }
             }
@@ -1125,8 +1582,10 @@ impl<'a> Checker<'a> {
         let disturbance = |this: &mut Self, s: &Ident| -> Option<usize> {
             let found = this.disturbances.iter().position(|d| d.name == s.node);
             if found.is_none() && !this.poisoned.contains(&s.node) {
-                let mut d = Diagnostic::error(s.span, format!("`{}` is not a disturbance", s.node)).with_label("expected a declared disturbance");
-                if let Some(c) = suggest(&s.node, this.disturbances.iter().map(|d| d.name.as_str())) {
+                let mut d = Diagnostic::error(s.span, format!("`{}` is not a disturbance", s.node))
+                    .with_label("expected a declared disturbance");
+                if let Some(c) = suggest(&s.node, this.disturbances.iter().map(|d| d.name.as_str()))
+                {
                     d = d.with_help(format!("did you mean `{c}`?"));
                 }
                 this.err(d);
@@ -1136,7 +1595,8 @@ impl<'a> Checker<'a> {
         let output = |this: &mut Self, s: &Ident| -> Option<usize> {
             let found = outputs.iter().position(|o| o.name == s.node);
             if found.is_none() && !this.poisoned.contains(&s.node) {
-                let mut d = Diagnostic::error(s.span, format!("`{}` is not an output", s.node)).with_label("expected a declared output");
+                let mut d = Diagnostic::error(s.span, format!("`{}` is not an output", s.node))
+                    .with_label("expected a declared output");
                 if let Some(c) = suggest(&s.node, outputs.iter().map(|o| o.name.as_str())) {
                     d = d.with_help(format!("did you mean `{c}`?"));
                 } else {
@@ -1154,14 +1614,23 @@ impl<'a> Checker<'a> {
                     Some((f?, t?))
                 }
                 _ => {
-                    this.err(Diagnostic::error(it.span, format!("`{}` needs `(disturbance -> output)`", name.node)).with_help(format!("e.g. `objective {}(d -> z) minimize;`", name.node)));
+                    this.err(
+                        Diagnostic::error(
+                            it.span,
+                            format!("`{}` needs `(disturbance -> output)`", name.node),
+                        )
+                        .with_help(format!("e.g. `objective {}(d -> z) minimize;`", name.node)),
+                    );
                     None
                 }
             }
         };
         let initial = |this: &mut Self| -> Option<InitialSet> {
             let Some(f) = for_ else {
-                this.err(Diagnostic::error(it.span, format!("`{}` needs an initial state", name.node)).with_help("add `for x0 = [...]` or `for x0 in ellipsoid(R)`"));
+                this.err(
+                    Diagnostic::error(it.span, format!("`{}` needs an initial state", name.node))
+                        .with_help("add `for x0 = [...]` or `for x0 in ellipsoid(R)`"),
+                );
                 return None;
             };
             if f.name.node != "x0" {
@@ -1173,17 +1642,28 @@ impl<'a> Checker<'a> {
                     ExprKind::Call(c, args) if c.node == "ellipsoid" && args.len() == 1 => {
                         let r = this.eval_const(&args[0].value)?;
                         if r.nrows() != n || r.ncols() != n {
-                            this.err(Diagnostic::error(args[0].value.span, format!("ellipsoid matrix must be {n}x{n}")));
+                            this.err(Diagnostic::error(
+                                args[0].value.span,
+                                format!("ellipsoid matrix must be {n}x{n}"),
+                            ));
                             return None;
                         }
-                        if r.clone().cholesky().is_none() || (&r - r.transpose()).norm() > 1e-12 * (1.0 + r.norm()) {
-                            this.err(Diagnostic::error(args[0].value.span, "ellipsoid matrix must be symmetric positive definite"));
+                        if r.clone().cholesky().is_none()
+                            || (&r - r.transpose()).norm() > 1e-12 * (1.0 + r.norm())
+                        {
+                            this.err(Diagnostic::error(
+                                args[0].value.span,
+                                "ellipsoid matrix must be symmetric positive definite",
+                            ));
                             return None;
                         }
                         Some(InitialSet::Ellipsoid(r))
                     }
                     _ => {
-                        this.err(Diagnostic::error(f.value.span, "expected `ellipsoid(R)`").with_help("the set {x : x' R x <= 1}"));
+                        this.err(
+                            Diagnostic::error(f.value.span, "expected `ellipsoid(R)`")
+                                .with_help("the set {x : x' R x <= 1}"),
+                        );
                         None
                     }
                 }
@@ -1195,19 +1675,41 @@ impl<'a> Checker<'a> {
             let a = with.iter().find(|a| a.name.node == key)?;
             this.positive(&a.value, key)
         };
-        let allowed_with: &[&str] = if name.node == "linf" { &["xi", "phi"] } else { &[] };
+        let allowed_with: &[&str] = if name.node == "linf" {
+            &["xi", "phi"]
+        } else {
+            &[]
+        };
         for a in with {
             if !allowed_with.contains(&a.name.node.as_str()) {
                 self.err(
-                    Diagnostic::error(a.name.span, format!("objective `{}` has no parameter `{}`", name.node, a.name.node))
-                        .with_label(if allowed_with.is_empty() { "this objective takes no `with` parameters".to_string() } else { format!("parameters: {}", allowed_with.join(", ")) }),
+                    Diagnostic::error(
+                        a.name.span,
+                        format!(
+                            "objective `{}` has no parameter `{}`",
+                            name.node, a.name.node
+                        ),
+                    )
+                    .with_label(if allowed_with.is_empty() {
+                        "this objective takes no `with` parameters".to_string()
+                    } else {
+                        format!("parameters: {}", allowed_with.join(", "))
+                    }),
                 );
                 return None;
             }
         }
         let expect_signals = |this: &mut Self, k: usize| -> bool {
             if signals.len() > k {
-                this.err(Diagnostic::error(it.span, format!("objective `{}` takes {} signal{}", name.node, k, if k == 1 { "" } else { "s" })));
+                this.err(Diagnostic::error(
+                    it.span,
+                    format!(
+                        "objective `{}` takes {} signal{}",
+                        name.node,
+                        k,
+                        if k == 1 { "" } else { "s" }
+                    ),
+                ));
                 false
             } else {
                 true
@@ -1216,7 +1718,10 @@ impl<'a> Checker<'a> {
         match name.node.as_str() {
             "stability" => {
                 if goal.is_some() || for_.is_some() || !expect_signals(self, 0) {
-                    self.err(Diagnostic::error(it.span, "`objective stability;` takes no goal"));
+                    self.err(Diagnostic::error(
+                        it.span,
+                        "`objective stability;` takes no goal",
+                    ));
                     return None;
                 }
                 Some(Objective::Stability)
@@ -1229,47 +1734,71 @@ impl<'a> Checker<'a> {
             }
             "hinf" => {
                 let (from, to) = pair(self)?;
-                Some(Objective::Hinf { from, to, target: target(self, "minimize", "<=")? })
+                Some(Objective::Hinf {
+                    from,
+                    to,
+                    target: target(self, "minimize", "<=")?,
+                })
             }
             "linf" => {
                 let (from, to) = pair(self)?;
                 let t = target(self, "minimize", "<=")?;
-                Some(Objective::Linf { from, to, target: t, xi: param(self, "xi"), phi: param(self, "phi") })
+                Some(Objective::Linf {
+                    from,
+                    to,
+                    target: t,
+                    xi: param(self, "xi"),
+                    phi: param(self, "phi"),
+                })
             }
             "input_norm" => {
                 if let Some(s) = signals.first() {
                     if !self.inputs.iter().any(|i| i.name == s.node) {
-                        self.err(Diagnostic::error(s.span, format!("`{}` is not an input", s.node)));
+                        self.err(Diagnostic::error(
+                            s.span,
+                            format!("`{}` is not an input", s.node),
+                        ));
                         return None;
                     }
                 }
                 let t = target(self, "minimize", "<=")?;
-                Some(Objective::InputNorm { target: t, initial: initial(self)? })
+                Some(Objective::InputNorm {
+                    target: t,
+                    initial: initial(self)?,
+                })
             }
             "output_norm" => {
                 let Some(s) = signals.first() else {
-                    self.err(Diagnostic::error(it.span, "`output_norm` needs an output: `output_norm(z) <= ...`"));
+                    self.err(Diagnostic::error(
+                        it.span,
+                        "`output_norm` needs an output: `output_norm(z) <= ...`",
+                    ));
                     return None;
                 };
                 let o = output(self, s)?;
                 let t = target(self, "minimize", "<=")?;
-                Some(Objective::OutputNorm { output: o, target: t, initial: initial(self)? })
+                Some(Objective::OutputNorm {
+                    output: o,
+                    target: t,
+                    initial: initial(self)?,
+                })
             }
             "saturation" => {
                 match goal {
                     Some(Goal::Word(w)) if w.node == "region" => {}
                     _ => {
-                        self.err(Diagnostic::error(it.span, "write `objective saturation region;`"));
+                        self.err(Diagnostic::error(
+                            it.span,
+                            "write `objective saturation region;`",
+                        ));
                         return None;
                     }
-                }
-                if !self.inputs.is_empty() && self.names.values().all(|_| true) {
-                    // Saturation levels are checked by the model stage together with `input ... saturate`.
                 }
                 Some(Objective::SaturationRegion)
             }
             other => {
-                let mut d = Diagnostic::error(name.span, format!("unknown objective `{other}`")).with_label(format!("objectives: {}", kinds.join(", ")));
+                let mut d = Diagnostic::error(name.span, format!("unknown objective `{other}`"))
+                    .with_label(format!("objectives: {}", kinds.join(", ")));
                 if let Some(c) = suggest(other, kinds) {
                     d = d.with_help(format!("did you mean `{c}`?"));
                 }
@@ -1279,13 +1808,25 @@ impl<'a> Checker<'a> {
         }
     }
 
-    fn named(&mut self, args: &[NamedArg], allowed: &[&str], what: &str) -> Option<HashMap<String, f64>> {
+    fn named(
+        &mut self,
+        args: &[NamedArg],
+        allowed: &[&str],
+        what: &str,
+    ) -> Option<HashMap<String, f64>> {
         let mut out = HashMap::new();
         for a in args {
             if !allowed.contains(&a.name.node.as_str()) {
                 self.err(
-                    Diagnostic::error(a.name.span, format!("{what} has no parameter `{}`", a.name.node))
-                        .with_label(if allowed.is_empty() { "no parameters".to_string() } else { format!("parameters: {}", allowed.join(", ")) }),
+                    Diagnostic::error(
+                        a.name.span,
+                        format!("{what} has no parameter `{}`", a.name.node),
+                    )
+                    .with_label(if allowed.is_empty() {
+                        "no parameters".to_string()
+                    } else {
+                        format!("parameters: {}", allowed.join(", "))
+                    }),
                 );
                 return None;
             }
@@ -1299,16 +1840,29 @@ impl<'a> Checker<'a> {
         match name.node.as_str() {
             "basic" | "tuan" => {
                 self.named(args, &[], &format!("relaxation `{}`", name.node))?;
-                Some(if name.node == "basic" { Relaxation::Basic } else { Relaxation::Tuan })
+                Some(if name.node == "basic" {
+                    Relaxation::Basic
+                } else {
+                    Relaxation::Tuan
+                })
             }
             "tanaka" => {
                 let p = self.named(args, &["s"], "relaxation `tanaka`")?;
                 let Some(s) = p.get("s").copied() else {
-                    self.err(Diagnostic::error(span, "`tanaka` needs `s`, the most rules that fire at once").with_help("write `relaxation tanaka(s = 4);`"));
+                    self.err(
+                        Diagnostic::error(
+                            span,
+                            "`tanaka` needs `s`, the most rules that fire at once",
+                        )
+                        .with_help("write `relaxation tanaka(s = 4);`"),
+                    );
                     return None;
                 };
                 if s.fract() != 0.0 || s < 1.0 {
-                    self.err(Diagnostic::error(span, format!("`s` must be a whole number >= 1, found {s}")));
+                    self.err(Diagnostic::error(
+                        span,
+                        format!("`s` must be a whole number >= 1, found {s}"),
+                    ));
                     return None;
                 }
                 Some(Relaxation::Tanaka { s: s as usize })
@@ -1317,13 +1871,17 @@ impl<'a> Checker<'a> {
                 let p = self.named(args, &["kappa"], "relaxation `membership_mismatch`")?;
                 let kappa = p.get("kappa").copied().unwrap_or(0.0);
                 if !(0.0..1.0).contains(&kappa) {
-                    self.err(Diagnostic::error(span, format!("`kappa` must be in [0, 1), found {kappa}")));
+                    self.err(Diagnostic::error(
+                        span,
+                        format!("`kappa` must be in [0, 1), found {kappa}"),
+                    ));
                     return None;
                 }
                 Some(Relaxation::MembershipMismatch { kappa })
             }
             other => {
-                let mut d = Diagnostic::error(name.span, format!("unknown relaxation `{other}`")).with_label(format!("relaxations: {}", kinds.join(", ")));
+                let mut d = Diagnostic::error(name.span, format!("unknown relaxation `{other}`"))
+                    .with_label(format!("relaxations: {}", kinds.join(", ")));
                 if let Some(c) = suggest(other, kinds) {
                     d = d.with_help(format!("did you mean `{c}`?"));
                 }
@@ -1338,8 +1896,11 @@ impl<'a> Checker<'a> {
             Value::Range(lo, hi, step) => {
                 let l = self.scalar(lo, "a range bound")?;
                 let h = self.scalar(hi, "a range bound")?;
-                if !(l < h) || l < 0.0 {
-                    self.err(Diagnostic::error(s.span, format!("`{}` needs 0 <= lo < hi, found {l} .. {h}", s.key.node)));
+                if l >= h || l.is_nan() || h.is_nan() || l < 0.0 {
+                    self.err(Diagnostic::error(
+                        s.span,
+                        format!("`{}` needs 0 <= lo < hi, found {l} .. {h}", s.key.node),
+                    ));
                     return None;
                 }
                 let st = match step {
@@ -1349,7 +1910,10 @@ impl<'a> Checker<'a> {
                 Some((l, h, st))
             }
             Value::Expr(e) => {
-                self.err(Diagnostic::error(e.span, format!("`{}` needs a range `lo .. hi`", s.key.node)));
+                self.err(Diagnostic::error(
+                    e.span,
+                    format!("`{}` needs a range `lo .. hi`", s.key.node),
+                ));
                 None
             }
         }
@@ -1359,7 +1923,10 @@ impl<'a> Checker<'a> {
         match &s.value {
             Value::Expr(e) => self.scalar(e, &format!("`{}`", s.key.node)),
             Value::Range(..) => {
-                self.err(Diagnostic::error(s.span, format!("`{}` needs a single value, not a range", s.key.node)));
+                self.err(Diagnostic::error(
+                    s.span,
+                    format!("`{}` needs a single value, not a range", s.key.node),
+                ));
                 None
             }
         }
@@ -1373,7 +1940,8 @@ impl<'a> Checker<'a> {
             "mixed" => &["sampling", "beta", "rho"],
             other => {
                 let kinds = ["continuous", "periodic", "aperiodic", "mixed"];
-                let mut d = Diagnostic::error(kind.span, format!("unknown trigger `{other}`")).with_label(format!("triggers: {}", kinds.join(", ")));
+                let mut d = Diagnostic::error(kind.span, format!("unknown trigger `{other}`"))
+                    .with_label(format!("triggers: {}", kinds.join(", ")));
                 if let Some(c) = suggest(other, kinds) {
                     d = d.with_help(format!("did you mean `{c}`?"));
                 }
@@ -1386,19 +1954,32 @@ impl<'a> Checker<'a> {
         for s in settings {
             if !allowed.contains(&s.key.node.as_str()) {
                 self.err(
-                    Diagnostic::error(s.key.span, format!("trigger `{}` has no setting `{}`", kind.node, s.key.node))
-                        .with_label(if allowed.is_empty() { "no settings".to_string() } else { format!("settings: {}", allowed.join(", ")) }),
+                    Diagnostic::error(
+                        s.key.span,
+                        format!("trigger `{}` has no setting `{}`", kind.node, s.key.node),
+                    )
+                    .with_label(if allowed.is_empty() {
+                        "no settings".to_string()
+                    } else {
+                        format!("settings: {}", allowed.join(", "))
+                    }),
                 );
                 ok = false;
             } else if get.insert(s.key.node.as_str(), s).is_some() {
-                self.err(Diagnostic::error(s.key.span, format!("setting `{}` is given twice", s.key.node)));
+                self.err(Diagnostic::error(
+                    s.key.span,
+                    format!("setting `{}` is given twice", s.key.node),
+                ));
                 ok = false;
             }
         }
         let require = |this: &mut Self, key: &str| -> Option<&Setting> {
             let s = get.get(key).copied();
             if s.is_none() && ok {
-                this.err(Diagnostic::error(kind.span, format!("trigger `{}` needs `{key} = ...;`", kind.node)));
+                this.err(Diagnostic::error(
+                    kind.span,
+                    format!("trigger `{}` needs `{key} = ...;`", kind.node),
+                ));
             }
             s
         };
@@ -1428,20 +2009,32 @@ impl<'a> Checker<'a> {
                         }
                         let nu = self.setting_scalar(s)?;
                         if nu < 0.0 {
-                            self.err(Diagnostic::error(s.span, "the threshold nu must be non-negative"));
+                            self.err(Diagnostic::error(
+                                s.span,
+                                "the threshold nu must be non-negative",
+                            ));
                             return None;
                         }
                         let mut adaptive = None;
                         for m in &s.modifiers {
                             if m.name.node != "adaptive" {
-                                self.err(Diagnostic::error(m.name.span, format!("unknown threshold modifier `{}`", m.name.node)).with_help("write `adaptive(mu1 = .., mu2 = .., mu3 = ..)`"));
+                                self.err(
+                                    Diagnostic::error(
+                                        m.name.span,
+                                        format!("unknown threshold modifier `{}`", m.name.node),
+                                    )
+                                    .with_help("write `adaptive(mu1 = .., mu2 = .., mu3 = ..)`"),
+                                );
                                 return None;
                             }
                             let p = self.named(&m.args, &["mu1", "mu2", "mu3"], "`adaptive`")?;
                             match (p.get("mu1"), p.get("mu2"), p.get("mu3")) {
                                 (Some(a), Some(b), Some(c)) => adaptive = Some((*a, *b, *c)),
                                 _ => {
-                                    self.err(Diagnostic::error(m.name.span, "`adaptive` needs mu1, mu2 and mu3"));
+                                    self.err(Diagnostic::error(
+                                        m.name.span,
+                                        "`adaptive` needs mu1, mu2 and mu3",
+                                    ));
                                     return None;
                                 }
                             }
@@ -1450,32 +2043,53 @@ impl<'a> Checker<'a> {
                     }
                     None => None,
                 };
-                let weight = match get.get("weight") {
-                    None => Weight::Synthesize,
-                    Some(s) => match &s.value {
-                        Value::Expr(Expr { kind: ExprKind::Name(w), .. }) if w == "synthesize" => Weight::Synthesize,
-                        Value::Expr(e) => {
-                            let w = self.eval_const(e)?;
-                            if w.nrows() != n || w.ncols() != n {
-                                self.err(Diagnostic::error(e.span, format!("the trigger weight must be {n}x{n}")).with_label(format!("this is {}x{}", w.nrows(), w.ncols())));
+                let weight =
+                    match get.get("weight") {
+                        None => Weight::Synthesize,
+                        Some(s) => match &s.value {
+                            Value::Expr(Expr {
+                                kind: ExprKind::Name(w),
+                                ..
+                            }) if w == "synthesize" => Weight::Synthesize,
+                            Value::Expr(e) => {
+                                let w = self.eval_const(e)?;
+                                if w.nrows() != n || w.ncols() != n {
+                                    self.err(
+                                        Diagnostic::error(
+                                            e.span,
+                                            format!("the trigger weight must be {n}x{n}"),
+                                        )
+                                        .with_label(format!("this is {}x{}", w.nrows(), w.ncols())),
+                                    );
+                                    return None;
+                                }
+                                Weight::Given(w)
+                            }
+                            Value::Range(..) => {
+                                self.err(Diagnostic::error(
+                                    s.span,
+                                    "the weight is a matrix or `synthesize`",
+                                ));
                                 return None;
                             }
-                            Weight::Given(w)
-                        }
-                        Value::Range(..) => {
-                            self.err(Diagnostic::error(s.span, "the weight is a matrix or `synthesize`"));
-                            return None;
-                        }
-                    },
-                };
-                Some(Trigger::Aperiodic { sampling: (lo, hi), threshold, weight })
+                        },
+                    };
+                Some(Trigger::Aperiodic {
+                    sampling: (lo, hi),
+                    threshold,
+                    weight,
+                })
             }
             _ => {
                 let s = require(self, "sampling")?;
                 let (lo, hi, _) = self.range_setting(s)?;
                 let beta = require(self, "beta").and_then(|s| self.setting_scalar(s));
                 let rho = require(self, "rho").and_then(|s| self.setting_scalar(s));
-                Some(Trigger::Mixed { sampling: (lo, hi), beta: beta?, rho: rho? })
+                Some(Trigger::Mixed {
+                    sampling: (lo, hi),
+                    beta: beta?,
+                    rho: rho?,
+                })
             }
         };
         if ok {
@@ -1498,7 +2112,10 @@ impl<'a> Checker<'a> {
             match st {
                 SimStmt::Setting(s) => {
                     if seen.contains(&s.key.node) {
-                        self.err(Diagnostic::error(s.key.span, format!("`{}` is given twice", s.key.node)));
+                        self.err(Diagnostic::error(
+                            s.key.span,
+                            format!("`{}` is given twice", s.key.node),
+                        ));
                         ok = false;
                         continue;
                     }
@@ -1506,13 +2123,21 @@ impl<'a> Checker<'a> {
                     match s.key.node.as_str() {
                         "x0" => match &s.value {
                             Value::Expr(e) => x0 = self.vector(e, n, "x0"),
-                            Value::Range(..) => self.err(Diagnostic::error(s.span, "x0 is a vector, not a range")),
+                            Value::Range(..) => {
+                                self.err(Diagnostic::error(s.span, "x0 is a vector, not a range"))
+                            }
                         },
                         "time" => {
                             if let Some((a, b, st)) = self.range_setting(s) {
                                 let h = st.unwrap_or((b - a) / 1000.0);
                                 if (b - a) / h > 1e9 {
-                                    self.err(Diagnostic::error(s.span, "too many time steps (more than 1e9)").with_help("increase the step"));
+                                    self.err(
+                                        Diagnostic::error(
+                                            s.span,
+                                            "too many time steps (more than 1e9)",
+                                        )
+                                        .with_help("increase the step"),
+                                    );
                                     ok = false;
                                 } else {
                                     time = Some((a, b, h));
@@ -1522,18 +2147,36 @@ impl<'a> Checker<'a> {
                             }
                         }
                         "seed" => match self.setting_scalar(s) {
-                            Some(v) if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 => seed = v as u64,
-                            Some(_) => self.err(Diagnostic::error(s.span, "the seed is a non-negative whole number")),
+                            Some(v) if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 => {
+                                seed = v as u64
+                            }
+                            Some(_) => self.err(Diagnostic::error(
+                                s.span,
+                                "the seed is a non-negative whole number",
+                            )),
                             None => ok = false,
                         },
                         "integrator" => match &s.value {
-                            Value::Expr(Expr { kind: ExprKind::Name(w), .. }) if w == "rk4" => integrator = Integrator::Rk4,
-                            Value::Expr(Expr { kind: ExprKind::Name(w), .. }) if w == "dopri5" => integrator = Integrator::Dopri5,
-                            _ => self.err(Diagnostic::error(s.span, "unknown integrator").with_help("use `rk4` or `dopri5`")),
+                            Value::Expr(Expr {
+                                kind: ExprKind::Name(w),
+                                ..
+                            }) if w == "rk4" => integrator = Integrator::Rk4,
+                            Value::Expr(Expr {
+                                kind: ExprKind::Name(w),
+                                ..
+                            }) if w == "dopri5" => integrator = Integrator::Dopri5,
+                            _ => self.err(
+                                Diagnostic::error(s.span, "unknown integrator")
+                                    .with_help("use `rk4` or `dopri5`"),
+                            ),
                         },
                         other => {
                             let keys = ["x0", "time", "seed", "integrator"];
-                            let mut d = Diagnostic::error(s.key.span, format!("unknown simulate setting `{other}`")).with_label(format!("settings: {}", keys.join(", ")));
+                            let mut d = Diagnostic::error(
+                                s.key.span,
+                                format!("unknown simulate setting `{other}`"),
+                            )
+                            .with_label(format!("settings: {}", keys.join(", ")));
                             if let Some(c) = suggest(other, keys) {
                                 d = d.with_help(format!("did you mean `{c}`?"));
                             }
@@ -1543,13 +2186,23 @@ impl<'a> Checker<'a> {
                     }
                 }
                 SimStmt::Signal { name, param, value } => {
-                    let Some(di) = self.disturbances.iter().position(|d| d.name == name.node) else {
-                        self.err(Diagnostic::error(name.span, format!("`{}` is not a disturbance", name.node)).with_help("signals in `simulate` define disturbances: `d(t) = ...;`"));
+                    let Some(di) = self.disturbances.iter().position(|d| d.name == name.node)
+                    else {
+                        self.err(
+                            Diagnostic::error(
+                                name.span,
+                                format!("`{}` is not a disturbance", name.node),
+                            )
+                            .with_help("signals in `simulate` define disturbances: `d(t) = ...;`"),
+                        );
                         ok = false;
                         continue;
                     };
                     if param.node != "t" {
-                        self.err(Diagnostic::error(param.span, "the signal parameter must be `t`"));
+                        self.err(Diagnostic::error(
+                            param.span,
+                            "the signal parameter must be `t`",
+                        ));
                         ok = false;
                         continue;
                     }
@@ -1558,9 +2211,19 @@ impl<'a> Checker<'a> {
                     env.unavailable.retain(|(n, _)| n != "t");
                     env.locals.push(("t".into(), Mat::zeros(1, 1)));
                     match env.eval(value) {
-                        Ok(v) if v.nrows() == len && v.ncols() == 1 => signals.push((di, value.clone())),
+                        Ok(v) if v.nrows() == len && v.ncols() == 1 => {
+                            signals.push((di, value.clone()))
+                        }
                         Ok(v) => {
-                            self.err(Diagnostic::error(value.span, format!("disturbance `{}` has {len} components but this is {}x{}", name.node, v.nrows(), v.ncols())));
+                            self.err(Diagnostic::error(
+                                value.span,
+                                format!(
+                                    "disturbance `{}` has {len} components but this is {}x{}",
+                                    name.node,
+                                    v.nrows(),
+                                    v.ncols()
+                                ),
+                            ));
                             ok = false;
                         }
                         Err(d) => {
@@ -1579,17 +2242,31 @@ impl<'a> Checker<'a> {
         }
         let Some(x0) = x0 else {
             if ok && !seen.iter().any(|k| k == "x0") {
-                self.err(Diagnostic::error(span, "`simulate` needs an initial state").with_help("add `x0 = [...];`"));
+                self.err(
+                    Diagnostic::error(span, "`simulate` needs an initial state")
+                        .with_help("add `x0 = [...];`"),
+                );
             }
             return None;
         };
         let Some(time) = time else {
             if ok && !seen.iter().any(|k| k == "time") {
-                self.err(Diagnostic::error(span, "`simulate` needs a time span").with_help("add `time = 0 .. 10 step 0.01;`"));
+                self.err(
+                    Diagnostic::error(span, "`simulate` needs a time span")
+                        .with_help("add `time = 0 .. 10 step 0.01;`"),
+                );
             }
             return None;
         };
-        ok.then_some(Simulation { x0, time, signals, seed, integrator, dynamics, span })
+        ok.then_some(Simulation {
+            x0,
+            time,
+            signals,
+            seed,
+            integrator,
+            dynamics,
+            span,
+        })
     }
 
     fn dynamics(&mut self, body: &[Spanned<DynStmt>], span: Span) -> Option<Dynamics> {
@@ -1608,12 +2285,23 @@ impl<'a> Checker<'a> {
                             ok = false;
                             continue;
                         }
-                        if self.names.contains_key(&v.name.node) || extra.iter().any(|s| s.name == v.name.node) {
-                            self.err(Diagnostic::error(v.name.span, format!("`{}` is already declared", v.name.node)));
+                        if self.names.contains_key(&v.name.node)
+                            || extra.iter().any(|s| s.name == v.name.node)
+                        {
+                            self.err(Diagnostic::error(
+                                v.name.span,
+                                format!("`{}` is already declared", v.name.node),
+                            ));
                             ok = false;
                             continue;
                         }
-                        extra.push(Signal { name: v.name.node.clone(), len: len as usize, is_vector: v.len.is_some(), offset: off, span: v.name.span });
+                        extra.push(Signal {
+                            name: v.name.node.clone(),
+                            len: len as usize,
+                            is_vector: v.len.is_some(),
+                            offset: off,
+                            span: v.name.span,
+                        });
                         off += len as usize;
                     }
                 }
@@ -1623,7 +2311,9 @@ impl<'a> Checker<'a> {
                 },
                 DynStmt::Derivative(name, e) => {
                     if let Some(prev) = ders.iter().find(|d| d.0 == name.node) {
-                        let d = Diagnostic::error(st.span, format!("`{}'` is given twice", name.node)).with_secondary(prev.2, "first here");
+                        let d =
+                            Diagnostic::error(st.span, format!("`{}'` is given twice", name.node))
+                                .with_secondary(prev.2, "first here");
                         self.err(d);
                         ok = false;
                         continue;
@@ -1644,11 +2334,17 @@ impl<'a> Checker<'a> {
             locals.push((s.name.clone(), Mat::zeros(s.len, 1)));
         }
         locals.push(("t".into(), Mat::zeros(1, 1)));
-        let all: Vec<Signal> = self.states.iter().cloned().chain(extra.iter().cloned()).collect();
+        let all: Vec<Signal> = self
+            .states
+            .iter()
+            .cloned()
+            .chain(extra.iter().cloned())
+            .collect();
         let mut out = Vec::new();
         for (name, e, dspan) in &ders {
             let Some(sig) = all.iter().find(|s| s.name == *name) else {
-                let mut d = Diagnostic::error(*dspan, format!("`{name}` is not a state")).with_label("a derivative needs a state");
+                let mut d = Diagnostic::error(*dspan, format!("`{name}` is not a state"))
+                    .with_label("a derivative needs a state");
                 if let Some(c) = suggest(name, all.iter().map(|s| s.name.as_str())) {
                     d = d.with_help(format!("did you mean `{c}`?"));
                 } else {
@@ -1660,9 +2356,20 @@ impl<'a> Checker<'a> {
             };
             let env = self.state_env(Mode::Shapes, &locals, &[Kind::Input, Kind::Disturbance]);
             match env.eval(e) {
-                Ok(v) if v.nrows() == sig.len && v.ncols() == 1 => out.push((name.clone(), e.clone())),
+                Ok(v) if v.nrows() == sig.len && v.ncols() == 1 => {
+                    out.push((name.clone(), e.clone()))
+                }
                 Ok(v) => {
-                    self.err(Diagnostic::error(e.span, format!("`{name}'` must have {} component{}, but this is {}x{}", sig.len, if sig.len == 1 { "" } else { "s" }, v.nrows(), v.ncols())));
+                    self.err(Diagnostic::error(
+                        e.span,
+                        format!(
+                            "`{name}'` must have {} component{}, but this is {}x{}",
+                            sig.len,
+                            if sig.len == 1 { "" } else { "s" },
+                            v.nrows(),
+                            v.ncols()
+                        ),
+                    ));
                     ok = false;
                 }
                 Err(d) => {
@@ -1673,19 +2380,31 @@ impl<'a> Checker<'a> {
         }
         for s in &all {
             if !ders.iter().any(|d| d.0 == s.name) {
-                self.err(Diagnostic::error(span, format!("`dynamics` gives no derivative for state `{}`", s.name)).with_help(format!("add `{}' = ...;`", s.name)));
+                self.err(
+                    Diagnostic::error(
+                        span,
+                        format!("`dynamics` gives no derivative for state `{}`", s.name),
+                    )
+                    .with_help(format!("add `{}' = ...;`", s.name)),
+                );
                 ok = false;
             }
         }
         // Order derivatives as the states.
         out.sort_by_key(|(n, _)| all.iter().position(|s| s.name == *n));
-        ok.then_some(Dynamics { extra_states: extra, consts, derivatives: out, span })
+        ok.then_some(Dynamics {
+            extra_states: extra,
+            consts,
+            derivatives: out,
+            span,
+        })
     }
 }
 
 fn is_c_identifier(s: &str) -> bool {
     let mut ch = s.chars();
-    matches!(ch.next(), Some(c) if c.is_ascii_alphabetic() || c == '_') && ch.all(|c| c.is_ascii_alphanumeric() || c == '_')
+    matches!(ch.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && ch.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 /// Calls `f(name, span, is_call)` for every name and call in `e`.

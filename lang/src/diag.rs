@@ -61,7 +61,10 @@ impl Diagnostic {
 
     /// A warning at `span`.
     pub fn warning(span: Span, message: impl Into<String>) -> Self {
-        Diagnostic { severity: Severity::Warning, ..Diagnostic::error(span, message) }
+        Diagnostic {
+            severity: Severity::Warning,
+            ..Diagnostic::error(span, message)
+        }
     }
 
     /// Sets the primary label.
@@ -72,7 +75,10 @@ impl Diagnostic {
 
     /// Adds a secondary label.
     pub fn with_secondary(mut self, span: Span, message: impl Into<String>) -> Self {
-        self.secondary.push(Label { span, message: message.into() });
+        self.secondary.push(Label {
+            span,
+            message: message.into(),
+        });
         self
     }
 
@@ -128,8 +134,10 @@ pub fn line_col(source: &str, at: usize) -> (usize, usize) {
 /// the source line, carets under the span, `= help: ...`). `color` adds ANSI colours.
 pub fn render(file_name: &str, source: &str, diagnostics: &[Diagnostic], color: bool) -> String {
     let file = SimpleFile::new(file_name, source);
-    let mut config = Config::default();
-    config.chars = codespan_reporting::term::Chars::ascii();
+    let config = Config {
+        chars: codespan_reporting::term::Chars::ascii(),
+        ..Config::default()
+    };
     let mut out: Vec<u8> = Vec::new();
     for d in diagnostics {
         let d = d.clone().clamped(source);
@@ -144,7 +152,9 @@ pub fn render(file_name: &str, source: &str, diagnostics: &[Diagnostic], color: 
         if result.is_err() {
             // Fall back to a plain line: rendering must never lose a diagnostic.
             let (l, c) = line_col(source, d.span.start);
-            out.extend_from_slice(format!("error: {}\n --> {file_name}:{l}:{c}\n", d.message).as_bytes());
+            out.extend_from_slice(
+                format!("error: {}\n --> {file_name}:{l}:{c}\n", d.message).as_bytes(),
+            );
         }
     }
     String::from_utf8_lossy(&out).into_owned()
@@ -163,7 +173,9 @@ fn to_codespan(d: &Diagnostic) -> CsDiagnostic<()> {
     if let Some(h) = &d.help {
         notes.push(format!("help: {h}"));
     }
-    base.with_message(&d.message).with_labels(labels).with_notes(notes)
+    base.with_message(&d.message)
+        .with_labels(labels)
+        .with_notes(notes)
 }
 
 /// A diagnostic in the JSON form printed by `tsfc check --format json`.

@@ -51,9 +51,35 @@ pub struct Env<'a> {
 
 /// Names of the built-in functions.
 pub const BUILTINS: &[&str] = &[
-    "eye", "zeros", "ones", "diag", "inv", "det", "trace", "transpose", "sqrt", "sin", "cos",
-    "tan", "atan", "atan2", "exp", "log", "abs", "sign", "sinc", "norm", "dot", "cross", "skew",
-    "min", "max", "sum", "mean", "blkdiag", "pi",
+    "eye",
+    "zeros",
+    "ones",
+    "diag",
+    "inv",
+    "det",
+    "trace",
+    "transpose",
+    "sqrt",
+    "sin",
+    "cos",
+    "tan",
+    "atan",
+    "atan2",
+    "exp",
+    "log",
+    "abs",
+    "sign",
+    "sinc",
+    "norm",
+    "dot",
+    "cross",
+    "skew",
+    "min",
+    "max",
+    "sum",
+    "mean",
+    "blkdiag",
+    "pi",
 ];
 
 type R = Result<Mat, Diagnostic>;
@@ -122,7 +148,8 @@ impl Env<'_> {
                 .with_label("call it with arguments")
                 .with_help(format!("write `{name}(...)`"));
         }
-        let mut d = Diagnostic::error(span, format!("unknown name `{name}`")).with_label("not declared");
+        let mut d =
+            Diagnostic::error(span, format!("unknown name `{name}`")).with_label("not declared");
         let cands = self
             .locals
             .iter()
@@ -162,13 +189,19 @@ impl Env<'_> {
     fn matrix(&self, rows: &[Vec<Expr>], sp: Span, depth: usize) -> R {
         let mut blocks: Vec<Mat> = Vec::new();
         for row in rows {
-            let vals = row.iter().map(|x| self.eval_depth(x, depth)).collect::<Result<Vec<_>, _>>()?;
+            let vals = row
+                .iter()
+                .map(|x| self.eval_depth(x, depth))
+                .collect::<Result<Vec<_>, _>>()?;
             let h = vals.first().map_or(0, |m| m.nrows());
             for (v, x) in vals.iter().zip(row) {
                 if v.nrows() != h {
                     return Err(Diagnostic::error(
                         x.span,
-                        format!("matrix row mixes heights: this element has {} rows, the first has {h}", v.nrows()),
+                        format!(
+                            "matrix row mixes heights: this element has {} rows, the first has {h}",
+                            v.nrows()
+                        ),
                     )
                     .with_label(format!("this is {}", shape(v)))
                     .with_help("elements separated by `,` must have the same number of rows"));
@@ -186,7 +219,9 @@ impl Env<'_> {
         let w = blocks.first().map_or(0, |m| m.ncols());
         for (b, row) in blocks.iter().zip(rows) {
             if b.ncols() != w {
-                let s = row.first().map_or(sp, |f| row.iter().fold(f.span, |acc, x| acc.join(x.span)));
+                let s = row
+                    .first()
+                    .map_or(sp, |f| row.iter().fold(f.span, |acc, x| acc.join(x.span)));
                 return Err(Diagnostic::error(
                     s,
                     format!("matrix rows have different widths: this row has {} columns, the first has {w}", b.ncols()),
@@ -208,22 +243,40 @@ impl Env<'_> {
     fn int(&self, e: &Expr, depth: usize) -> Result<i64, Diagnostic> {
         let v = self.eval_depth(e, depth)?;
         if !is_scalar(&v) {
-            return Err(Diagnostic::error(e.span, format!("expected an integer, found {}", shape(&v))));
+            return Err(Diagnostic::error(
+                e.span,
+                format!("expected an integer, found {}", shape(&v)),
+            ));
         }
         let x = v[(0, 0)];
         if x.fract() != 0.0 || !x.is_finite() || x.abs() > 1e9 {
-            return Err(Diagnostic::error(e.span, format!("expected an integer, found {x}"))
-                .with_label("not a whole number"));
+            return Err(
+                Diagnostic::error(e.span, format!("expected an integer, found {x}"))
+                    .with_label("not a whole number"),
+            );
         }
         Ok(x as i64)
     }
 
-    fn range(&self, a: &IndexArg, len: usize, sp: Span, depth: usize) -> Result<(usize, usize), Diagnostic> {
+    fn range(
+        &self,
+        a: &IndexArg,
+        len: usize,
+        sp: Span,
+        depth: usize,
+    ) -> Result<(usize, usize), Diagnostic> {
         let check = |v: i64, e: &Expr, allow_end: bool| -> Result<usize, Diagnostic> {
-            let max = if allow_end { len as i64 } else { len as i64 - 1 };
+            let max = if allow_end {
+                len as i64
+            } else {
+                len as i64 - 1
+            };
             if v < 0 || v > max {
-                Err(Diagnostic::error(e.span, format!("index {v} is out of bounds"))
-                    .with_label(format!("valid indices are 0..{len} (0-based, end excluded)")))
+                Err(
+                    Diagnostic::error(e.span, format!("index {v} is out of bounds")).with_label(
+                        format!("valid indices are 0..{len} (0-based, end excluded)"),
+                    ),
+                )
             } else {
                 Ok(v as usize)
             }
@@ -254,11 +307,18 @@ impl Env<'_> {
                 } else if m.nrows() == 1 {
                     (m.ncols(), false)
                 } else {
-                    return Err(Diagnostic::error(sp, format!("a single index needs a vector, found {}", shape(&m)))
-                        .with_help("index a matrix as `M[i, j]`"));
+                    return Err(Diagnostic::error(
+                        sp,
+                        format!("a single index needs a vector, found {}", shape(&m)),
+                    )
+                    .with_help("index a matrix as `M[i, j]`"));
                 };
                 let (l, h) = self.range(one, len, sp, depth)?;
-                Ok(if col { m.rows(l, h - l).into_owned() } else { m.columns(l, h - l).into_owned() })
+                Ok(if col {
+                    m.rows(l, h - l).into_owned()
+                } else {
+                    m.columns(l, h - l).into_owned()
+                })
             }
             [r, c] => {
                 let (r0, r1) = self.range(r, m.nrows(), sp, depth)?;
@@ -272,18 +332,25 @@ impl Env<'_> {
     fn call(&self, name: &str, name_span: Span, args: &[Arg], sp: Span, depth: usize) -> R {
         if let Some(a) = args.iter().find(|a| a.name.is_some()) {
             let n = a.name.as_ref().map_or(sp, |n| n.span);
-            return Err(Diagnostic::error(n, format!("`{name}` takes no named arguments"))
-                .with_help("pass the arguments by position"));
+            return Err(
+                Diagnostic::error(n, format!("`{name}` takes no named arguments"))
+                    .with_help("pass the arguments by position"),
+            );
         }
         if let Some(f) = self.fns.get(name) {
             if f.params.len() != args.len() {
                 return Err(arity(name, name_span, f.params.len(), args.len()));
             }
             if depth > 64 {
-                return Err(Diagnostic::error(sp, format!("`{name}` calls itself too deeply"))
-                    .with_help("functions may not be recursive"));
+                return Err(
+                    Diagnostic::error(sp, format!("`{name}` calls itself too deeply"))
+                        .with_help("functions may not be recursive"),
+                );
             }
-            let vals = args.iter().map(|a| self.eval_depth(&a.value, depth)).collect::<Result<Vec<_>, _>>()?;
+            let vals = args
+                .iter()
+                .map(|a| self.eval_depth(&a.value, depth))
+                .collect::<Result<Vec<_>, _>>()?;
             let inner = Env {
                 consts: self.consts,
                 fns: self.fns,
@@ -291,13 +358,17 @@ impl Env<'_> {
                 unavailable: Vec::new(),
                 mode: self.mode,
             };
-            return inner.eval_depth(&f.body, depth + 1).map_err(|d| {
-                d.with_secondary(sp, format!("in this call of `{name}`"))
-            });
+            return inner
+                .eval_depth(&f.body, depth + 1)
+                .map_err(|d| d.with_secondary(sp, format!("in this call of `{name}`")));
         }
         if !BUILTINS.contains(&name) {
-            let mut d = Diagnostic::error(name_span, format!("unknown function `{name}`")).with_label("not defined");
-            let cands = BUILTINS.iter().copied().chain(self.fns.keys().map(String::as_str));
+            let mut d = Diagnostic::error(name_span, format!("unknown function `{name}`"))
+                .with_label("not defined");
+            let cands = BUILTINS
+                .iter()
+                .copied()
+                .chain(self.fns.keys().map(String::as_str));
             if let Some(s) = suggest(name, cands) {
                 d = d.with_help(format!("did you mean `{s}`?"));
             } else {
@@ -305,23 +376,35 @@ impl Env<'_> {
             }
             return Err(d);
         }
-        let vals = args.iter().map(|a| self.eval_depth(&a.value, depth)).collect::<Result<Vec<_>, _>>()?;
+        let vals = args
+            .iter()
+            .map(|a| self.eval_depth(&a.value, depth))
+            .collect::<Result<Vec<_>, _>>()?;
         let spans: Vec<Span> = args.iter().map(|a| a.value.span).collect();
         builtin(name, name_span, &vals, &spans, sp, self.mode)
     }
 }
 
 fn arity(name: &str, span: Span, want: usize, got: usize) -> Diagnostic {
-    Diagnostic::error(span, format!("`{name}` takes {want} argument{}, {got} given", if want == 1 { "" } else { "s" }))
-        .with_label("wrong number of arguments")
+    Diagnostic::error(
+        span,
+        format!(
+            "`{name}` takes {want} argument{}, {got} given",
+            if want == 1 { "" } else { "s" }
+        ),
+    )
+    .with_label("wrong number of arguments")
 }
 
 fn binary(op: BinOp, x: Mat, y: Mat, xs: Span, ys: Span, sp: Span, mode: Mode) -> R {
     let mismatch = |what: &str, help: &str| {
-        Diagnostic::error(sp, format!("shape mismatch in {what}: {} and {}", shape(&x), shape(&y)))
-            .with_secondary(xs, format!("this is {}", shape(&x)))
-            .with_secondary(ys, format!("this is {}", shape(&y)))
-            .with_help(help.to_string())
+        Diagnostic::error(
+            sp,
+            format!("shape mismatch in {what}: {} and {}", shape(&x), shape(&y)),
+        )
+        .with_secondary(xs, format!("this is {}", shape(&x)))
+        .with_secondary(ys, format!("this is {}", shape(&y)))
+        .with_help(help.to_string())
     };
     match op {
         BinOp::Add | BinOp::Sub => {
@@ -333,7 +416,10 @@ fn binary(op: BinOp, x: Mat, y: Mat, xs: Span, ys: Span, sp: Span, mode: Mode) -
             } else if is_scalar(&x) {
                 Ok(y.map(|v| x[(0, 0)] + s * v))
             } else {
-                Err(mismatch(if op == BinOp::Add { "`+`" } else { "`-`" }, "both sides must have the same shape"))
+                Err(mismatch(
+                    if op == BinOp::Add { "`+`" } else { "`-`" },
+                    "both sides must have the same shape",
+                ))
             }
         }
         BinOp::Mul => {
@@ -344,7 +430,10 @@ fn binary(op: BinOp, x: Mat, y: Mat, xs: Span, ys: Span, sp: Span, mode: Mode) -
             } else if x.ncols() == y.nrows() {
                 Ok(&x * &y)
             } else {
-                Err(mismatch("`*`", "the left side's columns must equal the right side's rows"))
+                Err(mismatch(
+                    "`*`",
+                    "the left side's columns must equal the right side's rows",
+                ))
             }
         }
         BinOp::EMul => {
@@ -358,7 +447,10 @@ fn binary(op: BinOp, x: Mat, y: Mat, xs: Span, ys: Span, sp: Span, mode: Mode) -
         }
         BinOp::Div => {
             if !is_scalar(&y) {
-                return Err(mismatch("`/`", "divide by a scalar; for a matrix use `* inv(M)`"));
+                return Err(mismatch(
+                    "`/`",
+                    "divide by a scalar; for a matrix use `* inv(M)`",
+                ));
             }
             if y[(0, 0)] == 0.0 && mode == Mode::Exact {
                 return Err(Diagnostic::error(ys, "division by zero").with_label("this is 0"));
@@ -371,7 +463,10 @@ fn binary(op: BinOp, x: Mat, y: Mat, xs: Span, ys: Span, sp: Span, mode: Mode) -
             }
             let k = y[(0, 0)];
             if !is_scalar(&y) || x.nrows() != x.ncols() || k < 0.0 || k.fract() != 0.0 || k > 1e6 {
-                return Err(mismatch("`^`", "use scalar ^ scalar, or a square matrix ^ a non-negative integer"));
+                return Err(mismatch(
+                    "`^`",
+                    "use scalar ^ scalar, or a square matrix ^ a non-negative integer",
+                ));
             }
             let mut out = DMatrix::identity(x.nrows(), x.ncols());
             for _ in 0..k as usize {
@@ -399,7 +494,18 @@ fn dim_arg(v: &Mat, s: Span) -> Result<usize, Diagnostic> {
     if x.fract() == 0.0 && (0.0..=10_000.0).contains(&x) {
         Ok(x as usize)
     } else {
-        Err(Diagnostic::error(s, "expected a size (a whole number from 0 to 10000)").with_label(format!("this is {}", if is_scalar(v) { format!("{x}") } else { shape(v) })))
+        Err(
+            Diagnostic::error(s, "expected a size (a whole number from 0 to 10000)").with_label(
+                format!(
+                    "this is {}",
+                    if is_scalar(v) {
+                        format!("{x}")
+                    } else {
+                        shape(v)
+                    }
+                ),
+            ),
+        )
     }
 }
 
@@ -407,17 +513,29 @@ fn need_vec3(v: &Mat, s: Span, name: &str) -> Result<[f64; 3], Diagnostic> {
     if v.len() == 3 && (v.ncols() == 1 || v.nrows() == 1) {
         Ok([v[0], v[1], v[2]])
     } else {
-        Err(Diagnostic::error(s, format!("`{name}` needs a 3-vector, found {}", shape(v))))
+        Err(Diagnostic::error(
+            s,
+            format!("`{name}` needs a 3-vector, found {}", shape(v)),
+        ))
     }
 }
 
 fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) -> R {
-    let want = |n: usize| if a.len() == n { Ok(()) } else { Err(arity(name, ns, n, a.len())) };
+    let want = |n: usize| {
+        if a.len() == n {
+            Ok(())
+        } else {
+            Err(arity(name, ns, n, a.len()))
+        }
+    };
     let sq = |m: &Mat, s: Span| {
         if m.nrows() == m.ncols() {
             Ok(())
         } else {
-            Err(Diagnostic::error(s, format!("`{name}` needs a square matrix, found {}", shape(m))))
+            Err(Diagnostic::error(
+                s,
+                format!("`{name}` needs a square matrix, found {}", shape(m)),
+            ))
         }
     };
     match name {
@@ -431,8 +549,14 @@ fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) ->
             let v = if name == "zeros" { 0.0 } else { 1.0 };
             match a.len() {
                 1 => Ok(DMatrix::from_element(dim_arg(&a[0], s[0])?, 1, v)),
-                2 => Ok(DMatrix::from_element(dim_arg(&a[0], s[0])?, dim_arg(&a[1], s[1])?, v)),
-                n => Err(arity(name, ns, 2, n).with_help(format!("`{name}(n)` is an n-vector, `{name}(r, c)` an r x c matrix"))),
+                2 => Ok(DMatrix::from_element(
+                    dim_arg(&a[0], s[0])?,
+                    dim_arg(&a[1], s[1])?,
+                    v,
+                )),
+                n => Err(arity(name, ns, 2, n).with_help(format!(
+                    "`{name}(n)` is an n-vector, `{name}(r, c)` an r x c matrix"
+                ))),
             }
         }
         "diag" => {
@@ -443,7 +567,11 @@ fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) ->
                 Ok(DMatrix::from_diagonal(&nalgebra::DVector::from_vec(v)))
             } else {
                 sq(m, s[0])?;
-                Ok(DMatrix::from_column_slice(m.nrows(), 1, m.diagonal().as_slice()))
+                Ok(DMatrix::from_column_slice(
+                    m.nrows(),
+                    1,
+                    m.diagonal().as_slice(),
+                ))
             }
         }
         "inv" => {
@@ -453,7 +581,11 @@ fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) ->
                 Some(m) if m.iter().all(|v| v.is_finite()) => {
                     let cond = a[0].norm() * m.norm();
                     if cond > 1e14 && mode == Mode::Exact {
-                        Err(singular(sp, s[0], &format!("its condition number is about {cond:.1e}")))
+                        Err(singular(
+                            sp,
+                            s[0],
+                            &format!("its condition number is about {cond:.1e}"),
+                        ))
                     } else {
                         Ok(m)
                     }
@@ -484,7 +616,15 @@ fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) ->
                 "exp" => f64::exp,
                 "log" => f64::ln,
                 "abs" => f64::abs,
-                "sign" => |v: f64| if v > 0.0 { 1.0 } else if v < 0.0 { -1.0 } else { 0.0 },
+                "sign" => |v: f64| {
+                    if v > 0.0 {
+                        1.0
+                    } else if v < 0.0 {
+                        -1.0
+                    } else {
+                        0.0
+                    }
+                },
                 _ => sinc,
             };
             Ok(elementwise(&a[0], f))
@@ -504,7 +644,14 @@ fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) ->
             } else if is_scalar(x) {
                 Ok(y.map(|v| f(x[(0, 0)], v)))
             } else {
-                Err(Diagnostic::error(sp, format!("`{name}` needs arguments of the same shape, found {} and {}", shape(x), shape(y))))
+                Err(Diagnostic::error(
+                    sp,
+                    format!(
+                        "`{name}` needs arguments of the same shape, found {} and {}",
+                        shape(x),
+                        shape(y)
+                    ),
+                ))
             }
         }
         "norm" => want(1).map(|_| scalar(a[0].norm())),
@@ -518,21 +665,45 @@ fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) ->
         }
         "dot" => {
             want(2)?;
-            if a[0].len() != a[1].len() || !(a[0].ncols() == 1 || a[0].nrows() == 1) || !(a[1].ncols() == 1 || a[1].nrows() == 1) {
-                return Err(Diagnostic::error(sp, format!("`dot` needs two vectors of the same length, found {} and {}", shape(&a[0]), shape(&a[1]))));
+            if a[0].len() != a[1].len()
+                || !(a[0].ncols() == 1 || a[0].nrows() == 1)
+                || !(a[1].ncols() == 1 || a[1].nrows() == 1)
+            {
+                return Err(Diagnostic::error(
+                    sp,
+                    format!(
+                        "`dot` needs two vectors of the same length, found {} and {}",
+                        shape(&a[0]),
+                        shape(&a[1])
+                    ),
+                ));
             }
-            Ok(scalar(a[0].iter().zip(a[1].iter()).map(|(p, q)| p * q).sum()))
+            Ok(scalar(
+                a[0].iter().zip(a[1].iter()).map(|(p, q)| p * q).sum(),
+            ))
         }
         "cross" => {
             want(2)?;
             let p = need_vec3(&a[0], s[0], name)?;
             let q = need_vec3(&a[1], s[1], name)?;
-            Ok(DMatrix::from_column_slice(3, 1, &[p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]]))
+            Ok(DMatrix::from_column_slice(
+                3,
+                1,
+                &[
+                    p[1] * q[2] - p[2] * q[1],
+                    p[2] * q[0] - p[0] * q[2],
+                    p[0] * q[1] - p[1] * q[0],
+                ],
+            ))
         }
         "skew" => {
             want(1)?;
             let v = need_vec3(&a[0], s[0], name)?;
-            Ok(DMatrix::from_row_slice(3, 3, &[0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0]))
+            Ok(DMatrix::from_row_slice(
+                3,
+                3,
+                &[0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0],
+            ))
         }
         "blkdiag" => {
             let r: usize = a.iter().map(|m| m.nrows()).sum();
@@ -555,4 +726,103 @@ fn singular(sp: Span, arg: Span, why: &str) -> Diagnostic {
         .with_label("inverse of a singular matrix")
         .with_secondary(arg, why.to_string())
         .with_help("check the matrix entries (an inertia or mass matrix must be positive definite)")
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::check_source;
+    use crate::parser::parse_file;
+
+    /// Parses `expr` as the value of a constant and evaluates it with no other names.
+    fn eval(expr: &str) -> Result<Vec<f64>, String> {
+        let src = format!("const v = {expr};");
+        let (file, d) = parse_file(&src);
+        if let Some(e) = d.first() {
+            return Err(e.message.clone());
+        }
+        let Some(crate::ast::ItemKind::Const(_, e)) = file.items.first().map(|i| &i.kind) else {
+            return Err("not a constant".into());
+        };
+        let consts = std::collections::HashMap::new();
+        let fns = std::collections::HashMap::new();
+        let env = super::Env {
+            consts: &consts,
+            fns: &fns,
+            locals: vec![],
+            unavailable: vec![],
+            mode: super::Mode::Exact,
+        };
+        env.eval(e)
+            .map(|m| m.iter().copied().collect())
+            .map_err(|d| d.message)
+    }
+
+    #[test]
+    fn precedence_and_associativity() {
+        assert_eq!(eval("1 + 2 * 3").unwrap(), vec![7.0]);
+        assert_eq!(eval("-2 ^ 2").unwrap(), vec![-4.0]);
+        assert_eq!(eval("2 ^ 3 ^ 2").unwrap(), vec![512.0]);
+        assert_eq!(eval("8 / 2 / 2").unwrap(), vec![2.0]);
+        assert_eq!(eval("1 - 2 - 3").unwrap(), vec![-4.0]);
+    }
+
+    #[test]
+    fn matrices_blocks_transpose_and_indexing() {
+        // Column-major storage: [1, 2; 3, 4] is stored as 1, 3, 2, 4.
+        assert_eq!(eval("[1, 2; 3, 4]").unwrap(), vec![1.0, 3.0, 2.0, 4.0]);
+        assert_eq!(eval("[1, 2; 3, 4]'").unwrap(), vec![1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(
+            eval("[eye(2), [5; 6]]").unwrap(),
+            vec![1.0, 0.0, 0.0, 1.0, 5.0, 6.0]
+        );
+        assert_eq!(eval("[1; 2; 3; 4][1..3]").unwrap(), vec![2.0, 3.0]);
+        assert_eq!(eval("[1, 2; 3, 4][.., 1]").unwrap(), vec![2.0, 4.0]);
+        assert_eq!(eval("[1, 2; 3, 4] * [1; 1]").unwrap(), vec![3.0, 7.0]);
+        assert_eq!(eval("[1, 2] .* [3, 4]").unwrap(), vec![3.0, 8.0]);
+        assert_eq!(eval("[1, 1; 0, 1] ^ 3").unwrap(), vec![1.0, 0.0, 3.0, 1.0]);
+    }
+
+    #[test]
+    fn builtins_agree_with_closed_forms() {
+        let c = eval("cross([1; 0; 0], [0; 1; 0])").unwrap();
+        assert_eq!(c, vec![0.0, 0.0, 1.0]);
+        let s = eval("skew([1; 2; 3]) * [4; 5; 6] - cross([1; 2; 3], [4; 5; 6])").unwrap();
+        assert!(s.iter().all(|v| v.abs() < 1e-15));
+        let i = eval("inv([4, 7; 2, 6]) * [4, 7; 2, 6]").unwrap();
+        assert!((i[0] - 1.0).abs() < 1e-14 && i[1].abs() < 1e-14 && (i[3] - 1.0).abs() < 1e-14);
+        assert_eq!(eval("sinc(0)").unwrap(), vec![1.0]);
+        assert!((eval("sinc(pi() / 2)").unwrap()[0] - 2.0 / std::f64::consts::PI).abs() < 1e-15);
+        assert_eq!(eval("diag([1; 2])").unwrap(), vec![1.0, 0.0, 0.0, 2.0]);
+        assert_eq!(
+            eval("blkdiag(1, [2, 3])").unwrap(),
+            vec![1.0, 0.0, 0.0, 2.0, 0.0, 3.0]
+        );
+        assert_eq!(eval("mean([1, 2, 3, 6])").unwrap(), vec![3.0]);
+        assert_eq!(eval("zeros(2)").unwrap().len(), 2);
+        assert_eq!(eval("norm([3; 4])").unwrap(), vec![5.0]);
+    }
+
+    #[test]
+    fn errors_are_diagnostics() {
+        assert!(eval("[1, 2] + [1; 2]")
+            .unwrap_err()
+            .contains("shape mismatch"));
+        assert!(eval("inv([1, 2; 2, 4])").unwrap_err().contains("singular"));
+        assert!(eval("[1; 2][2]").unwrap_err().contains("out of bounds"));
+        assert!(eval("1 / 0").unwrap_err().contains("division by zero"));
+        assert!(eval("eye(2, 3)").unwrap_err().contains("takes 1 argument"));
+        assert!(eval("[1, 2; 3]").unwrap_err().contains("different widths"));
+        assert!(eval("foo(1)").unwrap_err().contains("unknown function"));
+    }
+
+    #[test]
+    fn check_source_accepts_a_minimal_spec() {
+        let src = "tsf 1; controller c; state x1; input u; A = -1; B = 1;\n\
+                   premise x1 range -1 .. 1 { all = trap(-1, -1, 1, 1); }\n\
+                   rule R: x1 is all => A = -2;";
+        let (spec, diags) = check_source(src);
+        assert!(diags.iter().all(|d| !d.is_error()), "{diags:?}");
+        let spec = spec.expect("valid");
+        assert_eq!((spec.n(), spec.m(), spec.rules.len()), (1, 1, 1));
+    }
 }

@@ -43,7 +43,9 @@ pub fn parse_file(source: &str) -> (File, Vec<Diagnostic>) {
         }
         match TsfParser::parse(Rule::item, text) {
             Ok(mut pairs) => {
-                let cx = Cx { offset: chunk.span.start };
+                let cx = Cx {
+                    offset: chunk.span.start,
+                };
                 if let Some(item) = pairs.next() {
                     match cx.item(item) {
                         Ok(it) => file.items.push(it),
@@ -97,16 +99,25 @@ fn broken_item(text: &str, span: Span) -> BrokenItem {
     }
     let keyword = words.first().cloned().unwrap_or_default();
     let names = match keyword.as_str() {
-        "const" | "fn" | "output" | "rule" | "controller" => words.get(1).cloned().into_iter().collect(),
+        "const" | "fn" | "output" | "rule" | "controller" => {
+            words.get(1).cloned().into_iter().collect()
+        }
         "state" | "input" | "disturbance" | "premise" => words
             .iter()
             .skip(1)
-            .filter(|w| w.chars().next().is_some_and(|c| !c.is_ascii_digit()) && !matches!(w.as_str(), "saturate" | "bound" | "range" | "sigma"))
+            .filter(|w| {
+                w.chars().next().is_some_and(|c| !c.is_ascii_digit())
+                    && !matches!(w.as_str(), "saturate" | "bound" | "range" | "sigma")
+            })
             .cloned()
             .collect(),
         other => vec![other.to_string()],
     };
-    BrokenItem { keyword, names, span }
+    BrokenItem {
+        keyword,
+        names,
+        span,
+    }
 }
 
 /// A readable name for a grammar rule in "expected ..." messages.
@@ -141,7 +152,9 @@ fn rule_name(r: &Rule) -> Option<&'static str> {
         Rule::consequent => "a consequent (`at(...)` or `A = ...`)",
         Rule::antecedent => "a premise",
         Rule::signals => "`(signal)`",
-        Rule::goal | Rule::goal_le | Rule::goal_ge => "a goal (`<= value`, `>= value`, `minimize`, `maximize`)",
+        Rule::goal | Rule::goal_le | Rule::goal_ge => {
+            "a goal (`<= value`, `>= value`, `minimize`, `maximize`)"
+        }
         Rule::saturate => "`saturate`",
         Rule::bound => "`bound`",
         Rule::var_decl | Rule::var_list => "a declaration `name` or `name[size]`",
@@ -166,16 +179,24 @@ fn syntax_error(e: &pest::error::Error<Rule>, offset: usize, text: &str) -> Diag
     let token_end = text[start.min(text.len())..]
         .char_indices()
         .find(|(_, c)| c.is_whitespace() || matches!(c, ';' | ',' | ')' | ']' | '}'))
-        .map_or(text.len(), |(i, c)| start + if i == 0 { c.len_utf8() } else { i });
+        .map_or(text.len(), |(i, c)| {
+            start + if i == 0 { c.len_utf8() } else { i }
+        });
     let end = end.max(token_end).min(text.len());
     let span = Span::new(start, end).shifted(offset);
     let found = text[start.min(text.len())..end]
         .chars()
         .take(24)
         .collect::<String>();
-    let found = if found.trim().is_empty() { "end of item".to_string() } else { format!("`{}`", found.trim()) };
+    let found = if found.trim().is_empty() {
+        "end of item".to_string()
+    } else {
+        format!("`{}`", found.trim())
+    };
     let mut expected: Vec<&str> = match &e.variant {
-        ErrorVariant::ParsingError { positives, .. } => positives.iter().filter_map(rule_name).collect(),
+        ErrorVariant::ParsingError { positives, .. } => {
+            positives.iter().filter_map(rule_name).collect()
+        }
         ErrorVariant::CustomError { .. } => Vec::new(),
     };
     expected.sort_unstable();
@@ -183,7 +204,10 @@ fn syntax_error(e: &pest::error::Error<Rule>, offset: usize, text: &str) -> Diag
     let msg = if expected.is_empty() {
         format!("syntax error: unexpected {found}")
     } else {
-        format!("syntax error: expected {}, found {found}", join_or(&expected))
+        format!(
+            "syntax error: expected {}, found {found}",
+            join_or(&expected)
+        )
     };
     let mut d = Diagnostic::error(span, msg).with_label("unexpected here");
     if text.trim_end().ends_with(';') || text.trim_end().ends_with('}') {
@@ -224,9 +248,12 @@ impl Cx {
     fn number(&self, p: &Pair<Rule>) -> PResult<f64> {
         match p.as_str().parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(Diagnostic::error(self.span(p), format!("number `{}` is out of range", p.as_str()))
-                .with_label("not a finite double-precision number")
-                .with_help("the largest magnitude is about 1.8e308")),
+            _ => Err(Diagnostic::error(
+                self.span(p),
+                format!("number `{}` is out of range", p.as_str()),
+            )
+            .with_label("not a finite double-precision number")
+            .with_help("the largest magnitude is about 1.8e308")),
         }
     }
 
@@ -258,7 +285,8 @@ impl Cx {
                         _ => body = Some(self.expr(p)?),
                     }
                 }
-                let body = body.ok_or_else(|| Diagnostic::error(span, "function without a body"))?;
+                let body =
+                    body.ok_or_else(|| Diagnostic::error(span, "function without a body"))?;
                 ItemKind::Fn(name, params, body)
             }
             Rule::state_decl => ItemKind::State(self.var_list(next(&mut it, span)?)?),
@@ -283,9 +311,17 @@ impl Cx {
                 let p2 = next(&mut it, span)?;
                 if p2.as_rule() == Rule::ident {
                     let param = Some(self.ident(p2));
-                    ItemKind::Matrix { name, param, value: self.expr(next(&mut it, span)?)? }
+                    ItemKind::Matrix {
+                        name,
+                        param,
+                        value: self.expr(next(&mut it, span)?)?,
+                    }
                 } else {
-                    ItemKind::Matrix { name, param: None, value: self.expr(p2)? }
+                    ItemKind::Matrix {
+                        name,
+                        param: None,
+                        value: self.expr(p2)?,
+                    }
                 }
             }
             Rule::premise_decl => self.premise(it, span)?,
@@ -298,14 +334,20 @@ impl Cx {
             Rule::trigger_decl => {
                 let name = self.ident(next(&mut it, span)?);
                 let settings = match it.next() {
-                    Some(block) => block.into_inner().map(|s| self.setting(s)).collect::<PResult<_>>()?,
+                    Some(block) => block
+                        .into_inner()
+                        .map(|s| self.setting(s))
+                        .collect::<PResult<_>>()?,
                     None => Vec::new(),
                 };
                 ItemKind::Trigger(name, settings)
             }
-            Rule::emit_decl => {
-                ItemKind::Emit(next(&mut it, span)?.into_inner().map(|p| self.ident(p)).collect())
-            }
+            Rule::emit_decl => ItemKind::Emit(
+                next(&mut it, span)?
+                    .into_inner()
+                    .map(|p| self.ident(p))
+                    .collect(),
+            ),
             Rule::precision_decl => ItemKind::Precision(self.ident(next(&mut it, span)?)),
             Rule::simulate_decl => {
                 ItemKind::Simulate(it.map(|p| self.sim_stmt(p)).collect::<PResult<_>>()?)
@@ -359,13 +401,24 @@ impl Cx {
                         let mut c = call.into_inner();
                         let shape = self.ident(next(&mut c, sspan)?);
                         let args = c.map(|a| self.arg(a)).collect::<PResult<_>>()?;
-                        sets.push(SetDef { name, shape, args, span: sspan });
+                        sets.push(SetDef {
+                            name,
+                            shape,
+                            args,
+                            span: sspan,
+                        });
                     }
                 }
                 _ => {}
             }
         }
-        Ok(ItemKind::Premise { names, expr, range, sigma, sets })
+        Ok(ItemKind::Premise {
+            names,
+            expr,
+            range,
+            sigma,
+            sets,
+        })
     }
 
     fn rule(&self, mut it: pest::iterators::Pairs<Rule>, span: Span) -> PResult<ItemKind> {
@@ -383,7 +436,11 @@ impl Cx {
             } else {
                 SetRef::Named(self.ident(set))
             };
-            clauses.push(Clause { premise, set, span: cspan });
+            clauses.push(Clause {
+                premise,
+                set,
+                span: cspan,
+            });
         }
         let cons = next(&mut it, span)?;
         let mut at = None;
@@ -402,7 +459,12 @@ impl Cx {
                 _ => matrices.push(self.named_arg(p)?),
             }
         }
-        Ok(ItemKind::Rule { name, clauses, at, matrices })
+        Ok(ItemKind::Rule {
+            name,
+            clauses,
+            at,
+            matrices,
+        })
     }
 
     fn objective(&self, mut it: pest::iterators::Pairs<Rule>, span: Span) -> PResult<ItemKind> {
@@ -433,7 +495,8 @@ impl Cx {
                             _ => value = Some(self.expr(q)?),
                         }
                     }
-                    let value = value.ok_or_else(|| Diagnostic::error(span, "`for` without a value"))?;
+                    let value =
+                        value.ok_or_else(|| Diagnostic::error(span, "`for` without a value"))?;
                     for_ = Some(ObjectiveFor { name, is_in, value });
                 }
                 Rule::obj_with => {
@@ -446,7 +509,13 @@ impl Cx {
                 _ => {}
             }
         }
-        Ok(ItemKind::Objective { name, signals, goal, for_, with })
+        Ok(ItemKind::Objective {
+            name,
+            signals,
+            goal,
+            for_,
+            with,
+        })
     }
 
     fn setting(&self, p: Pair<Rule>) -> PResult<Setting> {
@@ -471,7 +540,13 @@ impl Cx {
         }
         let key = key.ok_or_else(|| Diagnostic::error(span, "setting without a name"))?;
         let value = value.ok_or_else(|| Diagnostic::error(span, "setting without a value"))?;
-        Ok(Setting { key, qualifier, value, modifiers, span })
+        Ok(Setting {
+            key,
+            qualifier,
+            value,
+            modifiers,
+            span,
+        })
     }
 
     fn value(&self, p: Pair<Rule>, span: Span) -> PResult<Value> {
@@ -538,9 +613,15 @@ impl Cx {
     fn arg(&self, p: Pair<Rule>) -> PResult<Arg> {
         if p.as_rule() == Rule::named_arg {
             let na = self.named_arg(p)?;
-            Ok(Arg { name: Some(na.name), value: na.value })
+            Ok(Arg {
+                name: Some(na.name),
+                value: na.value,
+            })
         } else {
-            Ok(Arg { name: None, value: self.expr(p)? })
+            Ok(Arg {
+                name: None,
+                value: self.expr(p)?,
+            })
         }
     }
 
@@ -552,7 +633,10 @@ impl Cx {
                 let rhs = rhs?;
                 let s = self.span(&op).join(rhs.span);
                 Ok(match op.as_rule() {
-                    Rule::neg => Expr { kind: ExprKind::Neg(Box::new(rhs)), span: s },
+                    Rule::neg => Expr {
+                        kind: ExprKind::Neg(Box::new(rhs)),
+                        span: s,
+                    },
                     _ => rhs,
                 })
             })
@@ -560,10 +644,19 @@ impl Cx {
                 let lhs = lhs?;
                 let s = lhs.span.join(self.span(&op));
                 Ok(match op.as_rule() {
-                    Rule::transpose => Expr { kind: ExprKind::Transpose(Box::new(lhs)), span: s },
+                    Rule::transpose => Expr {
+                        kind: ExprKind::Transpose(Box::new(lhs)),
+                        span: s,
+                    },
                     _ => {
-                        let args = op.into_inner().map(|a| self.index_arg(a, s)).collect::<PResult<_>>()?;
-                        Expr { kind: ExprKind::Index(Box::new(lhs), args), span: s }
+                        let args = op
+                            .into_inner()
+                            .map(|a| self.index_arg(a, s))
+                            .collect::<PResult<_>>()?;
+                        Expr {
+                            kind: ExprKind::Index(Box::new(lhs), args),
+                            span: s,
+                        }
                     }
                 })
             })
@@ -578,10 +671,19 @@ impl Cx {
                     _ => BinOp::Pow,
                 };
                 let s = lhs.span.join(rhs.span);
-                Ok(Expr { kind: ExprKind::Binary(bop, Box::new(lhs), Box::new(rhs)), span: s })
+                Ok(Expr {
+                    kind: ExprKind::Binary(bop, Box::new(lhs), Box::new(rhs)),
+                    span: s,
+                })
             })
             .parse(p.into_inner())
-            .map_err(|d: Diagnostic| if d.span == Span::default() { Diagnostic { span, ..d } } else { d })
+            .map_err(|d: Diagnostic| {
+                if d.span == Span::default() {
+                    Diagnostic { span, ..d }
+                } else {
+                    d
+                }
+            })
     }
 
     fn index_arg(&self, p: Pair<Rule>, span: Span) -> PResult<IndexArg> {
@@ -613,7 +715,11 @@ impl Cx {
             _ => {
                 let rows = p
                     .into_inner()
-                    .map(|row| row.into_inner().map(|e| self.expr(e)).collect::<PResult<Vec<_>>>())
+                    .map(|row| {
+                        row.into_inner()
+                            .map(|e| self.expr(e))
+                            .collect::<PResult<Vec<_>>>()
+                    })
                     .collect::<PResult<Vec<_>>>()?;
                 ExprKind::Matrix(rows)
             }
@@ -623,9 +729,12 @@ impl Cx {
 }
 
 fn next<'a>(it: &mut impl Iterator<Item = Pair<'a, Rule>>, span: Span) -> PResult<Pair<'a, Rule>> {
-    it.next().ok_or_else(|| Diagnostic::error(span, "internal parser error: incomplete item"))
+    it.next()
+        .ok_or_else(|| Diagnostic::error(span, "internal parser error: incomplete item"))
 }
 
 fn first(p: Pair<Rule>, span: Span) -> PResult<Pair<Rule>> {
-    p.into_inner().next().ok_or_else(|| Diagnostic::error(span, "internal parser error: empty node"))
+    p.into_inner()
+        .next()
+        .ok_or_else(|| Diagnostic::error(span, "internal parser error: empty node"))
 }

@@ -405,6 +405,12 @@ impl Spec {
             let v = x.get(s.offset..s.offset + s.len).unwrap_or(&[]);
             locals.push((s.name.clone(), Mat::from_column_slice(v.len(), 1, v)));
         }
-        Env { consts: &self.consts, fns: &self.fns, locals, unavailable: Vec::new(), mode }
+        Env {
+            consts: &self.consts,
+            fns: &self.fns,
+            locals,
+            unavailable: Vec::new(),
+            mode,
+        }
     }
 }

@@ -72,7 +72,10 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
                 Some(&(open, _)) if closer(open) == b => {
                     stack.pop();
                     if b == b'}' && stack.is_empty() {
-                        chunks.push(Chunk { span: Span::new(item_start, i + 1), broken: false });
+                        chunks.push(Chunk {
+                            span: Span::new(item_start, i + 1),
+                            broken: false,
+                        });
                         start = None;
                     }
                 }
@@ -88,7 +91,10 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
                     // Recover: drop the rest of this item.
                     stack.clear();
                     i = skip_to_item_end(bytes, i + 1);
-                    chunks.push(Chunk { span: Span::new(item_start, i), broken: true });
+                    chunks.push(Chunk {
+                        span: Span::new(item_start, i),
+                        broken: true,
+                    });
                     start = None;
                     continue;
                 }
@@ -101,13 +107,19 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
                         .with_label("nothing opened this bracket"),
                     );
                     i = skip_to_item_end(bytes, i + 1);
-                    chunks.push(Chunk { span: Span::new(item_start, i), broken: true });
+                    chunks.push(Chunk {
+                        span: Span::new(item_start, i),
+                        broken: true,
+                    });
                     start = None;
                     continue;
                 }
             },
             b';' if stack.is_empty() => {
-                chunks.push(Chunk { span: Span::new(item_start, i + 1), broken: false });
+                chunks.push(Chunk {
+                    span: Span::new(item_start, i + 1),
+                    broken: false,
+                });
                 start = None;
             }
             _ => {}
@@ -116,7 +128,10 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
     }
     if let Some(&(open, at)) = stack.first() {
         if let Some(s) = start {
-            chunks.push(Chunk { span: Span::new(s, bytes.len()), broken: true });
+            chunks.push(Chunk {
+                span: Span::new(s, bytes.len()),
+                broken: true,
+            });
         }
         let what = if open == b'{' { "block" } else { "bracket" };
         diags.push(
@@ -127,7 +142,10 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
     } else if let Some(s) = start {
         // Trailing text without a terminating `;`: parse it anyway so the
         // parser can say what is missing.
-        chunks.push(Chunk { span: Span::new(s, bytes.len()), broken: false });
+        chunks.push(Chunk {
+            span: Span::new(s, bytes.len()),
+            broken: false,
+        });
     }
     chunks
 }
@@ -150,13 +168,27 @@ mod tests {
     fn texts(src: &str) -> (Vec<&str>, usize) {
         let mut d = Vec::new();
         let c = split_items(src, &mut d);
-        (c.iter().filter(|c| !c.broken).map(|c| &src[c.span.start..c.span.end]).collect(), d.len())
+        (
+            c.iter()
+                .filter(|c| !c.broken)
+                .map(|c| &src[c.span.start..c.span.end])
+                .collect(),
+            d.len(),
+        )
     }
 
     #[test]
     fn splits_statements_and_blocks() {
-        let (t, e) = texts("tsf 1; // c;\n premise a { x = tri(0, 1, 2); } rule R: a is x => A = [1; 2];");
-        assert_eq!(t, vec!["tsf 1;", "premise a { x = tri(0, 1, 2); }", "rule R: a is x => A = [1; 2];"]);
+        let (t, e) =
+            texts("tsf 1; // c;\n premise a { x = tri(0, 1, 2); } rule R: a is x => A = [1; 2];");
+        assert_eq!(
+            t,
+            vec![
+                "tsf 1;",
+                "premise a { x = tri(0, 1, 2); }",
+                "rule R: a is x => A = [1; 2];"
+            ]
+        );
         assert_eq!(e, 0);
     }
 

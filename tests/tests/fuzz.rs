@@ -9,8 +9,13 @@ fn corpus() -> Vec<String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut out = Vec::new();
     for dir in [root.join("../specs"), root.join("bad")] {
-        let Ok(rd) = std::fs::read_dir(&dir) else { continue };
-        let mut paths: Vec<_> = rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "tsf")).collect();
+        let Ok(rd) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        let mut paths: Vec<_> = rd
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "tsf"))
+            .collect();
         paths.sort();
         for p in paths {
             if let Ok(t) = std::fs::read_to_string(&p) {
@@ -97,18 +102,45 @@ fn mutation() -> impl Strategy<Value = Mutation> {
         any::<usize>().prop_map(Mutation::DeleteByte),
         (any::<usize>(), any::<u8>()).prop_map(|(a, b)| Mutation::InsertByte(a, b)),
         (any::<usize>(), any::<u8>()).prop_map(|(a, b)| Mutation::ReplaceByte(a, b)),
-        (any::<usize>(), prop_oneof![Just("{".to_string()), Just("}".into()), Just("[".into()), Just("/*".into()), Just("'".into()), Just("1e999".into()), Just("inv(".into()), Just(";".into()), Just("..".into()), Just("é∂".into())])
+        (
+            any::<usize>(),
+            prop_oneof![
+                Just("{".to_string()),
+                Just("}".into()),
+                Just("[".into()),
+                Just("/*".into()),
+                Just("'".into()),
+                Just("1e999".into()),
+                Just("inv(".into()),
+                Just(";".into()),
+                Just("..".into()),
+                Just("é∂".into())
+            ]
+        )
             .prop_map(|(a, t)| Mutation::InsertText(a, t)),
     ]
 }
 
 fn check_bytes(bytes: Vec<u8>) -> Result<(), TestCaseError> {
-    let source = Source { name: "fuzz.tsf".into(), text: String::from_utf8_lossy(&bytes).into_owned(), bytes };
+    let source = Source {
+        name: "fuzz.tsf".into(),
+        text: String::from_utf8_lossy(&bytes).into_owned(),
+        bytes,
+    };
     let checked = frontend::check(&source);
     for d in &checked.diagnostics {
-        prop_assert!(d.span.start <= d.span.end && d.span.end <= source.text.len(), "span {:?} outside input of {} bytes", d.span, source.text.len());
+        prop_assert!(
+            d.span.start <= d.span.end && d.span.end <= source.text.len(),
+            "span {:?} outside input of {} bytes",
+            d.span,
+            source.text.len()
+        );
         for l in &d.secondary {
-            prop_assert!(l.span.end <= source.text.len(), "secondary span {:?} outside input", l.span);
+            prop_assert!(
+                l.span.end <= source.text.len(),
+                "secondary span {:?} outside input",
+                l.span
+            );
         }
         prop_assert!(!d.message.is_empty());
     }
@@ -118,7 +150,10 @@ fn check_bytes(bytes: Vec<u8>) -> Result<(), TestCaseError> {
 }
 
 fn cases() -> u32 {
-    std::env::var("TSFC_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(3000)
+    std::env::var("TSFC_FUZZ_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(10_000)
 }
 
 proptest! {

@@ -4,10 +4,17 @@ use std::path::Path;
 use tsfc::frontend;
 
 fn check(name: &str) -> tsfc::model::TsModel {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../specs").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../specs")
+        .join(name);
     let source = frontend::read_source(&path).unwrap_or_else(|e| panic!("{}", e.message));
     let checked = frontend::check(&source);
-    let errors: Vec<_> = checked.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.message.clone()).collect();
+    let errors: Vec<_> = checked
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error())
+        .map(|d| d.message.clone())
+        .collect();
     assert!(errors.is_empty(), "{name}: {errors:?}");
     checked.model.expect("a model for a clean spec")
 }
@@ -33,5 +40,8 @@ fn inverted_pendulum_checks_clean() {
     // The sector-nonlinearity vertices: A1(2,1) = g / (4l/3 - a m l) with
     // g = 9.8, m = 2, M = 8, l = 0.5, a = 1/(m+M): 9.8 / (2/3 - 0.1) = 17.294...
     let a21 = m.rules[0].a[(1, 0)];
-    assert!((a21 - 9.8 / (2.0 / 3.0 - 0.1)).abs() < 1e-9, "A1(2,1) = {a21}");
+    assert!(
+        (a21 - 9.8 / (2.0 / 3.0 - 0.1)).abs() < 1e-9,
+        "A1(2,1) = {a21}"
+    );
 }

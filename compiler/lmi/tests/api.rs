@@ -235,3 +235,21 @@ fn stats_count_unknowns_cones_and_nonzeros() -> TestResult {
     println!("{s}");
     Ok(())
 }
+
+/// Degenerate problems are answered with a status or an error, never a panic.
+#[test]
+fn degenerate_problems() -> TestResult {
+    let empty = Problem::new();
+    assert!(matches!(
+        empty.solve(&tsf_lmi::SolveSettings::default()),
+        Err(LmiError::Dimension { .. })
+    ));
+    let mut free = Problem::new();
+    let t = free.scalar("t")?;
+    let sol = free.solve(&tsf_lmi::SolveSettings::default())?;
+    assert_eq!(sol.status, tsf_lmi::SolveStatus::Solved);
+    free.minimize(Expr::var(t))?;
+    let sol = free.solve(&tsf_lmi::SolveSettings::default())?;
+    assert_eq!(sol.status, tsf_lmi::SolveStatus::DualInfeasible);
+    Ok(())
+}

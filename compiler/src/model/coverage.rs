@@ -31,12 +31,26 @@ pub struct Coverage {
     pub weakest: Vec<f64>,
 }
 
-fn candidates(spec: &Spec, layout: &PremiseLayout, k: usize) -> Vec<f64> {
-    let Some((pi, slot)) = layout.slots.iter().enumerate().find(|(_, s)| k >= s.first && k < s.first + s.dim) else {
+/// Uniform points per axis added to the breakpoints when the grid stays small.
+const UNIFORM_POINTS: usize = 17;
+
+fn candidates(spec: &Spec, layout: &PremiseLayout, k: usize, uniform: bool) -> Vec<f64> {
+    let Some((pi, slot)) = layout
+        .slots
+        .iter()
+        .enumerate()
+        .find(|(_, s)| k >= s.first && k < s.first + s.dim)
+    else {
         return vec![0.0];
     };
     let (lo, hi) = slot.range;
     let mut v = vec![lo, hi];
+    if uniform {
+        v.extend(
+            (1..UNIFORM_POINTS - 1)
+                .map(|i| lo + (hi - lo) * i as f64 / (UNIFORM_POINTS - 1) as f64),
+        );
+    }
     if let Some(p) = spec.premises.get(pi) {
         v.extend(p.sets.iter().flat_map(|s| s.shape.breakpoints()));
     }
@@ -57,12 +71,30 @@ fn candidates(spec: &Spec, layout: &PremiseLayout, k: usize) -> Vec<f64> {
 }
 
 /// Runs the coverage check; a hole becomes an error diagnostic.
-pub fn check_coverage(spec: &Spec, layout: &PremiseLayout, terms: &[Vec<TermSpec>], diags: &mut Vec<Diagnostic>) -> Coverage {
+pub fn check_coverage(
+    spec: &Spec,
+    layout: &PremiseLayout,
+    terms: &[Vec<TermSpec>],
+    diags: &mut Vec<Diagnostic>,
+) -> Coverage {
     let p = layout.len();
-    let axes: Vec<Vec<f64>> = (0..p).map(|k| candidates(spec, layout, k)).collect();
-    let total: f64 = axes.iter().map(|a| a.len() as f64).product();
+    let grid = |uniform: bool| -> Vec<Vec<f64>> {
+        (0..p)
+            .map(|k| candidates(spec, layout, k, uniform))
+            .collect()
+    };
+    let size = |axes: &[Vec<f64>]| -> f64 { axes.iter().map(|a| a.len() as f64).product() };
+    let mut axes = grid(true);
+    if size(&axes) > MAX_GRID_POINTS as f64 {
+        axes = grid(false);
+    }
+    let total = size(&axes);
     let exhaustive = total <= MAX_GRID_POINTS as f64;
-    let count = if exhaustive { total as usize } else { MAX_GRID_POINTS };
+    let count = if exhaustive {
+        total as usize
+    } else {
+        MAX_GRID_POINTS
+    };
     let mut z = vec![0.0; p];
     let mut min_w = f64::INFINITY;
     let mut weakest = z.clone();
@@ -114,7 +146,13 @@ pub fn check_coverage(spec: &Spec, layout: &PremiseLayout, terms: &[Vec<TermSpec
                 .with_note("normalised strengths are numerically fragile there; consider wider sets"),
         );
     }
-    Coverage { covered, points: count, exhaustive, min_total_weight: min_w, weakest }
+    Coverage {
+        covered,
+        points: count,
+        exhaustive,
+        min_total_weight: min_w,
+        weakest,
+    }
 }
 
 /// Formats a number compactly for messages.

@@ -14,7 +14,11 @@ pub(super) fn local_models(spec: &Spec, diags: &mut Vec<Diagnostic>) -> Vec<Loca
     for rule in &spec.rules {
         let point = rule.at.as_ref().map(|(x, _)| x.clone());
         let x = point.clone().unwrap_or_else(|| vec![0.0; n]);
-        let mut eval = |name: &str, mm: &Option<ModelMatrix>, rows: usize, cols: usize| -> Option<DMatrix<f64>> {
+        let mut eval = |name: &str,
+                        mm: &Option<ModelMatrix>,
+                        rows: usize,
+                        cols: usize|
+         -> Option<DMatrix<f64>> {
             if let Some((_, v, _)) = rule.overrides.iter().find(|(k, _, _)| k == name) {
                 return Some(v.clone());
             }
@@ -23,9 +27,17 @@ pub(super) fn local_models(spec: &Spec, diags: &mut Vec<Diagnostic>) -> Vec<Loca
             };
             if mm.state_dependent && rule.at.is_none() {
                 diags.push(
-                    Diagnostic::error(rule.span, format!("rule {} has no operating point, but `{name}` depends on the state", rule.name))
-                        .with_secondary(mm.span, format!("`{name}(x)` defined here"))
-                        .with_help(format!("add `at(...)` to the rule, or give `{name} = ...` in it")),
+                    Diagnostic::error(
+                        rule.span,
+                        format!(
+                            "rule {} has no operating point, but `{name}` depends on the state",
+                            rule.name
+                        ),
+                    )
+                    .with_secondary(mm.span, format!("`{name}(x)` defined here"))
+                    .with_help(format!(
+                        "add `at(...)` to the rule, or give `{name} = ...` in it"
+                    )),
                 );
                 return None;
             }
@@ -33,8 +45,14 @@ pub(super) fn local_models(spec: &Spec, diags: &mut Vec<Diagnostic>) -> Vec<Loca
             match env.eval(&mm.expr) {
                 Ok(v) if v.iter().all(|e| e.is_finite()) => Some(v),
                 Ok(_) => {
-                    let mut d = Diagnostic::error(mm.expr.span, format!("`{name}` is not finite at the operating point of rule {}", rule.name))
-                        .with_label("NaN or infinite entries");
+                    let mut d = Diagnostic::error(
+                        mm.expr.span,
+                        format!(
+                            "`{name}` is not finite at the operating point of rule {}",
+                            rule.name
+                        ),
+                    )
+                    .with_label("NaN or infinite entries");
                     if let Some((_, s)) = &rule.at {
                         d = d.with_secondary(*s, "evaluated at this operating point");
                     }
@@ -43,7 +61,10 @@ pub(super) fn local_models(spec: &Spec, diags: &mut Vec<Diagnostic>) -> Vec<Loca
                 }
                 Err(d) => {
                     let d = match &rule.at {
-                        Some((_, s)) => d.with_secondary(*s, format!("while evaluating `{name}` for rule {} here", rule.name)),
+                        Some((_, s)) => d.with_secondary(
+                            *s,
+                            format!("while evaluating `{name}` for rule {} here", rule.name),
+                        ),
                         None => d,
                     };
                     diags.push(d);
@@ -55,7 +76,13 @@ pub(super) fn local_models(spec: &Spec, diags: &mut Vec<Diagnostic>) -> Vec<Loca
         let b = eval("B", &spec.b, n, m);
         let d = eval("D", &spec.d, n, q);
         if let (Some(a), Some(b), Some(d)) = (a, b, d) {
-            out.push(LocalModel { name: rule.name.clone(), a, b, d, at: point });
+            out.push(LocalModel {
+                name: rule.name.clone(),
+                a,
+                b,
+                d,
+                at: point,
+            });
         }
     }
     out
@@ -67,9 +94,12 @@ pub(super) fn check_objectives(spec: &Spec, diags: &mut Vec<Diagnostic>) {
         if matches!(o.node, Objective::SaturationRegion) && spec.saturation.is_none() {
             let at = spec.inputs.first().map_or(Span::new(0, 0), |s| s.span);
             diags.push(
-                Diagnostic::error(o.span, "`objective saturation region` needs saturation levels")
-                    .with_secondary(at, "input declared here")
-                    .with_help("declare them: `input u[3] saturate 2.0;`"),
+                Diagnostic::error(
+                    o.span,
+                    "`objective saturation region` needs saturation levels",
+                )
+                .with_secondary(at, "input declared here")
+                .with_help("declare them: `input u[3] saturate 2.0;`"),
             );
         }
     }

@@ -44,7 +44,11 @@ impl PremiseLayout {
     pub fn component_name(&self, k: usize) -> String {
         for s in &self.slots {
             if k >= s.first && k < s.first + s.dim {
-                return if s.dim == 1 { s.name.clone() } else { format!("{}[{}]", s.name, k - s.first) };
+                return if s.dim == 1 {
+                    s.name.clone()
+                } else {
+                    format!("{}[{}]", s.name, k - s.first)
+                };
             }
         }
         format!("z[{k}]")
@@ -87,8 +91,19 @@ pub fn rule_weight(terms: &[TermSpec], z: &[f64]) -> f64 {
     let rt: Vec<Term<'_, f64>> = terms
         .iter()
         .map(|t| match t {
-            TermSpec::Is { var, set } => Term::Is { var: *var, set: membership(*set) },
-            TermSpec::About { first, point, sigma } => Term::About { first: *first, point, sigma: *sigma },
+            TermSpec::Is { var, set } => Term::Is {
+                var: *var,
+                set: membership(*set),
+            },
+            TermSpec::About {
+                first,
+                point,
+                sigma,
+            } => Term::About {
+                first: *first,
+                point,
+                sigma: *sigma,
+            },
         })
         .collect();
     Rule::new(&rt).weight(z)
@@ -124,7 +139,12 @@ pub(super) fn layout(spec: &Spec, diags: &mut Vec<Diagnostic>) -> PremiseLayout 
             let mut min_d = f64::INFINITY;
             for (i, a) in abouts.iter().enumerate() {
                 for b in abouts.iter().skip(i + 1) {
-                    let d = a.iter().zip(b.iter()).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+                    let d = a
+                        .iter()
+                        .zip(b.iter())
+                        .map(|(x, y)| (x - y) * (x - y))
+                        .sum::<f64>()
+                        .sqrt();
                     if d > 0.0 {
                         min_d = min_d.min(d);
                     }
@@ -138,11 +158,25 @@ pub(super) fn layout(spec: &Spec, diags: &mut Vec<Diagnostic>) -> PremiseLayout 
         });
         if !abouts.is_empty() && !p.sets.is_empty() {
             diags.push(
-                Diagnostic::warning(p.span, format!("premise `{}` is used both with named sets and with `about`", p.name))
-                    .with_note("the two kinds of sets are not a partition together; check the coverage"),
+                Diagnostic::warning(
+                    p.span,
+                    format!(
+                        "premise `{}` is used both with named sets and with `about`",
+                        p.name
+                    ),
+                )
+                .with_note(
+                    "the two kinds of sets are not a partition together; check the coverage",
+                ),
             );
         }
-        slots.push(PremiseSlot { name: p.name.clone(), first, dim: p.dim, range, sigma });
+        slots.push(PremiseSlot {
+            name: p.name.clone(),
+            first,
+            dim: p.dim,
+            range,
+            sigma,
+        });
         first += p.dim;
     }
     PremiseLayout { slots }
@@ -159,8 +193,15 @@ pub(super) fn rule_terms(spec: &Spec, layout: &PremiseLayout) -> Vec<Vec<TermSpe
                     let slot = layout.slots.get(c.premise)?;
                     let p = spec.premises.get(c.premise)?;
                     Some(match &c.set {
-                        ClauseSet::Named(i) => TermSpec::Is { var: slot.first, set: p.sets.get(*i)?.shape },
-                        ClauseSet::About(v) => TermSpec::About { first: slot.first, point: v.clone(), sigma: slot.sigma },
+                        ClauseSet::Named(i) => TermSpec::Is {
+                            var: slot.first,
+                            set: p.sets.get(*i)?.shape,
+                        },
+                        ClauseSet::About(v) => TermSpec::About {
+                            first: slot.first,
+                            point: v.clone(),
+                            sigma: slot.sigma,
+                        },
                     })
                 })
                 .collect()
@@ -185,12 +226,18 @@ pub fn premise_values(spec: &Spec, x: &[f64]) -> Result<Vec<f64>, Diagnostic> {
 /// Centre of each rule in premise space: the peak of each named set, the
 /// `about` point, or (for a premise the rule does not mention) the premise
 /// value at the rule's operating point (else the middle of the range).
-pub(super) fn rule_centers(spec: &Spec, layout: &PremiseLayout, terms: &[Vec<TermSpec>]) -> Vec<Vec<f64>> {
+pub(super) fn rule_centers(
+    spec: &Spec,
+    layout: &PremiseLayout,
+    terms: &[Vec<TermSpec>],
+) -> Vec<Vec<f64>> {
     spec.rules
         .iter()
         .zip(terms)
         .map(|(r, ts)| {
-            let at_z = r.at.as_ref().and_then(|(x, _)| premise_values(spec, x).ok());
+            let at_z =
+                r.at.as_ref()
+                    .and_then(|(x, _)| premise_values(spec, x).ok());
             let mut c: Vec<f64> = layout
                 .slots
                 .iter()
@@ -226,10 +273,17 @@ pub(super) fn rule_centers(spec: &Spec, layout: &PremiseLayout, terms: &[Vec<Ter
 }
 
 /// Warns when a rule's operating point lies where its own premise does not fire.
-pub(super) fn check_operating_points(spec: &Spec, layout: &PremiseLayout, terms: &[Vec<TermSpec>], diags: &mut Vec<Diagnostic>) {
+pub(super) fn check_operating_points(
+    spec: &Spec,
+    layout: &PremiseLayout,
+    terms: &[Vec<TermSpec>],
+    diags: &mut Vec<Diagnostic>,
+) {
     for (r, ts) in spec.rules.iter().zip(terms) {
         let Some((x, span)) = &r.at else { continue };
-        let Ok(z) = premise_values(spec, x) else { continue };
+        let Ok(z) = premise_values(spec, x) else {
+            continue;
+        };
         if z.len() != layout.len() {
             continue;
         }
@@ -239,16 +293,29 @@ pub(super) fn check_operating_points(spec: &Spec, layout: &PremiseLayout, terms:
             .iter()
             .enumerate()
             .map(|(k, v)| {
-                let slot = layout.slots.iter().find(|s| k >= s.first && k < s.first + s.dim);
-                slot.map_or(*v, |s| v + 1e-9 * (0.5 * (s.range.0 + s.range.1) - v).signum() * (s.range.1 - s.range.0))
+                let slot = layout
+                    .slots
+                    .iter()
+                    .find(|s| k >= s.first && k < s.first + s.dim);
+                slot.map_or(*v, |s| {
+                    v + 1e-9
+                        * (0.5 * (s.range.0 + s.range.1) - v).signum()
+                        * (s.range.1 - s.range.0)
+                })
             })
             .collect();
         let w = rule_weight(ts, &z).max(rule_weight(ts, &nudged));
         if w <= 1e-9 {
             diags.push(
-                Diagnostic::warning(*span, format!("the operating point of rule {} lies outside its own premise", r.name))
-                    .with_label(format!("the rule's firing strength here is {w:.2e}"))
-                    .with_help("a rule's local model should describe the plant where the rule fires"),
+                Diagnostic::warning(
+                    *span,
+                    format!(
+                        "the operating point of rule {} lies outside its own premise",
+                        r.name
+                    ),
+                )
+                .with_label(format!("the rule's firing strength here is {w:.2e}"))
+                .with_help("a rule's local model should describe the plant where the rule fires"),
             );
         }
     }
