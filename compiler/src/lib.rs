@@ -9,3 +9,8 @@
 
 pub mod frontend;
 pub mod model;
+pub mod certify;
+pub mod synth;
+pub mod report;
+pub mod compile;
+pub mod summary;

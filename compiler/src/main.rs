@@ -11,6 +11,7 @@ use tsfc::frontend;
 mod exit {
     pub const SPEC: u8 = 1;
     pub const IO: u8 = 2;
+    pub const INFEASIBLE: u8 = 3;
 }
 
 #[derive(Parser)]
@@ -43,12 +44,59 @@ enum Command {
         #[arg(long, value_enum, default_value = "human")]
         format: Format,
     },
+    /// Synthesize certified PDC gains and write the report (exit 3 when infeasible or refused).
+    Compile {
+        /// Spec file.
+        spec: PathBuf,
+        /// Output folder.
+        #[arg(long, default_value = "tsfc-out")]
+        out: PathBuf,
+        /// Report path (default: OUT/<controller>.report.json).
+        #[arg(long)]
+        report: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Check { specs, format } => check(&specs, format),
+        Command::Compile { spec, out, report } => compile(&spec, &out, report),
+    }
+}
+
+fn compile(path: &std::path::Path, out: &std::path::Path, report_path: Option<PathBuf>) -> ExitCode {
+    let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
+    let source = match frontend::read_source(path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {}", e.message);
+            return ExitCode::from(exit::IO);
+        }
+    };
+    let checked = frontend::check(&source);
+    eprint!("{}", diag::render(&source.name, &source.text, &checked.diagnostics, color));
+    let Some(model) = checked.model else {
+        return ExitCode::from(exit::SPEC);
+    };
+    let spec = tsfc::report::SpecInfo { path: source.name.clone(), sha256: tsfc::report::sha256_hex(&source.bytes) };
+    let compiled = tsfc::compile::compile(&model, spec, &tsfc::synth::Settings::default(), (checked.parse_time, checked.model_time));
+    let report_path = report_path.unwrap_or_else(|| out.join(format!("{}.report.json", model.spec.controller.node)));
+    let json = match serde_json::to_string_pretty(&compiled.report) {
+        Ok(j) => j + "\n",
+        Err(e) => {
+            eprintln!("error: cannot serialize the report: {e}");
+            return ExitCode::from(exit::IO);
+        }
+    };
+    if let Err(e) = tsfc::report::write_atomic(&report_path, json.as_bytes()) {
+        eprintln!("error: cannot write `{}`: {e}", report_path.display());
+        return ExitCode::from(exit::IO);
+    }
+    eprint!("{}", tsfc::summary::summary(&model, &compiled, &report_path));
+    match compiled.status {
+        tsfc::compile::Status::Certified => ExitCode::SUCCESS,
+        _ => ExitCode::from(exit::INFEASIBLE),
     }
 }
 

@@ -29,6 +29,12 @@ pub struct Coverage {
     pub min_total_weight: f64,
     /// The weakest point.
     pub weakest: Vec<f64>,
+    /// `overlap[i][j]`: rules i and j fire together somewhere on the grid.
+    /// Exact for tri/trap premises (their products are positive at the
+    /// midpoint of any grid cell where they are positive at all).
+    pub overlap: Vec<Vec<bool>>,
+    /// The most rules seen firing at one point.
+    pub max_firing: usize,
 }
 
 /// Uniform points per axis added to the breakpoints when the grid stays small.
@@ -99,6 +105,10 @@ pub fn check_coverage(
     let mut min_w = f64::INFINITY;
     let mut weakest = z.clone();
     let mut rng = 0x9E37_79B9_7F4A_7C15u64;
+    let r = terms.len();
+    let mut overlap = vec![vec![false; r]; r];
+    let mut max_firing = 0;
+    let mut weights = vec![0.0; r];
     for idx in 0..count {
         let mut rem = idx;
         for (k, axis) in axes.iter().enumerate() {
@@ -115,7 +125,17 @@ pub fn check_coverage(
             };
             z[k] = axis[i];
         }
-        let w: f64 = terms.iter().map(|t| rule_weight(t, &z)).sum();
+        for (wi, t) in weights.iter_mut().zip(terms) {
+            *wi = rule_weight(t, &z);
+        }
+        let firing: Vec<usize> = (0..r).filter(|&i| weights[i] > 0.0).collect();
+        max_firing = max_firing.max(firing.len());
+        for &i in &firing {
+            for &j in &firing {
+                overlap[i][j] = true;
+            }
+        }
+        let w: f64 = weights.iter().sum();
         if w < min_w {
             min_w = w;
             weakest.clone_from(&z);
@@ -152,6 +172,8 @@ pub fn check_coverage(
         exhaustive,
         min_total_weight: min_w,
         weakest,
+        overlap,
+        max_firing,
     }
 }
 

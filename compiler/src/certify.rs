@@ -1,0 +1,77 @@
+//! The certificate: every LMI of the *unreduced* problem is rebuilt from the
+//! numeric solution (variable values, not solver slacks) and its extreme
+//! eigenvalue computed with a dense symmetric eigen-solver. Gains are emitted
+//! only if every strict LMI holds beyond its floating-point error bound.
+
+use crate::model::TsModel;
+use crate::synth::{build, Design};
+use serde::Serialize;
+use tsf_lmi::ConstraintKind;
+
+/// The margin of one constraint.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct LmiMargin {
+    /// Constraint name (e.g. `hinf Q[2,5]`).
+    pub name: String,
+    /// Strict-feasibility measure: lambda_min(E) for E > 0, -lambda_max(E) for E < 0
+    /// (e - rhs for scalar constraints). Positive means the condition holds.
+    pub margin: f64,
+    /// Bound on the rounding error of `margin`.
+    pub error_bound: f64,
+    /// Whether the condition is strict (`< 0`, `> 0`).
+    pub strict: bool,
+    /// Matrix size (1 for scalars).
+    pub size: usize,
+    /// Whether this constraint passes.
+    pub ok: bool,
+}
+
+/// The certificate of a design.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Certificate {
+    /// Smallest margin over the strict LMIs.
+    pub min_margin: f64,
+    /// Whether every constraint passes.
+    pub ok: bool,
+    /// The constraint closest to failing (or failing).
+    pub worst: String,
+    /// Every constraint.
+    pub lmis: Vec<LmiMargin>,
+}
+
+/// Checks `design` against the full set of conditions of its plan.
+pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, String> {
+    let built = build(model, &design.plan, model.spec.relaxation.node, design.eps, false)?;
+    let problem = &built.problem;
+    let mut values = problem.assignment();
+    let vars: Vec<_> = problem.vars().map(|(_, v)| v).collect();
+    if vars.len() != design.values.len() {
+        return Err(format!("internal error: {} variables in the full problem, {} values", vars.len(), design.values.len()));
+    }
+    for (v, value) in vars.iter().zip(&design.values) {
+        values.set(*v, value.clone()).map_err(|e| format!("internal error: {e}"))?;
+    }
+    let margins = problem.margins(&values).map_err(|e| format!("internal error: {e}"))?;
+    let mut lmis = Vec::with_capacity(margins.len());
+    for m in margins {
+        let (strict, size) = match m.kind {
+            ConstraintKind::Lmi { margin, size, .. } => (margin > 0.0, size),
+            ConstraintKind::Scalar { .. } => (false, 1),
+        };
+        let ok = if strict { m.slack > m.error_bound } else { m.slack >= -m.error_bound };
+        lmis.push(LmiMargin { name: m.name, margin: m.slack, error_bound: m.error_bound, strict, size, ok });
+    }
+    let min_margin = lmis.iter().filter(|l| l.strict).map(|l| l.margin).fold(f64::INFINITY, f64::min);
+    let ok = lmis.iter().all(|l| l.ok);
+    // The worst: a failing one if any, else the strict one with the least room.
+    let worst = lmis
+        .iter()
+        .min_by(|a, b| {
+            let key = |l: &LmiMargin| (l.ok, if l.strict { l.margin - l.error_bound } else { f64::INFINITY });
+            let (ka, kb) = (key(a), key(b));
+            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+        })
+        .map(|l| l.name.clone())
+        .unwrap_or_default();
+    Ok(Certificate { min_margin, ok, worst, lmis })
+}

@@ -1,0 +1,80 @@
+//! `tsfc compile`: synthesis, certificate and report for a checked model.
+
+use crate::certify::{certify, Certificate};
+use crate::model::TsModel;
+use crate::report::{report, Report, SpecInfo, Timings};
+use crate::synth::{synthesize, Design, Settings, SynthError};
+use std::time::{Duration, Instant};
+
+/// How a compile ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// Gains certified.
+    Certified,
+    /// Objectives infeasible together.
+    Infeasible,
+    /// Solver trouble or certificate refused.
+    Refused,
+}
+
+/// The result of compiling one model.
+#[derive(Debug)]
+pub struct Compiled {
+    /// Verdict.
+    pub status: Status,
+    /// Design and certificate, or why there is none.
+    pub outcome: Result<(Design, Certificate), SynthError>,
+    /// The JSON report.
+    pub report: Report,
+}
+
+/// Synthesizes and certifies. If the certificate fails only because the
+/// solver's answer sits within rounding of the strict margin, the synthesis is
+/// retried once with a 100 times larger margin (noted in the report).
+pub fn compile(model: &TsModel, spec: SpecInfo, settings: &Settings, front: (Duration, Duration)) -> Compiled {
+    let t0 = Instant::now();
+    let mut settings = settings.clone();
+    let mut outcome = run(model, &settings);
+    if matches!(&outcome, Ok((_, c)) if !c.ok) {
+        settings.eps *= 100.0;
+        let retry = run(model, &settings);
+        if let (Ok((d, c)), Ok(_)) = (&retry, &outcome) {
+            if c.ok {
+                let mut d = d.clone();
+                d.notes.push(format!("certificate failed at margin {:.1e}; re-solved with margin {:.1e}", settings.eps / 100.0, settings.eps));
+                outcome = Ok((d, c.clone()));
+            }
+        }
+    }
+    let status = match &outcome {
+        Ok((_, c)) if c.ok => Status::Certified,
+        Err(SynthError::Infeasible { .. }) => Status::Infeasible,
+        _ => Status::Refused,
+    };
+    let (solve, build, cert) = match &outcome {
+        Ok((d, _)) => (d.log.solve_time, d.log.build_time, Duration::ZERO),
+        Err(_) => (Duration::ZERO, Duration::ZERO, Duration::ZERO),
+    };
+    let total = front.0 + front.1 + t0.elapsed();
+    let timings = Timings {
+        parse: front.0.as_secs_f64(),
+        model: front.1.as_secs_f64(),
+        build: build.as_secs_f64(),
+        solve: solve.as_secs_f64(),
+        certify: cert.as_secs_f64(),
+        total: total.as_secs_f64(),
+    };
+    let mut report = report(model, spec, &outcome, timings);
+    if let Ok((d, _)) = &outcome {
+        report.timings_s.certify = d.certify_time.as_secs_f64();
+    }
+    Compiled { status, outcome, report }
+}
+
+fn run(model: &TsModel, settings: &Settings) -> Result<(Design, Certificate), SynthError> {
+    let mut design = synthesize(model, settings)?;
+    let t = Instant::now();
+    let cert = certify(model, &design).map_err(SynthError::Unsupported)?;
+    design.certify_time = t.elapsed();
+    Ok((design, cert))
+}

@@ -1,0 +1,233 @@
+//! The JSON report of `tsfc compile` and the atomic file writer.
+
+use crate::certify::Certificate;
+use crate::model::TsModel;
+use crate::synth::{Design, SynthError};
+use nalgebra::DMatrix;
+use serde::Serialize;
+use sha2::{Digest, Sha256};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Rows of a matrix, for JSON.
+pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows()).map(|i| m.row(i).iter().copied().collect()).collect()
+}
+
+/// Lower-case hex SHA-256 of `bytes`.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// `spec` section.
+#[derive(Debug, Serialize)]
+pub struct SpecInfo {
+    /// Path as given.
+    pub path: String,
+    /// SHA-256 of the file's bytes.
+    pub sha256: String,
+}
+
+/// One gain.
+#[derive(Debug, Serialize)]
+pub struct Gain {
+    /// Rule name.
+    pub rule: String,
+    /// F (m x n rows).
+    #[serde(rename = "F")]
+    pub f: Vec<Vec<f64>>,
+}
+
+/// `solver` section.
+#[derive(Debug, Serialize)]
+pub struct SolverInfo {
+    /// Solver name.
+    pub name: &'static str,
+    /// Status of the kept SDP (or of the last attempt).
+    pub status: String,
+    /// Iterations of the kept SDP.
+    pub iterations: u32,
+    /// SDPs solved in all (bisections, line searches, diagnosis).
+    pub solves: usize,
+    /// Size of the kept SDP.
+    pub problem: BTreeMap<String, serde_json::Value>,
+}
+
+/// `timings_s` section.
+#[derive(Debug, Serialize, Default)]
+pub struct Timings {
+    /// Language stage.
+    pub parse: f64,
+    /// Model stage.
+    pub model: f64,
+    /// Building LMI problems.
+    pub build: f64,
+    /// Inside Clarabel.
+    pub solve: f64,
+    /// Certificate.
+    pub certify: f64,
+    /// Everything.
+    pub total: f64,
+}
+
+/// Why there is no certified design.
+#[derive(Debug, Serialize)]
+pub struct Diagnosis {
+    /// The verdict.
+    pub message: String,
+    /// What is achievable instead.
+    pub achievable: Vec<String>,
+}
+
+/// The whole report.
+#[derive(Debug, Serialize)]
+pub struct Report {
+    /// tsfc version.
+    pub tsfc_version: &'static str,
+    /// The spec.
+    pub spec: SpecInfo,
+    /// Controller name.
+    pub controller: String,
+    /// States.
+    pub n: usize,
+    /// Inputs.
+    pub m: usize,
+    /// Disturbances.
+    pub q: usize,
+    /// Number of rules.
+    pub rules: usize,
+    /// `certified`, `infeasible` or `refused`.
+    pub status: &'static str,
+    /// Relaxation used.
+    pub relaxation: String,
+    /// Margin eps of strict LMIs.
+    pub lmi_margin_eps: Option<f64>,
+    /// Achieved objective values.
+    pub objectives: BTreeMap<String, serde_json::Value>,
+    /// Gains (empty unless certified).
+    pub gains: Vec<Gain>,
+    /// Lyapunov matrix P (empty unless a design was found).
+    #[serde(rename = "P")]
+    pub p: Vec<Vec<f64>>,
+    /// Certificate.
+    pub certificate: Option<Certificate>,
+    /// Reductions applied to the solved problem.
+    pub reductions: Vec<String>,
+    /// Search notes.
+    pub notes: Vec<String>,
+    /// Diagnosis when not certified.
+    pub diagnosis: Option<Diagnosis>,
+    /// Solver.
+    pub solver: SolverInfo,
+    /// Timings.
+    pub timings_s: Timings,
+}
+
+fn objectives(design: &Design) -> BTreeMap<String, serde_json::Value> {
+    let a = &design.achieved;
+    let mut o = BTreeMap::new();
+    let mut put = |k: &str, v: Option<f64>| {
+        if let Some(v) = v {
+            o.insert(k.to_string(), serde_json::json!(v));
+        }
+    };
+    put("hinf_gamma", a.hinf_gamma);
+    put("linf_gamma", a.linf_gamma);
+    put("linf_phi", a.linf_phi);
+    put("linf_xi", a.linf_xi);
+    put("decay_rate", a.decay_rate);
+    put("input_norm_bound", a.input_norm_bound);
+    put("output_norm_bound", a.output_norm_bound);
+    if let Some((lo, hi)) = a.decay_bracket {
+        o.insert("decay_rate_bracket".into(), serde_json::json!([lo, if hi.is_finite() { serde_json::json!(hi) } else { serde_json::Value::Null }]));
+    }
+    o
+}
+
+/// Assembles the report.
+pub fn report(model: &TsModel, spec: SpecInfo, outcome: &Result<(Design, Certificate), SynthError>, timings: Timings) -> Report {
+    let (status, design, cert, diagnosis) = match outcome {
+        Ok((d, c)) if c.ok => ("certified", Some(d), Some(c.clone()), None),
+        Ok((d, c)) => (
+            "refused",
+            Some(d),
+            Some(c.clone()),
+            Some(Diagnosis { message: format!("certificate refused: the worst condition is `{}`", c.worst), achievable: Vec::new() }),
+        ),
+        Err(SynthError::Infeasible { message, achievable }) => ("infeasible", None, None, Some(Diagnosis { message: message.clone(), achievable: achievable.clone() })),
+        Err(SynthError::Solver { message, achievable, status }) => (
+            "refused",
+            None,
+            None,
+            Some(Diagnosis { message: format!("{message} (solver status: {status:?})"), achievable: achievable.clone() }),
+        ),
+        Err(e) => ("refused", None, None, Some(Diagnosis { message: e.to_string(), achievable: Vec::new() })),
+    };
+    let certified = status == "certified";
+    let mut problem = BTreeMap::new();
+    if let Some(s) = design.and_then(|d| d.log.stats.as_ref()) {
+        let largest = s.psd_cones.iter().copied().max().unwrap_or(0);
+        for (k, v) in [
+            ("variables", s.variables),
+            ("scalar_unknowns", s.scalar_unknowns),
+            ("lmis", s.lmis),
+            ("scalar_constraints", s.scalar_constraints),
+            ("psd_cones", s.psd_cones.len()),
+            ("largest_psd_cone", largest),
+            ("rows", s.rows),
+            ("nnz", s.nnz),
+        ] {
+            problem.insert(k.to_string(), serde_json::json!(v));
+        }
+    }
+    Report {
+        tsfc_version: env!("CARGO_PKG_VERSION"),
+        spec,
+        controller: model.spec.controller.node.clone(),
+        n: model.n,
+        m: model.m,
+        q: model.q,
+        rules: model.r(),
+        status,
+        relaxation: format!("{:?}", model.spec.relaxation.node),
+        lmi_margin_eps: design.map(|d| d.eps),
+        objectives: design.map(objectives).unwrap_or_default(),
+        gains: if certified {
+            design
+                .map(|d| d.gains.iter().zip(&model.rules).map(|(f, r)| Gain { rule: r.name.clone(), f: rows(f) }).collect())
+                .unwrap_or_default()
+        } else {
+            Vec::new()
+        },
+        p: design.map(|d| rows(&d.p)).unwrap_or_default(),
+        certificate: cert,
+        reductions: design.map(|d| d.reductions.clone()).unwrap_or_default(),
+        notes: design.map(|d| d.notes.clone()).unwrap_or_default(),
+        diagnosis,
+        solver: SolverInfo {
+            name: "clarabel",
+            status: design.and_then(|d| d.log.status).map_or_else(|| "none".to_string(), |s| format!("{s:?}")),
+            iterations: design.map_or(0, |d| d.log.iterations),
+            solves: design.map_or(0, |d| d.log.solves),
+            problem,
+        },
+        timings_s: timings,
+    }
+}
+
+/// Writes `bytes` to `path` atomically (temporary file in the same folder, then
+/// rename), creating the folder; an existing file is left untouched on failure
+/// and not rewritten when the content is unchanged.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if std::fs::read(path).is_ok_and(|old| old == bytes) {
+        return Ok(());
+    }
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)?;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}

@@ -1,0 +1,45 @@
+//! The short human summary `tsfc compile` prints.
+
+use crate::compile::{Compiled, Status};
+use crate::model::TsModel;
+use std::fmt::Write;
+use std::path::Path;
+
+/// A few lines: verdict, achieved objectives, certificate, solver, where the report is.
+pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
+    let mut s = String::new();
+    let r = &c.report;
+    let verdict = match c.status {
+        Status::Certified => "certified",
+        Status::Infeasible => "infeasible",
+        Status::Refused => "refused",
+    };
+    let _ = writeln!(s, "{verdict}: controller `{}` (n = {}, m = {}, {} rules, relaxation {})", r.controller, r.n, r.m, r.rules, r.relaxation);
+    for (k, v) in &r.objectives {
+        let _ = writeln!(s, "  {k:<20} {v}");
+    }
+    if let Some(cert) = &r.certificate {
+        let strict = cert.lmis.iter().filter(|l| l.strict).count();
+        let _ = writeln!(s, "  certificate          {} conditions ({strict} strict), min margin {:.3e}, worst `{}`", cert.lmis.len(), cert.min_margin, cert.worst);
+    }
+    for red in &r.reductions {
+        let _ = writeln!(s, "  reduction            {red}");
+    }
+    for n in &r.notes {
+        let _ = writeln!(s, "  note                 {n}");
+    }
+    if let Some(d) = &r.diagnosis {
+        let _ = writeln!(s, "  {}", d.message);
+        for a in &d.achievable {
+            let _ = writeln!(s, "    {a}");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "  solver               clarabel, {} SDP(s), status {}, {} iterations; solve {:.3} s of {:.3} s total",
+        r.solver.solves, r.solver.status, r.solver.iterations, r.timings_s.solve, r.timings_s.total
+    );
+    let _ = writeln!(s, "  report               {}", report_path.display());
+    let _ = model;
+    s
+}
