@@ -41,37 +41,78 @@ pub struct Certificate {
 
 /// Checks `design` against the full set of conditions of its plan.
 pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, String> {
-    let built = build(model, &design.plan, model.spec.relaxation.node, design.eps, false)?;
+    let built = build(
+        model,
+        &design.plan,
+        model.spec.relaxation.node,
+        design.eps,
+        false,
+    )?;
     let problem = &built.problem;
+    // Variables the solved (reduced) problem did not have are zero (e.g. a
+    // relaxation slack proven unnecessary).
     let mut values = problem.assignment();
-    let vars: Vec<_> = problem.vars().map(|(_, v)| v).collect();
-    if vars.len() != design.values.len() {
-        return Err(format!("internal error: {} variables in the full problem, {} values", vars.len(), design.values.len()));
+    for (name, v) in problem.vars() {
+        if let Some((_, value)) = design.values.iter().find(|(n, _)| n == name) {
+            values
+                .set(v, value.clone())
+                .map_err(|e| format!("internal error: {e}"))?;
+        }
     }
-    for (v, value) in vars.iter().zip(&design.values) {
-        values.set(*v, value.clone()).map_err(|e| format!("internal error: {e}"))?;
-    }
-    let margins = problem.margins(&values).map_err(|e| format!("internal error: {e}"))?;
+    let margins = problem
+        .margins(&values)
+        .map_err(|e| format!("internal error: {e}"))?;
     let mut lmis = Vec::with_capacity(margins.len());
     for m in margins {
         let (strict, size) = match m.kind {
-            ConstraintKind::Lmi { margin, size, .. } => (margin > 0.0, size),
+            ConstraintKind::Lmi { margin, size, .. } => {
+                (margin > 0.0 && !built.nonstrict.contains(&m.name), size)
+            }
             ConstraintKind::Scalar { .. } => (false, 1),
         };
-        let ok = if strict { m.slack > m.error_bound } else { m.slack >= -m.error_bound };
-        lmis.push(LmiMargin { name: m.name, margin: m.slack, error_bound: m.error_bound, strict, size, ok });
+        let ok = if strict {
+            m.slack > m.error_bound
+        } else {
+            m.slack >= -m.error_bound
+        };
+        lmis.push(LmiMargin {
+            name: m.name,
+            margin: m.slack,
+            error_bound: m.error_bound,
+            strict,
+            size,
+            ok,
+        });
     }
-    let min_margin = lmis.iter().filter(|l| l.strict).map(|l| l.margin).fold(f64::INFINITY, f64::min);
+    let min_margin = lmis
+        .iter()
+        .filter(|l| l.strict)
+        .map(|l| l.margin)
+        .fold(f64::INFINITY, f64::min);
     let ok = lmis.iter().all(|l| l.ok);
     // The worst: a failing one if any, else the strict one with the least room.
     let worst = lmis
         .iter()
         .min_by(|a, b| {
-            let key = |l: &LmiMargin| (l.ok, if l.strict { l.margin - l.error_bound } else { f64::INFINITY });
+            let key = |l: &LmiMargin| {
+                (
+                    l.ok,
+                    if l.strict {
+                        l.margin - l.error_bound
+                    } else {
+                        f64::INFINITY
+                    },
+                )
+            };
             let (ka, kb) = (key(a), key(b));
             ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
         })
         .map(|l| l.name.clone())
         .unwrap_or_default();
-    Ok(Certificate { min_margin, ok, worst, lmis })
+    Ok(Certificate {
+        min_margin,
+        ok,
+        worst,
+        lmis,
+    })
 }

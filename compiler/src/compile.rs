@@ -31,7 +31,12 @@ pub struct Compiled {
 /// Synthesizes and certifies. If the certificate fails only because the
 /// solver's answer sits within rounding of the strict margin, the synthesis is
 /// retried once with a 100 times larger margin (noted in the report).
-pub fn compile(model: &TsModel, spec: SpecInfo, settings: &Settings, front: (Duration, Duration)) -> Compiled {
+pub fn compile(
+    model: &TsModel,
+    spec: SpecInfo,
+    settings: &Settings,
+    front: (Duration, Duration),
+) -> Compiled {
     let t0 = Instant::now();
     let mut settings = settings.clone();
     let mut outcome = run(model, &settings);
@@ -41,7 +46,11 @@ pub fn compile(model: &TsModel, spec: SpecInfo, settings: &Settings, front: (Dur
         if let (Ok((d, c)), Ok(_)) = (&retry, &outcome) {
             if c.ok {
                 let mut d = d.clone();
-                d.notes.push(format!("certificate failed at margin {:.1e}; re-solved with margin {:.1e}", settings.eps / 100.0, settings.eps));
+                d.notes.push(format!(
+                    "certificate failed at margin {:.1e}; re-solved with margin {:.1e}",
+                    settings.eps / 100.0,
+                    settings.eps
+                ));
                 outcome = Ok((d, c.clone()));
             }
         }
@@ -68,7 +77,11 @@ pub fn compile(model: &TsModel, spec: SpecInfo, settings: &Settings, front: (Dur
     if let Ok((d, _)) = &outcome {
         report.timings_s.certify = d.certify_time.as_secs_f64();
     }
-    Compiled { status, outcome, report }
+    Compiled {
+        status,
+        outcome,
+        report,
+    }
 }
 
 fn run(model: &TsModel, settings: &Settings) -> Result<(Design, Certificate), SynthError> {

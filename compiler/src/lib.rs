@@ -7,10 +7,10 @@
 
 #![allow(clippy::result_large_err)] // diagnostics travel on the cold error path
 
+pub mod certify;
+pub mod compile;
 pub mod frontend;
 pub mod model;
-pub mod certify;
-pub mod synth;
 pub mod report;
-pub mod compile;
 pub mod summary;
+pub mod synth;

@@ -65,7 +65,11 @@ fn main() -> ExitCode {
     }
 }
 
-fn compile(path: &std::path::Path, out: &std::path::Path, report_path: Option<PathBuf>) -> ExitCode {
+fn compile(
+    path: &std::path::Path,
+    out: &std::path::Path,
+    report_path: Option<PathBuf>,
+) -> ExitCode {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
     let source = match frontend::read_source(path) {
         Ok(s) => s,
@@ -75,13 +79,25 @@ fn compile(path: &std::path::Path, out: &std::path::Path, report_path: Option<Pa
         }
     };
     let checked = frontend::check(&source);
-    eprint!("{}", diag::render(&source.name, &source.text, &checked.diagnostics, color));
+    eprint!(
+        "{}",
+        diag::render(&source.name, &source.text, &checked.diagnostics, color)
+    );
     let Some(model) = checked.model else {
         return ExitCode::from(exit::SPEC);
     };
-    let spec = tsfc::report::SpecInfo { path: source.name.clone(), sha256: tsfc::report::sha256_hex(&source.bytes) };
-    let compiled = tsfc::compile::compile(&model, spec, &tsfc::synth::Settings::default(), (checked.parse_time, checked.model_time));
-    let report_path = report_path.unwrap_or_else(|| out.join(format!("{}.report.json", model.spec.controller.node)));
+    let spec = tsfc::report::SpecInfo {
+        path: source.name.clone(),
+        sha256: tsfc::report::sha256_hex(&source.bytes),
+    };
+    let compiled = tsfc::compile::compile(
+        &model,
+        spec,
+        &tsfc::synth::Settings::default(),
+        (checked.parse_time, checked.model_time),
+    );
+    let report_path = report_path
+        .unwrap_or_else(|| out.join(format!("{}.report.json", model.spec.controller.node)));
     let json = match serde_json::to_string_pretty(&compiled.report) {
         Ok(j) => j + "\n",
         Err(e) => {
@@ -93,7 +109,10 @@ fn compile(path: &std::path::Path, out: &std::path::Path, report_path: Option<Pa
         eprintln!("error: cannot write `{}`: {e}", report_path.display());
         return ExitCode::from(exit::IO);
     }
-    eprint!("{}", tsfc::summary::summary(&model, &compiled, &report_path));
+    eprint!(
+        "{}",
+        tsfc::summary::summary(&model, &compiled, &report_path)
+    );
     match compiled.status {
         tsfc::compile::Status::Certified => ExitCode::SUCCESS,
         _ => ExitCode::from(exit::INFEASIBLE),

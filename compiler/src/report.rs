@@ -11,12 +11,17 @@ use std::path::Path;
 
 /// Rows of a matrix, for JSON.
 pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows()).map(|i| m.row(i).iter().copied().collect()).collect()
+    (0..m.nrows())
+        .map(|i| m.row(i).iter().copied().collect())
+        .collect()
 }
 
 /// Lower-case hex SHA-256 of `bytes`.
 pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 /// `spec` section.
@@ -139,29 +144,73 @@ fn objectives(design: &Design) -> BTreeMap<String, serde_json::Value> {
     put("input_norm_bound", a.input_norm_bound);
     put("output_norm_bound", a.output_norm_bound);
     if let Some((lo, hi)) = a.decay_bracket {
-        o.insert("decay_rate_bracket".into(), serde_json::json!([lo, if hi.is_finite() { serde_json::json!(hi) } else { serde_json::Value::Null }]));
+        o.insert(
+            "decay_rate_bracket".into(),
+            serde_json::json!([
+                lo,
+                if hi.is_finite() {
+                    serde_json::json!(hi)
+                } else {
+                    serde_json::Value::Null
+                }
+            ]),
+        );
     }
     o
 }
 
 /// Assembles the report.
-pub fn report(model: &TsModel, spec: SpecInfo, outcome: &Result<(Design, Certificate), SynthError>, timings: Timings) -> Report {
+pub fn report(
+    model: &TsModel,
+    spec: SpecInfo,
+    outcome: &Result<(Design, Certificate), SynthError>,
+    timings: Timings,
+) -> Report {
     let (status, design, cert, diagnosis) = match outcome {
         Ok((d, c)) if c.ok => ("certified", Some(d), Some(c.clone()), None),
         Ok((d, c)) => (
             "refused",
             Some(d),
             Some(c.clone()),
-            Some(Diagnosis { message: format!("certificate refused: the worst condition is `{}`", c.worst), achievable: Vec::new() }),
+            Some(Diagnosis {
+                message: format!("certificate refused: the worst condition is `{}`", c.worst),
+                achievable: Vec::new(),
+            }),
         ),
-        Err(SynthError::Infeasible { message, achievable }) => ("infeasible", None, None, Some(Diagnosis { message: message.clone(), achievable: achievable.clone() })),
-        Err(SynthError::Solver { message, achievable, status }) => (
+        Err(SynthError::Infeasible {
+            message,
+            achievable,
+        }) => (
+            "infeasible",
+            None,
+            None,
+            Some(Diagnosis {
+                message: message.clone(),
+                achievable: achievable.clone(),
+            }),
+        ),
+        Err(SynthError::Solver {
+            message,
+            achievable,
+            status,
+        }) => (
             "refused",
             None,
             None,
-            Some(Diagnosis { message: format!("{message} (solver status: {status:?})"), achievable: achievable.clone() }),
+            Some(Diagnosis {
+                message: format!("{message} (solver status: {status:?})"),
+                achievable: achievable.clone(),
+            }),
         ),
-        Err(e) => ("refused", None, None, Some(Diagnosis { message: e.to_string(), achievable: Vec::new() })),
+        Err(e) => (
+            "refused",
+            None,
+            None,
+            Some(Diagnosis {
+                message: e.to_string(),
+                achievable: Vec::new(),
+            }),
+        ),
     };
     let certified = status == "certified";
     let mut problem = BTreeMap::new();
@@ -194,7 +243,16 @@ pub fn report(model: &TsModel, spec: SpecInfo, outcome: &Result<(Design, Certifi
         objectives: design.map(objectives).unwrap_or_default(),
         gains: if certified {
             design
-                .map(|d| d.gains.iter().zip(&model.rules).map(|(f, r)| Gain { rule: r.name.clone(), f: rows(f) }).collect())
+                .map(|d| {
+                    d.gains
+                        .iter()
+                        .zip(&model.rules)
+                        .map(|(f, r)| Gain {
+                            rule: r.name.clone(),
+                            f: rows(f),
+                        })
+                        .collect()
+                })
                 .unwrap_or_default()
         } else {
             Vec::new()
@@ -206,7 +264,9 @@ pub fn report(model: &TsModel, spec: SpecInfo, outcome: &Result<(Design, Certifi
         diagnosis,
         solver: SolverInfo {
             name: "clarabel",
-            status: design.and_then(|d| d.log.status).map_or_else(|| "none".to_string(), |s| format!("{s:?}")),
+            status: design
+                .and_then(|d| d.log.status)
+                .map_or_else(|| "none".to_string(), |s| format!("{s:?}")),
             iterations: design.map_or(0, |d| d.log.iterations),
             solves: design.map_or(0, |d| d.log.solves),
             problem,
@@ -222,9 +282,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     if std::fs::read(path).is_ok_and(|old| old == bytes) {
         return Ok(());
     }
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir)?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
     let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
     std::fs::write(&tmp, bytes)?;
     std::fs::rename(&tmp, path).inspect_err(|_| {

@@ -14,13 +14,23 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
         Status::Infeasible => "infeasible",
         Status::Refused => "refused",
     };
-    let _ = writeln!(s, "{verdict}: controller `{}` (n = {}, m = {}, {} rules, relaxation {})", r.controller, r.n, r.m, r.rules, r.relaxation);
+    let _ = writeln!(
+        s,
+        "{verdict}: controller `{}` (n = {}, m = {}, {} rules, relaxation {})",
+        r.controller, r.n, r.m, r.rules, r.relaxation
+    );
     for (k, v) in &r.objectives {
         let _ = writeln!(s, "  {k:<20} {v}");
     }
     if let Some(cert) = &r.certificate {
         let strict = cert.lmis.iter().filter(|l| l.strict).count();
-        let _ = writeln!(s, "  certificate          {} conditions ({strict} strict), min margin {:.3e}, worst `{}`", cert.lmis.len(), cert.min_margin, cert.worst);
+        let _ = writeln!(
+            s,
+            "  certificate          {} conditions ({strict} strict), min margin {:.3e}, worst `{}`",
+            cert.lmis.len(),
+            cert.min_margin,
+            cert.worst
+        );
     }
     for red in &r.reductions {
         let _ = writeln!(s, "  reduction            {red}");

@@ -62,5 +62,5 @@ pub use expr::{BlockGrid, Expr};
 pub use lower::ProblemStats;
 pub use margin::Margin;
 pub use problem::{ObjectiveSense, Problem};
-pub use solve::{Solution, SolveSettings, SolveStatus};
+pub use solve::{LinearSolver, Solution, SolveSettings, SolveStatus};
 pub use var::{Var, VarKind};

@@ -34,6 +34,17 @@ pub struct SolveSettings {
     pub chordal_decomposition: bool,
     /// Let the solver rescale the data.
     pub equilibrate: bool,
+    /// Sparse LDL factorization used for the KKT systems.
+    pub linear_solver: LinearSolver,
+}
+
+/// The sparse LDL factorization of the interior-point KKT systems.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinearSolver {
+    /// faer's supernodal LDL (fast on the dense blocks PSD cones create).
+    Faer,
+    /// Clarabel's QDLDL (scalar, simplicial).
+    Qdldl,
 }
 
 impl Default for SolveSettings {
@@ -49,6 +60,7 @@ impl Default for SolveSettings {
             tol_infeas_rel: 1e-8,
             chordal_decomposition: true,
             equilibrate: true,
+            linear_solver: LinearSolver::Faer,
         }
     }
 }
@@ -66,6 +78,10 @@ impl SolveSettings {
             tol_infeas_rel: self.tol_infeas_rel,
             chordal_decomposition_enable: self.chordal_decomposition,
             equilibrate_enable: self.equilibrate,
+            direct_solve_method: match self.linear_solver {
+                LinearSolver::Faer => "faer".to_string(),
+                LinearSolver::Qdldl => "qdldl".to_string(),
+            },
             ..DefaultSettings::default()
         }
     }

@@ -82,9 +82,18 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
     if let tsf_lang::spec::Relaxation::Tanaka { s } = spec.relaxation.node {
         if s < coverage.max_firing {
             diags.push(
-                Diagnostic::error(spec.relaxation.span, format!("tanaka(s = {s}) assumes at most {s} rules fire at once, but up to {} do", coverage.max_firing))
-                    .with_label("this relaxation would not be sound")
-                    .with_help(format!("use `relaxation tanaka(s = {});` or narrower fuzzy sets", coverage.max_firing)),
+                Diagnostic::error(
+                    spec.relaxation.span,
+                    format!(
+                        "tanaka(s = {s}) assumes at most {s} rules fire at once, but up to {} do",
+                        coverage.max_firing
+                    ),
+                )
+                .with_label("this relaxation would not be sound")
+                .with_help(format!(
+                    "use `relaxation tanaka(s = {});` or narrower fuzzy sets",
+                    coverage.max_firing
+                )),
             );
             return None;
         }

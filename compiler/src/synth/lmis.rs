@@ -40,6 +40,23 @@ pub struct Built {
     pub vars: Vars,
     /// Human-readable notes on reductions applied (empty for the full build).
     pub reductions: Vec<String>,
+    /// Names of the constraints that are non-strict in the theory (`>= 0`).
+    /// They are solved with the margin too, so that the numeric solution
+    /// satisfies them with room, and certified as non-strict.
+    pub nonstrict: Vec<String>,
+}
+
+/// Adds `E >= 0` (non-strict in the theory), solved as `E >= eps I`.
+pub(super) fn nonstrict_psd(
+    problem: &mut Problem,
+    nonstrict: &mut Vec<String>,
+    name: &str,
+    e: Expr,
+    eps: f64,
+) -> Result<(), LmiError> {
+    problem.psd(name, e, eps)?;
+    nonstrict.push(name.to_string());
+    Ok(())
 }
 
 /// Whether every rule has the same B (then the pair LMIs of the symmetric
@@ -69,7 +86,11 @@ fn channel(model: &TsModel, from: usize, to: usize) -> Channel {
     let sig = &model.spec.disturbances[from];
     let out = &model.spec.outputs[to];
     Channel {
-        d: model.rules.iter().map(|r| cols(&r.d, sig.offset, sig.len)).collect(),
+        d: model
+            .rules
+            .iter()
+            .map(|r| cols(&r.d, sig.offset, sig.len))
+            .collect(),
         c: out.c.clone(),
         e: out.e.clone(),
         g: cols(&out.g, sig.offset, sig.len),
@@ -110,19 +131,38 @@ fn scalar_times_identity(var: Option<Var>, fixed: f64, k: usize) -> Result<Expr,
 }
 
 /// [1, x0'; x0, X] >= 0, or X - R^{-1} >= 0 for an ellipsoid of initial states.
-fn initial_set(problem: &mut Problem, v: &Vars, init: &InitialSet, what: &str) -> Result<(), LmiError> {
+fn initial_set(
+    problem: &mut Problem,
+    ns: &mut Vec<String>,
+    eps: f64,
+    v: &Vars,
+    init: &InitialSet,
+    what: &str,
+) -> Result<(), LmiError> {
     match init {
         InitialSet::Point(x0) => {
             let x0 = DMatrix::from_column_slice(x0.len(), 1, x0);
             let e = Expr::sym_blocks(vec![
-                vec![Some(Expr::identity(1)), Some(Expr::constant(&x0.transpose())?)],
+                vec![
+                    Some(Expr::identity(1)),
+                    Some(Expr::constant(&x0.transpose())?),
+                ],
                 vec![None, Some(Expr::var(v.x))],
             ])?;
-            problem.psd(&format!("{what}: x0 in E(P,1)"), e, 0.0)?;
+            nonstrict_psd(problem, ns, &format!("{what}: x0 in E(P,1)"), e, eps)?;
         }
         InitialSet::Ellipsoid(r) => {
-            let rinv = r.clone().try_inverse().unwrap_or_else(|| DMatrix::zeros(r.nrows(), r.ncols()));
-            problem.psd(&format!("{what}: ellipsoid in E(P,1)"), Expr::var(v.x).add_constant(&(-rinv))?, 0.0)?;
+            let rinv = r
+                .clone()
+                .try_inverse()
+                .unwrap_or_else(|| DMatrix::zeros(r.nrows(), r.ncols()));
+            nonstrict_psd(
+                problem,
+                ns,
+                &format!("{what}: ellipsoid in E(P,1)"),
+                Expr::var(v.x).add_constant(&(-rinv))?,
+                eps,
+            )?;
         }
     }
     Ok(())
@@ -130,31 +170,63 @@ fn initial_set(problem: &mut Problem, v: &Vars, init: &InitialSet, what: &str) -
 
 /// Builds the problem for `plan`. With `reduce`, constraints provably implied
 /// by others are left out (and listed in `reductions`).
-pub fn build(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, reduce: bool) -> Result<Built, String> {
+pub fn build(
+    model: &TsModel,
+    plan: &Plan,
+    relaxation: Relaxation,
+    eps: f64,
+    reduce: bool,
+) -> Result<Built, String> {
     build_inner(model, plan, relaxation, eps, reduce).map_err(lmi_err)
 }
 
-fn build_inner(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, reduce: bool) -> Result<Built, LmiError> {
+fn build_inner(
+    model: &TsModel,
+    plan: &Plan,
+    relaxation: Relaxation,
+    eps: f64,
+    reduce: bool,
+) -> Result<Built, LmiError> {
     let (n, m, r) = (model.n, model.m, model.r());
     let mut problem = Problem::new();
     let x = problem.symmetric("X", n)?;
-    let mvars = (0..r).map(|j| problem.full(&format!("M{}", j + 1), m, n)).collect::<Result<Vec<_>, _>>()?;
-    let opt_var = |problem: &mut Problem, name: &str, b: Option<Bound>| -> Result<Option<Var>, LmiError> {
-        match b {
-            Some(Bound::Minimize | Bound::Free) => Ok(Some(problem.scalar(name)?)),
-            _ => Ok(None),
-        }
-    };
+    let mvars = (0..r)
+        .map(|j| problem.full(&format!("M{}", j + 1), m, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let opt_var =
+        |problem: &mut Problem, name: &str, b: Option<Bound>| -> Result<Option<Var>, LmiError> {
+            match b {
+                Some(Bound::Minimize | Bound::Free) => Ok(Some(problem.scalar(name)?)),
+                _ => Ok(None),
+            }
+        };
     let hinf_g = opt_var(&mut problem, "g", plan.hinf.as_ref().map(|h| h.bound))?;
-    let input_s = opt_var(&mut problem, "mu2", plan.input_norm.as_ref().map(|h| h.bound))?;
-    let output_s = opt_var(&mut problem, "lambda2", plan.output_norm.as_ref().map(|h| h.bound))?;
+    let input_s = opt_var(
+        &mut problem,
+        "mu2",
+        plan.input_norm.as_ref().map(|h| h.bound),
+    )?;
+    let output_s = opt_var(
+        &mut problem,
+        "lambda2",
+        plan.output_norm.as_ref().map(|h| h.bound),
+    )?;
     let linf_gamma = opt_var(&mut problem, "gamma", plan.linf.as_ref().map(|h| h.bound))?;
     let linf_xi = match &plan.linf {
         Some(l) if l.xi.is_none() => Some(problem.scalar("xi")?),
         _ => None,
     };
-    let vars = Vars { x, m: mvars, hinf_g, input_s, output_s, linf_gamma, linf_xi };
+    let vars = Vars {
+        x,
+        m: mvars,
+        hinf_g,
+        input_s,
+        output_s,
+        linf_gamma,
+        linf_xi,
+    };
     let mut reductions = Vec::new();
+    let mut nonstrict = Vec::new();
     let pair_reduce = reduce && common_b(model);
 
     problem.psd("X > 0", Expr::var(x), eps)?;
@@ -163,9 +235,25 @@ fn build_inner(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, r
     // the H-inf or L-inf family (their (1,1) blocks) when there is no decay rate.
     let alpha = plan.decay.unwrap_or(0.0);
     if plan.decay.is_some() || (plan.hinf.is_none() && plan.linf.is_none()) {
-        let name = if plan.decay.is_some() { "decay" } else { "stability" };
-        let fam = Family { name: name.into(), q: Box::new(|i, j| upsilon(model, &vars, i, j, 2.0 * alpha)) };
-        relax(&mut problem, model, &fam, relaxation, eps, pair_reduce, &mut reductions)?;
+        let name = if plan.decay.is_some() {
+            "decay"
+        } else {
+            "stability"
+        };
+        let fam = Family {
+            name: name.into(),
+            q: Box::new(|i, j| upsilon(model, &vars, i, j, 2.0 * alpha)),
+        };
+        relax(
+            &mut problem,
+            model,
+            &fam,
+            relaxation,
+            eps,
+            pair_reduce,
+            &mut reductions,
+            &mut nonstrict,
+        )?;
     }
 
     if let Some(h) = &plan.hinf {
@@ -180,13 +268,30 @@ fn build_inner(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, r
             name: "hinf".into(),
             q: Box::new(|i, j| {
                 Expr::sym_blocks(vec![
-                    vec![Some(upsilon(model, &vars, i, j, 0.0)?), Some(Expr::constant(&ch.d[i])?), Some(output_map(&ch, &vars, j, n)?.transpose())],
-                    vec![None, Some(scalar_times_identity(vars.hinf_g, g_fixed, q)?.scale(-1.0)?), Some(Expr::constant(&ch.g.transpose())?)],
+                    vec![
+                        Some(upsilon(model, &vars, i, j, 0.0)?),
+                        Some(Expr::constant(&ch.d[i])?),
+                        Some(output_map(&ch, &vars, j, n)?.transpose()),
+                    ],
+                    vec![
+                        None,
+                        Some(scalar_times_identity(vars.hinf_g, g_fixed, q)?.scale(-1.0)?),
+                        Some(Expr::constant(&ch.g.transpose())?),
+                    ],
                     vec![None, None, Some(Expr::identity(p).scale(-1.0)?)],
                 ])
             }),
         };
-        relax(&mut problem, model, &fam, relaxation, eps, pair_reduce, &mut reductions)?;
+        relax(
+            &mut problem,
+            model,
+            &fam,
+            relaxation,
+            eps,
+            pair_reduce,
+            &mut reductions,
+            &mut nonstrict,
+        )?;
         if let Some(g) = vars.hinf_g {
             problem.add_scalar("g >= 0", Expr::var(g), Relation::Ge, 0.0)?;
             if h.bound == Bound::Minimize {
@@ -209,18 +314,41 @@ fn build_inner(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, r
             name: "linf".into(),
             q: Box::new(|i, j| {
                 Expr::sym_blocks(vec![
-                    vec![Some(upsilon(model, &vars, i, j, phi)?), Some(Expr::constant(&ch.d[i])?)],
-                    vec![None, Some(scalar_times_identity(vars.linf_xi, xi_fixed, q)?.scale(-1.0)?)],
+                    vec![
+                        Some(upsilon(model, &vars, i, j, phi)?),
+                        Some(Expr::constant(&ch.d[i])?),
+                    ],
+                    vec![
+                        None,
+                        Some(scalar_times_identity(vars.linf_xi, xi_fixed, q)?.scale(-1.0)?),
+                    ],
                 ])
             }),
         };
-        relax(&mut problem, model, &fam, relaxation, eps, pair_reduce, &mut reductions)?;
+        relax(
+            &mut problem,
+            model,
+            &fam,
+            relaxation,
+            eps,
+            pair_reduce,
+            &mut reductions,
+            &mut nonstrict,
+        )?;
         // Output peak: [phi X, 0, (C X + E M_j)'; *, (gamma - xi) I, G'; *, *, gamma I] > 0 for every j.
         let gi = |k| scalar_times_identity(vars.linf_gamma, gamma_fixed, k);
         for j in 0..r {
             let e = Expr::sym_blocks(vec![
-                vec![Some(Expr::var(x).scale(phi)?), None, Some(output_map(&ch, &vars, j, n)?.transpose())],
-                vec![None, Some(gi(q)?.sub(scalar_times_identity(vars.linf_xi, xi_fixed, q)?)?), Some(Expr::constant(&ch.g.transpose())?)],
+                vec![
+                    Some(Expr::var(x).scale(phi)?),
+                    None,
+                    Some(output_map(&ch, &vars, j, n)?.transpose()),
+                ],
+                vec![
+                    None,
+                    Some(gi(q)?.sub(scalar_times_identity(vars.linf_xi, xi_fixed, q)?)?),
+                    Some(Expr::constant(&ch.g.transpose())?),
+                ],
                 vec![None, None, Some(gi(p)?)],
             ])?;
             problem.psd(&format!("linf peak [{}]", j + 1), e, eps)?;
@@ -234,7 +362,14 @@ fn build_inner(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, r
     }
 
     if let Some(u) = &plan.input_norm {
-        initial_set(&mut problem, &vars, &u.initial, "input norm")?;
+        initial_set(
+            &mut problem,
+            &mut nonstrict,
+            eps,
+            &vars,
+            &u.initial,
+            "input norm",
+        )?;
         let fixed = match u.bound {
             Bound::Fixed(mu) => mu * mu,
             _ => 0.0,
@@ -244,7 +379,13 @@ fn build_inner(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, r
                 vec![Some(Expr::var(x)), Some(Expr::var(vars.m[j]).transpose())],
                 vec![None, Some(scalar_times_identity(vars.input_s, fixed, m)?)],
             ])?;
-            problem.psd(&format!("input norm [{}]", j + 1), e, 0.0)?;
+            nonstrict_psd(
+                &mut problem,
+                &mut nonstrict,
+                &format!("input norm [{}]", j + 1),
+                e,
+                eps,
+            )?;
         }
         if let (Some(s), Bound::Minimize) = (vars.input_s, u.bound) {
             problem.minimize(Expr::var(s))?;
@@ -254,7 +395,14 @@ fn build_inner(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, r
     if let Some(o) = &plan.output_norm {
         let out = &model.spec.outputs[o.output];
         if plan.input_norm.is_none() {
-            initial_set(&mut problem, &vars, &o.initial, "output norm")?;
+            initial_set(
+                &mut problem,
+                &mut nonstrict,
+                eps,
+                &vars,
+                &o.initial,
+                "output norm",
+            )?;
         }
         let fixed = match o.bound {
             Bound::Fixed(l) => l * l,
@@ -266,10 +414,15 @@ fn build_inner(model: &TsModel, plan: &Plan, relaxation: Relaxation, eps: f64, r
             vec![Some(Expr::var(x)), Some(cx.transpose())],
             vec![None, Some(scalar_times_identity(vars.output_s, fixed, p)?)],
         ])?;
-        problem.psd("output norm", e, 0.0)?;
+        nonstrict_psd(&mut problem, &mut nonstrict, "output norm", e, eps)?;
         if let (Some(s), Bound::Minimize) = (vars.output_s, o.bound) {
             problem.minimize(Expr::var(s))?;
         }
     }
-    Ok(Built { problem, vars, reductions })
+    Ok(Built {
+        problem,
+        vars,
+        reductions,
+        nonstrict,
+    })
 }

@@ -33,7 +33,12 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { eps: 1e-7, solver: SolveSettings::default(), bisection_rel_tol: 1e-3, default_phi: 0.1 }
+        Settings {
+            eps: 1e-7,
+            solver: SolveSettings::default(),
+            bisection_rel_tol: 1e-3,
+            default_phi: 0.1,
+        }
     }
 }
 
@@ -86,8 +91,8 @@ pub struct Design {
     pub x: DMatrix<f64>,
     /// Lyapunov matrix P.
     pub p: DMatrix<f64>,
-    /// Values of every variable, in creation order (for the certificate).
-    pub values: Vec<DMatrix<f64>>,
+    /// Values of every variable of the solved problem, by name (for the certificate).
+    pub values: Vec<(String, DMatrix<f64>)>,
     /// Achieved objectives.
     pub achieved: Achieved,
     /// Strict-LMI margin used.
@@ -128,14 +133,21 @@ pub enum SynthError {
 impl std::fmt::Display for SynthError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            SynthError::Infeasible { message, achievable } => {
+            SynthError::Infeasible {
+                message,
+                achievable,
+            } => {
                 write!(f, "{message}")?;
                 for a in achievable {
                     write!(f, "\n  {a}")?;
                 }
                 Ok(())
             }
-            SynthError::Solver { status, message, achievable } => {
+            SynthError::Solver {
+                status,
+                message,
+                achievable,
+            } => {
                 write!(f, "{message} (solver status: {status:?})")?;
                 for a in achievable {
                     write!(f, "\n  {a}")?;
@@ -164,9 +176,13 @@ impl Runner<'_> {
     fn attempt(&mut self, plan: &Plan) -> Result<Attempt, SynthError> {
         let relaxation = self.model.spec.relaxation.node;
         let t0 = Instant::now();
-        let built = build(self.model, plan, relaxation, self.settings.eps, true).map_err(SynthError::Unsupported)?;
+        let built = build(self.model, plan, relaxation, self.settings.eps, true)
+            .map_err(SynthError::Unsupported)?;
         self.log.build_time += t0.elapsed();
-        let sol = built.problem.solve(&self.settings.solver).map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))?;
+        let sol = built
+            .problem
+            .solve(&self.settings.solver)
+            .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))?;
         self.log.solves += 1;
         self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
         match sol.status {
@@ -177,7 +193,11 @@ impl Runner<'_> {
         self.log.status = Some(sol.status);
         self.log.iterations = sol.iterations;
         self.log.stats = Some(built.problem.stats());
-        let values_of = |v| sol.value(v).cloned().map_err(|e| SynthError::Unsupported(format!("{e}")));
+        let values_of = |v| {
+            sol.value(v)
+                .cloned()
+                .map_err(|e| SynthError::Unsupported(format!("{e}")))
+        };
         let x = values_of(built.vars.x)?;
         let Some(chol) = x.clone().cholesky() else {
             return Ok(Attempt::Trouble(SolveStatus::NumericalError));
@@ -189,13 +209,23 @@ impl Runner<'_> {
             .iter()
             .map(|&mv| values_of(mv).map(|m| chol.solve(&m.transpose()).transpose()))
             .collect::<Result<Vec<_>, _>>()?;
-        let values = built.problem.vars().map(|(_, v)| values_of(v)).collect::<Result<Vec<_>, _>>()?;
+        let values = built
+            .problem
+            .vars()
+            .map(|(name, v)| values_of(v).map(|m| (name.to_string(), m)))
+            .collect::<Result<Vec<_>, _>>()?;
         let scalar = |v: Option<tsf_lmi::Var>| v.and_then(|v| sol.value(v).ok().map(|m| m[(0, 0)]));
-        let mut achieved = Achieved { decay_rate: plan.decay, ..Achieved::default() };
+        let mut achieved = Achieved {
+            decay_rate: plan.decay,
+            ..Achieved::default()
+        };
         if let Some(h) = &plan.hinf {
             achieved.hinf_gamma = Some(match h.bound {
                 Bound::Fixed(g) => g,
-                _ => scalar(built.vars.hinf_g).unwrap_or(f64::NAN).max(0.0).sqrt(),
+                _ => scalar(built.vars.hinf_g)
+                    .unwrap_or(f64::NAN)
+                    .max(0.0)
+                    .sqrt(),
             });
         }
         if let Some(l) = &plan.linf {
@@ -209,13 +239,19 @@ impl Runner<'_> {
         if let Some(u) = &plan.input_norm {
             achieved.input_norm_bound = Some(match u.bound {
                 Bound::Fixed(m) => m,
-                _ => scalar(built.vars.input_s).unwrap_or(f64::NAN).max(0.0).sqrt(),
+                _ => scalar(built.vars.input_s)
+                    .unwrap_or(f64::NAN)
+                    .max(0.0)
+                    .sqrt(),
             });
         }
         if let Some(o) = &plan.output_norm {
             achieved.output_norm_bound = Some(match o.bound {
                 Bound::Fixed(l) => l,
-                _ => scalar(built.vars.output_s).unwrap_or(f64::NAN).max(0.0).sqrt(),
+                _ => scalar(built.vars.output_s)
+                    .unwrap_or(f64::NAN)
+                    .max(0.0)
+                    .sqrt(),
             });
         }
         Ok(Attempt::Solved(Box::new(Design {
@@ -235,11 +271,20 @@ impl Runner<'_> {
 
     /// Largest decay rate for which `plan` is feasible: (design, bracket).
     fn max_decay(&mut self, plan: &Plan) -> Result<Option<(Design, (f64, f64))>, SynthError> {
-        let with = |a: f64| Plan { decay: Some(a), ..plan.clone() };
+        let with = |a: f64| Plan {
+            decay: Some(a),
+            ..plan.clone()
+        };
         let mut best = match self.attempt(&with(0.0))? {
             Attempt::Solved(d) => *d,
             Attempt::Infeasible => return Ok(None),
-            Attempt::Trouble(s) => return Err(SynthError::Solver { status: s, message: "the solver failed at decay rate 0".into(), achievable: Vec::new() }),
+            Attempt::Trouble(s) => {
+                return Err(SynthError::Solver {
+                    status: s,
+                    message: "the solver failed at decay rate 0".into(),
+                    achievable: Vec::new(),
+                })
+            }
         };
         let (mut lo, mut hi) = (0.0, 0.5);
         // Grow the bracket until infeasible.
@@ -276,7 +321,10 @@ impl Runner<'_> {
         if goal == Goal::MaxDecay {
             return Ok(self.max_decay(plan)?.map(|(mut d, bracket)| {
                 d.achieved.decay_bracket = Some(bracket);
-                d.notes.push(format!("decay rate maximized by bisection: feasible at {:.6}, not at {:.6}", bracket.0, bracket.1));
+                d.notes.push(format!(
+                    "decay rate maximized by bisection: feasible at {:.6}, not at {:.6}",
+                    bracket.0, bracket.1
+                ));
                 d
             }));
         }
@@ -286,12 +334,20 @@ impl Runner<'_> {
         match self.attempt(plan)? {
             Attempt::Solved(d) => Ok(Some(*d)),
             Attempt::Infeasible => Ok(None),
-            Attempt::Trouble(s) => Err(SynthError::Solver { status: s, message: "the solver stopped without a verdict".into(), achievable: Vec::new() }),
+            Attempt::Trouble(s) => Err(SynthError::Solver {
+                status: s,
+                message: "the solver stopped without a verdict".into(),
+                achievable: Vec::new(),
+            }),
         }
     }
 
     fn linf_phi_free(&self) -> bool {
-        self.model.spec.objectives.iter().any(|o| matches!(o.node, tsf_lang::spec::Objective::Linf { phi: None, .. }))
+        self.model
+            .spec
+            .objectives
+            .iter()
+            .any(|o| matches!(o.node, tsf_lang::spec::Objective::Linf { phi: None, .. }))
     }
 
     /// Line search over phi (log grid, then golden section) for the smallest L-inf gamma.
@@ -322,7 +378,10 @@ impl Runner<'_> {
         let Some(best_k) = best_k else {
             return Ok(None);
         };
-        let (mut a, mut b) = (grid[best_k.saturating_sub(1)].ln(), grid[(best_k + 1).min(grid.len() - 1)].ln());
+        let (mut a, mut b) = (
+            grid[best_k.saturating_sub(1)].ln(),
+            grid[(best_k + 1).min(grid.len() - 1)].ln(),
+        );
         let mut best = results.swap_remove(best_k).1;
         let gr = 0.5 * (5f64.sqrt() - 1.0);
         for _ in 0..12 {
@@ -330,7 +389,10 @@ impl Runner<'_> {
             let d = a + gr * (b - a);
             let fc = eval(self, c.exp())?;
             let fd = eval(self, d.exp())?;
-            let (kc, kd) = (fc.as_ref().map_or(f64::INFINITY, key), fd.as_ref().map_or(f64::INFINITY, key));
+            let (kc, kd) = (
+                fc.as_ref().map_or(f64::INFINITY, key),
+                fd.as_ref().map_or(f64::INFINITY, key),
+            );
             for cand in [fc, fd].into_iter().flatten() {
                 if best.as_ref().is_none_or(|bd| key(&cand) < key(bd)) {
                     best = Some(cand);
@@ -343,7 +405,10 @@ impl Runner<'_> {
             }
         }
         Ok(best.map(|mut d| {
-            d.notes.push(format!("L-inf phi chosen by line search over [1e-4, 1e1]: phi = {:.6}", d.achieved.linf_phi.unwrap_or(f64::NAN)));
+            d.notes.push(format!(
+                "L-inf phi chosen by line search over [1e-4, 1e1]: phi = {:.6}",
+                d.achieved.linf_phi.unwrap_or(f64::NAN)
+            ));
             d
         }))
     }
@@ -352,7 +417,11 @@ impl Runner<'_> {
 /// Synthesizes gains for `model`'s objectives.
 pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthError> {
     let (plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
-    let mut runner = Runner { model, settings, log: SolverLog::default() };
+    let mut runner = Runner {
+        model,
+        settings,
+        log: SolverLog::default(),
+    };
     match runner.run(&plan, goal) {
         Ok(Some(mut d)) => {
             d.log = std::mem::take(&mut runner.log);
@@ -390,7 +459,11 @@ fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
     let mut achievable = Vec::new();
     for (name, value) in &fixed {
         let relaxed = plan.optimizing(name);
-        let goal = if *name == "decay_rate" { Goal::MaxDecay } else { Goal::InSdp };
+        let goal = if *name == "decay_rate" {
+            Goal::MaxDecay
+        } else {
+            Goal::InSdp
+        };
         let line = match runner.run(&relaxed, goal) {
             Ok(Some(d)) => {
                 let best = match *name {
@@ -416,5 +489,8 @@ fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
     } else {
         format!("infeasible: the objectives cannot be met together ({list})")
     };
-    SynthError::Infeasible { message, achievable }
+    SynthError::Infeasible {
+        message,
+        achievable,
+    }
 }

@@ -109,19 +109,61 @@ pub fn initial_plan(spec: &Spec, default_phi: f64) -> (Plan, Goal) {
                 Target::Fixed(a) => plan.decay = Some(*a),
             },
             Objective::Hinf { from, to, target } => {
-                plan.hinf = Some(HinfPlan { from: *from, to: *to, bound: bound(*target) });
+                plan.hinf = Some(HinfPlan {
+                    from: *from,
+                    to: *to,
+                    bound: bound(*target),
+                });
             }
-            Objective::Linf { from, to, target, xi, phi } => {
-                plan.linf = Some(LinfPlan { from: *from, to: *to, bound: bound(*target), phi: phi.unwrap_or(default_phi), xi: *xi });
+            Objective::Linf {
+                from,
+                to,
+                target,
+                xi,
+                phi,
+            } => {
+                plan.linf = Some(LinfPlan {
+                    from: *from,
+                    to: *to,
+                    bound: bound(*target),
+                    phi: phi.unwrap_or(default_phi),
+                    xi: *xi,
+                });
             }
             Objective::InputNorm { target, initial } => {
-                plan.input_norm = Some(InputNormPlan { bound: bound(*target), initial: initial.clone() });
+                plan.input_norm = Some(InputNormPlan {
+                    bound: bound(*target),
+                    initial: initial.clone(),
+                });
             }
-            Objective::OutputNorm { output, target, initial } => {
-                plan.output_norm = Some(OutputNormPlan { output: *output, bound: bound(*target), initial: initial.clone() });
+            Objective::OutputNorm {
+                output,
+                target,
+                initial,
+            } => {
+                plan.output_norm = Some(OutputNormPlan {
+                    output: *output,
+                    bound: bound(*target),
+                    initial: initial.clone(),
+                });
             }
         }
-        if matches!(o.node, Objective::Hinf { target: Target::Optimize, .. } | Objective::Linf { target: Target::Optimize, .. } | Objective::InputNorm { target: Target::Optimize, .. } | Objective::OutputNorm { target: Target::Optimize, .. }) {
+        if matches!(
+            o.node,
+            Objective::Hinf {
+                target: Target::Optimize,
+                ..
+            } | Objective::Linf {
+                target: Target::Optimize,
+                ..
+            } | Objective::InputNorm {
+                target: Target::Optimize,
+                ..
+            } | Objective::OutputNorm {
+                target: Target::Optimize,
+                ..
+            }
+        ) {
             goal = Goal::InSdp;
         }
     }
@@ -135,16 +177,32 @@ impl Plan {
         if let Some(a) = self.decay.filter(|a| *a > 0.0) {
             out.push(("decay_rate", a));
         }
-        if let Some(HinfPlan { bound: Bound::Fixed(g), .. }) = &self.hinf {
+        if let Some(HinfPlan {
+            bound: Bound::Fixed(g),
+            ..
+        }) = &self.hinf
+        {
             out.push(("hinf", *g));
         }
-        if let Some(LinfPlan { bound: Bound::Fixed(g), .. }) = &self.linf {
+        if let Some(LinfPlan {
+            bound: Bound::Fixed(g),
+            ..
+        }) = &self.linf
+        {
             out.push(("linf", *g));
         }
-        if let Some(InputNormPlan { bound: Bound::Fixed(m), .. }) = &self.input_norm {
+        if let Some(InputNormPlan {
+            bound: Bound::Fixed(m),
+            ..
+        }) = &self.input_norm
+        {
             out.push(("input_norm", *m));
         }
-        if let Some(OutputNormPlan { bound: Bound::Fixed(l), .. }) = &self.output_norm {
+        if let Some(OutputNormPlan {
+            bound: Bound::Fixed(l),
+            ..
+        }) = &self.output_norm
+        {
             out.push(("output_norm", *l));
         }
         out

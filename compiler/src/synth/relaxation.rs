@@ -1,6 +1,7 @@
 //! Double-sum relaxations: sufficient LMI conditions for
 //! sum_i sum_j h_i h_j Q_ij < 0 from the blocks Q_ij of one objective family.
 
+use super::lmis::nonstrict_psd;
 use crate::model::TsModel;
 use tsf_lang::spec::Relaxation;
 use tsf_lmi::{Expr, LmiError, Problem};
@@ -17,9 +18,27 @@ pub struct Family<'a> {
 /// Adds the relaxed conditions of `fam` to `problem`. With `pair_reduce`
 /// (every rule shares B) the pair conditions are left out: they equal sums of
 /// vertex conditions (Q_ij + Q_ji = Q_ii + Q_jj) and so are implied.
-pub fn relax(problem: &mut Problem, model: &TsModel, fam: &Family<'_>, relaxation: Relaxation, eps: f64, pair_reduce: bool, reductions: &mut Vec<String>) -> Result<(), LmiError> {
+#[allow(clippy::too_many_arguments)]
+pub fn relax(
+    problem: &mut Problem,
+    model: &TsModel,
+    fam: &Family<'_>,
+    relaxation: Relaxation,
+    eps: f64,
+    pair_reduce: bool,
+    reductions: &mut Vec<String>,
+    nonstrict: &mut Vec<String>,
+) -> Result<(), LmiError> {
     let r = model.r();
-    let overlap = |i: usize, j: usize| model.coverage.overlap.get(i).and_then(|row| row.get(j)).copied().unwrap_or(true);
+    let overlap = |i: usize, j: usize| {
+        model
+            .coverage
+            .overlap
+            .get(i)
+            .and_then(|row| row.get(j))
+            .copied()
+            .unwrap_or(true)
+    };
     let name = |what: &str, i: usize, j: usize| format!("{} {what}[{},{}]", fam.name, i + 1, j + 1);
     let mut dropped = 0usize;
     match relaxation {
@@ -34,14 +53,40 @@ pub fn relax(problem: &mut Problem, model: &TsModel, fam: &Family<'_>, relaxatio
                         dropped += 1;
                         continue;
                     }
-                    problem.nsd(&name("Q+Q'", i, j), (fam.q)(i, j)?.add((fam.q)(j, i)?)?, eps)?;
+                    problem.nsd(
+                        &name("Q+Q'", i, j),
+                        (fam.q)(i, j)?.add((fam.q)(j, i)?)?,
+                        eps,
+                    )?;
                 }
             }
+        }
+        Relaxation::Tanaka { .. } if pair_reduce => {
+            // Every pair LMI is implied and Y = 0 is then optimal: the vertex
+            // LMIs Q_ii < 0 are equivalent. Y is left out of the solved problem
+            // (the certificate checks the original conditions with Y = 0).
+            for i in 0..r {
+                problem.nsd(&name("Q+(s-1)Y", i, i), (fam.q)(i, i)?, eps)?;
+            }
+            let pairs = (0..r)
+                .flat_map(|i| (i + 1..r).map(move |j| (i, j)))
+                .filter(|&(i, j)| overlap(i, j))
+                .count();
+            reductions.push(format!(
+                "{}: tanaka slack Y = 0 and {pairs} pair LMIs dropped: every rule shares B, so (Q_ij + Q_ji)/2 = (Q_ii + Q_jj)/2 < 0 <= Y is implied by the vertex LMIs; the certificate checks the original conditions with Y = 0",
+                fam.name
+            ));
         }
         Relaxation::Tanaka { s } => {
             let size = (fam.q)(0, 0)?.shape().0;
             let y = problem.symmetric(&format!("Y_{}", fam.name), size)?;
-            problem.psd(&format!("{} Y >= 0", fam.name), Expr::var(y), 0.0)?;
+            nonstrict_psd(
+                problem,
+                nonstrict,
+                &format!("{} Y >= 0", fam.name),
+                Expr::var(y),
+                eps,
+            )?;
             for i in 0..r {
                 let e = (fam.q)(i, i)?.add(Expr::var(y).scale((s as f64 - 1.0).max(0.0))?)?;
                 problem.nsd(&name("Q+(s-1)Y", i, i), e, eps)?;
@@ -53,8 +98,13 @@ pub fn relax(problem: &mut Problem, model: &TsModel, fam: &Family<'_>, relaxatio
                         dropped += 1;
                         continue;
                     }
-                    let e = (fam.q)(i, j)?.add((fam.q)(j, i)?)?.scale(0.5)?.sub(Expr::var(y))?;
-                    problem.nsd(&name("(Q+Q')/2-Y", i, j), e, 0.0)?;
+                    let e = (fam.q)(i, j)?
+                        .add((fam.q)(j, i)?)?
+                        .scale(0.5)?
+                        .sub(Expr::var(y))?;
+                    let n = name("(Q+Q')/2-Y", i, j);
+                    problem.nsd(&n, e, eps)?;
+                    nonstrict.push(n);
                 }
             }
         }
@@ -72,7 +122,10 @@ pub fn relax(problem: &mut Problem, model: &TsModel, fam: &Family<'_>, relaxatio
                         dropped += 1;
                         continue;
                     }
-                    let e = (fam.q)(i, i)?.scale(c)?.add((fam.q)(i, j)?)?.add((fam.q)(j, i)?)?;
+                    let e = (fam.q)(i, i)?
+                        .scale(c)?
+                        .add((fam.q)(i, j)?)?
+                        .add((fam.q)(j, i)?)?;
                     problem.nsd(&name("tuan", i, j), e, eps)?;
                 }
             }
