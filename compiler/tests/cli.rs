@@ -99,3 +99,102 @@ fn binary_garbage_is_a_spec_error_not_a_crash() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("not valid UTF-8"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+fn tmp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tsfc-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("tmp dir");
+    dir
+}
+
+#[test]
+fn compile_writes_a_certified_report() {
+    let dir = tmp_dir("compile");
+    let out = tsfc()
+        .arg("compile")
+        .arg(fixture("specs/inverted_pendulum.tsf"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(dir.join("inverted_pendulum.report.json")).expect("report written"),
+    )
+    .expect("JSON");
+    for key in [
+        "tsfc_version",
+        "spec",
+        "controller",
+        "n",
+        "m",
+        "rules",
+        "status",
+        "objectives",
+        "gains",
+        "P",
+        "certificate",
+        "solver",
+        "timings_s",
+    ] {
+        assert!(report.get(key).is_some(), "report lacks `{key}`");
+    }
+    assert_eq!(report["status"], "certified");
+    assert_eq!(report["spec"]["sha256"].as_str().map(str::len), Some(64));
+    assert_eq!(report["gains"].as_array().map(Vec::len), Some(2));
+    assert_eq!(
+        report["gains"][0]["F"].as_array().map(Vec::len),
+        Some(1),
+        "F is m x n rows"
+    );
+    assert!(
+        report["certificate"]["min_margin"]
+            .as_f64()
+            .expect("margin")
+            > 0.0
+    );
+    for k in ["parse", "model", "build", "solve", "certify", "total"] {
+        assert!(report["timings_s"][k].as_f64().is_some(), "timing {k}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn compile_of_an_infeasible_spec_exits_3_without_gains() {
+    let dir = tmp_dir("infeasible");
+    let spec = dir.join("tight.tsf");
+    let text = std::fs::read_to_string(fixture("specs/inverted_pendulum.tsf")).expect("spec");
+    // A decay rate no bounded gain reaches together with a tight input bound.
+    let tight = text.replace(
+        "objective decay_rate >= 0.5;",
+        "objective decay_rate >= 0.5;\nobjective input_norm(u) <= 0.001 for x0 = [1.0, 0];",
+    );
+    assert_ne!(tight, text, "the spec's decay line changed");
+    std::fs::write(&spec, tight).expect("write");
+    let out = tsfc()
+        .arg("compile")
+        .arg(&spec)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(dir.join("inverted_pendulum.report.json")).expect("report"),
+    )
+    .expect("JSON");
+    assert_ne!(report["status"], "certified");
+    assert_eq!(report["gains"].as_array().map(Vec::len), Some(0));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("input_norm"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

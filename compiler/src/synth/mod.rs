@@ -105,6 +105,9 @@ pub struct Design {
     pub log: SolverLog,
     /// Time spent certifying (filled by the caller).
     pub certify_time: Duration,
+    /// Whether the solver reached only reduced accuracy (`AlmostSolved`):
+    /// such a solution is used only to explain infeasibility, never emitted.
+    pub approximate: bool,
 }
 
 /// Why synthesis produced no design.
@@ -159,6 +162,9 @@ impl std::fmt::Display for SynthError {
     }
 }
 
+/// (largest feasible, smallest infeasible) value found by a bisection.
+type Bracket = (f64, f64);
+
 /// Outcome of one SDP.
 enum Attempt {
     Solved(Box<Design>),
@@ -170,6 +176,8 @@ struct Runner<'a> {
     model: &'a TsModel,
     settings: &'a Settings,
     log: SolverLog,
+    /// Accept `AlmostSolved` iterates (only while diagnosing).
+    accept_almost: bool,
 }
 
 impl Runner<'_> {
@@ -185,16 +193,20 @@ impl Runner<'_> {
             .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))?;
         self.log.solves += 1;
         self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
+        let approximate = sol.status == SolveStatus::AlmostSolved && self.accept_almost;
         match sol.status {
             SolveStatus::Solved => {}
+            _ if approximate => {}
             s if s.is_primal_infeasible() => return Ok(Attempt::Infeasible),
             s => return Ok(Attempt::Trouble(s)),
         }
         self.log.status = Some(sol.status);
         self.log.iterations = sol.iterations;
         self.log.stats = Some(built.problem.stats());
+        let iterate = sol.assignment_any_status();
         let values_of = |v| {
-            sol.value(v)
+            iterate
+                .value(v)
                 .cloned()
                 .map_err(|e| SynthError::Unsupported(format!("{e}")))
         };
@@ -214,7 +226,8 @@ impl Runner<'_> {
             .vars()
             .map(|(name, v)| values_of(v).map(|m| (name.to_string(), m)))
             .collect::<Result<Vec<_>, _>>()?;
-        let scalar = |v: Option<tsf_lmi::Var>| v.and_then(|v| sol.value(v).ok().map(|m| m[(0, 0)]));
+        let scalar =
+            |v: Option<tsf_lmi::Var>| v.and_then(|v| iterate.value(v).ok().map(|m| m[(0, 0)]));
         let mut achieved = Achieved {
             decay_rate: plan.decay,
             ..Achieved::default()
@@ -266,11 +279,12 @@ impl Runner<'_> {
             notes: Vec::new(),
             log: SolverLog::default(),
             certify_time: Duration::ZERO,
+            approximate,
         })))
     }
 
     /// Largest decay rate for which `plan` is feasible: (design, bracket).
-    fn max_decay(&mut self, plan: &Plan) -> Result<Option<(Design, (f64, f64))>, SynthError> {
+    fn max_decay(&mut self, plan: &Plan) -> Result<Option<(Design, Bracket)>, SynthError> {
         let with = |a: f64| Plan {
             decay: Some(a),
             ..plan.clone()
@@ -288,17 +302,12 @@ impl Runner<'_> {
         };
         let (mut lo, mut hi) = (0.0, 0.5);
         // Grow the bracket until infeasible.
-        loop {
-            match self.attempt(&with(hi))? {
-                Attempt::Solved(d) => {
-                    best = *d;
-                    lo = hi;
-                    hi *= 2.0;
-                    if hi > 1e6 {
-                        return Ok(Some((best, (lo, f64::INFINITY))));
-                    }
-                }
-                Attempt::Infeasible | Attempt::Trouble(_) => break,
+        while let Attempt::Solved(d) = self.attempt(&with(hi))? {
+            best = *d;
+            lo = hi;
+            hi *= 2.0;
+            if hi > 1e6 {
+                return Ok(Some((best, (lo, f64::INFINITY))));
             }
         }
         while hi - lo > self.settings.bisection_rel_tol * hi.max(1e-9) {
@@ -421,6 +430,7 @@ pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthE
         model,
         settings,
         log: SolverLog::default(),
+        accept_almost: false,
     };
     match runner.run(&plan, goal) {
         Ok(Some(mut d)) => {
@@ -457,6 +467,7 @@ fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
     };
     let list = fixed.iter().map(desc).collect::<Vec<_>>().join(", ");
     let mut achievable = Vec::new();
+    runner.accept_almost = true;
     for (name, value) in &fixed {
         let relaxed = plan.optimizing(name);
         let goal = if *name == "decay_rate" {
@@ -466,6 +477,7 @@ fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
         };
         let line = match runner.run(&relaxed, goal) {
             Ok(Some(d)) => {
+                let approx = if d.approximate { " (approximate: the solver reached only reduced accuracy)" } else { "" };
                 let best = match *name {
                     "decay_rate" => d.achieved.decay_bracket.map(|b| b.0),
                     "hinf" => d.achieved.hinf_gamma,
@@ -474,8 +486,8 @@ fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
                     _ => d.achieved.output_norm_bound,
                 };
                 match best {
-                    Some(b) if *name == "decay_rate" => format!("infeasible with decay_rate >= {value}; the largest feasible decay rate with the other objectives is {b:.6}"),
-                    Some(b) => format!("infeasible with {name} <= {value}; the smallest feasible bound with the other objectives is {b:.6}"),
+                    Some(b) if *name == "decay_rate" => format!("infeasible with decay_rate >= {value}; the largest feasible decay rate with the other objectives is {b:.6}{approx}"),
+                    Some(b) => format!("infeasible with {name} <= {value}; the smallest feasible bound with the other objectives is {b:.6}{approx}"),
                     None => format!("{name}: no value found"),
                 }
             }
