@@ -1,0 +1,478 @@
+//! `bench-compile`: times the library pipeline (read, check, compile) on every
+//! shipped spec and on generated Zhang-like scaling specs, and prints the
+//! median time of each stage.
+//!
+//! ```sh
+//! cargo run --release -p tsfc --bin bench-compile -- --repeat 7 --json bench/results.json
+//! ```
+//!
+//! This is a measuring tool, not a test: nothing here asserts a timing goal.
+//! The hidden `--dump-model SPEC` prints the local models and objective data of
+//! a spec as JSON for `bench/compare_cvxpy.py`.
+
+use clap::Parser;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use tsf_lang::spec::{InitialSet, Objective, Relaxation, Target};
+use tsfc::compile::Status;
+use tsfc::frontend::{self, Source};
+use tsfc::model::TsModel;
+use tsfc::report::{rows, Report, SpecInfo, Timings};
+
+/// Seconds per pipeline stage (the report's `timings_s`).
+#[derive(Serialize, Debug, Clone, Copy, Default)]
+struct Stages {
+    parse: f64,
+    model: f64,
+    build: f64,
+    solve: f64,
+    certify: f64,
+    total: f64,
+}
+
+impl From<&Timings> for Stages {
+    fn from(t: &Timings) -> Self {
+        Stages {
+            parse: t.parse,
+            model: t.model,
+            build: t.build,
+            solve: t.solve,
+            certify: t.certify,
+            total: t.total,
+        }
+    }
+}
+use tsfc::synth::Settings;
+
+/// Command-line options.
+#[derive(Parser, Debug)]
+#[command(
+    name = "bench-compile",
+    about = "Median per-stage compile times of the shipped specs and of generated scaling specs"
+)]
+struct Cli {
+    /// Timed runs per spec (one untimed warm-up run comes first).
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+    /// Also write the results as JSON to this path.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Directory of the shipped specs (every `*.tsf` in it is benchmarked).
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../specs"))]
+    specs: PathBuf,
+    /// Grid sizes k of the generated scaling specs (k x k rules), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "2,3,4,6,8")]
+    scaling: Vec<usize>,
+    /// Skip the shipped specs (scaling run only).
+    #[arg(long)]
+    no_shipped: bool,
+    /// Write the generated scaling specs to this directory instead of a temporary one (kept).
+    #[arg(long)]
+    write_specs: Option<PathBuf>,
+    /// Print the model data of SPEC as JSON (for bench/compare_cvxpy.py) and exit.
+    #[arg(long, hide = true, value_name = "SPEC")]
+    dump_model: Option<PathBuf>,
+}
+
+/// Median results of one spec.
+#[derive(Serialize, Debug)]
+struct Row {
+    /// Spec label (file name or generated name).
+    spec: String,
+    /// Number of rules.
+    rules: usize,
+    /// Compile status of the last run.
+    status: String,
+    /// Achieved H-inf gamma, if any.
+    hinf_gamma: Option<f64>,
+    /// All achieved objectives, as in the report.
+    objectives: serde_json::Value,
+    /// SDPs solved per compile.
+    sdps: usize,
+    /// Size of the kept SDP, as in the report.
+    problem: serde_json::Value,
+    /// Median of each stage over the timed runs, seconds.
+    median_s: Stages,
+    /// Median of (total - solve) / total over the runs, percent.
+    overhead_pct: f64,
+    /// Number of timed runs.
+    runs: usize,
+}
+
+/// Everything the bench measured.
+#[derive(Serialize, Debug)]
+struct Results {
+    /// Timed runs per spec.
+    repeat: usize,
+    /// Logical CPUs visible to the process.
+    cpus: usize,
+    /// Shipped specs.
+    shipped: Vec<Row>,
+    /// Generated scaling specs, by rule count.
+    scaling: Vec<Row>,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(&cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(cli: &Cli) -> Result<(), String> {
+    if let Some(spec) = &cli.dump_model {
+        let model = load(spec)?.1;
+        let json = serde_json::to_string_pretty(&dump_model(&model)?)
+            .map_err(|e| format!("cannot serialize the model: {e}"))?;
+        println!("{json}");
+        return Ok(());
+    }
+    let repeat = cli.repeat.max(1);
+    let mut shipped = Vec::new();
+    if !cli.no_shipped {
+        for path in shipped_specs(&cli.specs)? {
+            shipped.push(bench_spec(&path, repeat)?);
+        }
+        print_table("shipped specs", &shipped);
+    }
+    let (dir, keep) = match &cli.write_specs {
+        Some(d) => (d.clone(), true),
+        None => (
+            std::env::temp_dir().join(format!("tsfc-bench-{}", std::process::id())),
+            false,
+        ),
+    };
+    let scaling = scaling_run(&cli.scaling, &dir, repeat);
+    if !keep {
+        // Best effort: a leftover temporary directory is harmless.
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let scaling = scaling?;
+    if !scaling.is_empty() {
+        print_table("scaling (Zhang-like, k x k rules)", &scaling);
+    }
+    if let Some(path) = &cli.json {
+        let results = Results {
+            repeat,
+            cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            shipped,
+            scaling,
+        };
+        let json = serde_json::to_string_pretty(&results)
+            .map_err(|e| format!("cannot serialize the results: {e}"))?;
+        std::fs::write(path, json + "\n")
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+        println!("results written to {}", path.display());
+    }
+    Ok(())
+}
+
+/// Every `*.tsf` file of `dir`, sorted.
+fn shipped_specs(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let entries =
+        std::fs::read_dir(dir).map_err(|e| format!("cannot list `{}`: {e}", dir.display()))?;
+    let mut specs: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "tsf"))
+        .collect();
+    specs.sort();
+    Ok(specs)
+}
+
+/// Writes the scaling specs into `dir` and benchmarks them.
+fn scaling_run(ks: &[usize], dir: &Path, repeat: usize) -> Result<Vec<Row>, String> {
+    if ks.is_empty() {
+        return Ok(Vec::new());
+    }
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create `{}`: {e}", dir.display()))?;
+    ks.iter()
+        .map(|&k| {
+            if k < 2 {
+                return Err(format!("scaling grid size {k} < 2"));
+            }
+            let path = dir.join(format!("zhang_grid{k}x{k}.tsf"));
+            std::fs::write(&path, zhang_like(k))
+                .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+            bench_spec(&path, repeat)
+        })
+        .collect()
+}
+
+/// Reads and checks a spec; errors if it has spec errors.
+fn load(
+    path: &Path,
+) -> Result<(Source, TsModel, (std::time::Duration, std::time::Duration)), String> {
+    let source = frontend::read_source(path).map_err(|e| e.message)?;
+    let checked = frontend::check(&source);
+    let front = (checked.parse_time, checked.model_time);
+    let errors = checked.diagnostics.iter().filter(|d| d.is_error()).count();
+    match checked.model {
+        Some(model) if errors == 0 => Ok((source, model, front)),
+        _ => Err(format!(
+            "`{}` has {errors} spec error(s); run `tsfc check` on it",
+            path.display()
+        )),
+    }
+}
+
+/// One full pipeline run: read, check, compile.
+fn pipeline(path: &Path) -> Result<(Report, Status), String> {
+    let (source, model, front) = load(path)?;
+    let info = SpecInfo {
+        path: source.name.clone(),
+        sha256: tsfc::report::sha256_hex(&source.bytes),
+    };
+    let compiled = tsfc::compile::compile(&model, info, &Settings::default(), front);
+    Ok((compiled.report, compiled.status))
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Runs the pipeline `repeat` times (after one warm-up) and takes medians.
+fn bench_spec(path: &Path, repeat: usize) -> Result<Row, String> {
+    let label = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    eprintln!("bench: {label} ({repeat} runs)");
+    let mut runs = Vec::with_capacity(repeat);
+    let (mut last, mut status) = pipeline(path)?;
+    for _ in 0..repeat {
+        (last, status) = pipeline(path)?;
+        runs.push(Stages::from(&last.timings_s));
+    }
+    let stage = |f: fn(&Stages) -> f64| median(runs.iter().map(f).collect());
+    let median_s = Stages {
+        parse: stage(|t| t.parse),
+        model: stage(|t| t.model),
+        build: stage(|t| t.build),
+        solve: stage(|t| t.solve),
+        certify: stage(|t| t.certify),
+        total: stage(|t| t.total),
+    };
+    let overhead_pct = stage(|t| 100.0 * (t.total - t.solve) / t.total);
+    let objectives = serde_json::to_value(&last.objectives).unwrap_or_default();
+    Ok(Row {
+        spec: label,
+        rules: last.rules,
+        status: format!("{status:?}"),
+        hinf_gamma: objectives.get("hinf_gamma").and_then(|g| g.as_f64()),
+        objectives,
+        sdps: last.solver.solves,
+        problem: serde_json::to_value(&last.solver.problem).unwrap_or_default(),
+        median_s,
+        overhead_pct,
+        runs: repeat,
+    })
+}
+
+fn print_table(title: &str, rows: &[Row]) {
+    println!(
+        "\n## {title} (median of {} runs, seconds)\n",
+        rows.first().map_or(0, |r| r.runs)
+    );
+    println!(
+        "| spec | rules | parse | model | build | solve | certify | total | overhead | gamma | status | SDPs | unknowns | rows | PSD cones (largest) |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|");
+    for r in rows {
+        let t = &r.median_s;
+        let p = |k: &str| r.problem.get(k).and_then(|v| v.as_u64()).unwrap_or(0);
+        let gamma = r
+            .hinf_gamma
+            .map_or_else(|| "-".to_string(), |g| format!("{g:.6}"));
+        println!(
+            "| {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.1}% | {} | {} | {} | {} | {} | {} ({}) |",
+            r.spec,
+            r.rules,
+            t.parse,
+            t.model,
+            t.build,
+            t.solve,
+            t.certify,
+            t.total,
+            r.overhead_pct,
+            gamma,
+            r.status,
+            r.sdps,
+            p("scalar_unknowns"),
+            p("rows"),
+            p("psd_cones"),
+            p("largest_psd_cone"),
+        );
+    }
+}
+
+/// A number as spec text (12 decimals, no `-0`).
+fn num(v: f64) -> String {
+    let s = format!("{v:.12}");
+    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
+/// `k` evenly spaced points from `-half` to `half`.
+fn grid(k: usize, half: f64) -> Vec<String> {
+    (0..k)
+        .map(|t| num(-half + 2.0 * half * t as f64 / (k - 1) as f64))
+        .collect()
+}
+
+/// Premise `name = mean(of)` with `k` triangular sets peaking at `pts`
+/// (outer sets are shoulders out to +-10, as in the Zhang spec).
+fn premise(name: &str, of: &str, pts: &[String]) -> String {
+    let k = pts.len();
+    let mut s = format!(
+        "premise {name} = mean({of}) range {} .. {} {{\n",
+        pts[0],
+        pts[k - 1]
+    );
+    for t in 0..k {
+        let shape = if t == 0 {
+            format!("trap(-10, -10, {}, {})", pts[0], pts[1])
+        } else if t == k - 1 {
+            format!("trap({}, {}, 10, 10)", pts[k - 2], pts[k - 1])
+        } else {
+            format!("tri({}, {}, {})", pts[t - 1], pts[t], pts[t + 1])
+        };
+        s += &format!("    s{t} = {shape};\n");
+    }
+    s + "}\n"
+}
+
+/// The Zhang & Zeng spacecraft model (n = 6, m = 3) with a `k x k` rule grid
+/// on mean(w) in [-0.1, 0.1] and mean(rho) in [-0.15, 0.15], operating points
+/// on the diagonals, and the objectives of specs/zhang2013_multiobjective.tsf.
+fn zhang_like(k: usize) -> String {
+    let (w, r) = (grid(k, 0.1), grid(k, 0.15));
+    let mut s = format!(
+        "tsf 1;\ncontroller zhang_grid{k}x{k};\n\
+const J = [127, 1.8, -3.4; 1.8, 117, -2.3; -3.4, -2.3, 210];\n\
+state w[3], rho[3];\ninput u[3];\ndisturbance d[3];\noutput z = x;\n\
+fn Phi(v) = [0, v[2], -v[1]; -v[2], 0, v[0]; v[1], -v[0], 0];\n\
+A(x) = [ -inv(J) * Phi(w) * J, zeros(3, 3); 0.5 * (eye(3) + rho * rho'), 0.5 * Phi(w) ];\n\
+B = [inv(J); zeros(3, 3)];\nD = B;\n"
+    );
+    s += &premise("wm", "w", &w);
+    s += &premise("rm", "rho", &r);
+    for (a, cw) in w.iter().enumerate() {
+        for (b, cr) in r.iter().enumerate() {
+            s += &format!(
+                "rule R{}: wm is s{a} and rm is s{b} => at(w = [{cw}, {cw}, {cw}], rho = [{cr}, {cr}, {cr}]);\n",
+                a * k + b + 1
+            );
+        }
+    }
+    s + "objective hinf(d -> z) minimize;\nobjective decay_rate >= 0.01;\n\
+objective input_norm(u) <= 5 for x0 = [0.08, -0.05, 0.1, 0.12, 0.06, -0.08];\n\
+relaxation tanaka(s = 4);\n"
+}
+
+/// Model data of the LMIs for the CVXPY comparison: local models, the H-inf
+/// channel, the input-norm x0 and bound, decay rate, relaxation and margin.
+#[derive(Serialize)]
+struct ModelDump {
+    n: usize,
+    m: usize,
+    rules: Vec<RuleDump>,
+    /// H-inf channel: disturbance columns and output matrices C, E, G.
+    hinf: Option<ChannelDump>,
+    decay_rate: Option<f64>,
+    input_norm: Option<f64>,
+    x0: Option<Vec<f64>>,
+    relaxation: String,
+    tanaka_s: Option<usize>,
+    overlap: Vec<Vec<bool>>,
+    eps: f64,
+}
+
+#[derive(Serialize)]
+struct RuleDump {
+    name: String,
+    a: Vec<Vec<f64>>,
+    b: Vec<Vec<f64>>,
+    /// Disturbance columns of the H-inf channel.
+    d: Vec<Vec<f64>>,
+}
+
+#[derive(Serialize)]
+struct ChannelDump {
+    minimize: bool,
+    c: Vec<Vec<f64>>,
+    e: Vec<Vec<f64>>,
+    g: Vec<Vec<f64>>,
+}
+
+fn dump_model(model: &TsModel) -> Result<ModelDump, String> {
+    let spec = &model.spec;
+    let mut dump = ModelDump {
+        n: model.n,
+        m: model.m,
+        rules: Vec::new(),
+        hinf: None,
+        decay_rate: None,
+        input_norm: None,
+        x0: None,
+        relaxation: format!("{:?}", spec.relaxation.node),
+        tanaka_s: match spec.relaxation.node {
+            Relaxation::Tanaka { s } => Some(s),
+            _ => None,
+        },
+        overlap: model.coverage.overlap.clone(),
+        eps: Settings::default().eps,
+    };
+    let mut dist = None;
+    for o in &spec.objectives {
+        match &o.node {
+            Objective::Hinf { from, to, target } => {
+                let out = &spec.outputs[*to];
+                let sig = &spec.disturbances[*from];
+                dist = Some((sig.offset, sig.len));
+                dump.hinf = Some(ChannelDump {
+                    minimize: *target == Target::Optimize,
+                    c: rows(&out.c),
+                    e: rows(&out.e),
+                    g: rows(&out.g.columns(sig.offset, sig.len).into_owned()),
+                });
+            }
+            Objective::DecayRate(Target::Fixed(a)) => dump.decay_rate = Some(*a),
+            Objective::InputNorm {
+                target: Target::Fixed(mu),
+                initial: InitialSet::Point(x0),
+            } => {
+                dump.input_norm = Some(*mu);
+                dump.x0 = Some(x0.clone());
+            }
+            Objective::Stability => {}
+            other => return Err(format!("--dump-model does not support {other:?}")),
+        }
+    }
+    dump.rules = model
+        .rules
+        .iter()
+        .map(|r| RuleDump {
+            name: r.name.clone(),
+            a: rows(&r.a),
+            b: rows(&r.b),
+            d: dist.map_or_else(Vec::new, |(off, len)| {
+                rows(&r.d.columns(off, len).into_owned())
+            }),
+        })
+        .collect();
+    Ok(dump)
+}
