@@ -67,6 +67,12 @@ struct Cli {
     /// Skip the shipped specs (scaling run only).
     #[arg(long)]
     no_shipped: bool,
+    /// Skip the generated scaling specs.
+    #[arg(long)]
+    no_scaling: bool,
+    /// Benchmark these specs instead of every spec of `--specs`.
+    #[arg(value_name = "SPEC")]
+    only: Vec<PathBuf>,
     /// Write the generated scaling specs to this directory instead of a temporary one (kept).
     #[arg(long)]
     write_specs: Option<PathBuf>,
@@ -135,7 +141,12 @@ fn run(cli: &Cli) -> Result<(), String> {
     let repeat = cli.repeat.max(1);
     let mut shipped = Vec::new();
     if !cli.no_shipped {
-        for path in shipped_specs(&cli.specs)? {
+        let paths = if cli.only.is_empty() {
+            shipped_specs(&cli.specs)?
+        } else {
+            cli.only.clone()
+        };
+        for path in paths {
             shipped.push(bench_spec(&path, repeat)?);
         }
         print_table("shipped specs", &shipped);
@@ -147,7 +158,8 @@ fn run(cli: &Cli) -> Result<(), String> {
             false,
         ),
     };
-    let scaling = scaling_run(&cli.scaling, &dir, repeat);
+    let ks: &[usize] = if cli.no_scaling { &[] } else { &cli.scaling };
+    let scaling = scaling_run(ks, &dir, repeat);
     if !keep {
         // Best effort: a leftover temporary directory is harmless.
         let _ = std::fs::remove_dir_all(&dir);
