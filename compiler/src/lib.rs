@@ -8,6 +8,7 @@
 #![allow(clippy::result_large_err)] // diagnostics travel on the cold error path
 
 pub mod certify;
+pub mod codegen;
 pub mod compile;
 pub mod frontend;
 pub mod model;
