@@ -76,6 +76,12 @@ struct Cli {
     /// Write the generated scaling specs to this directory instead of a temporary one (kept).
     #[arg(long)]
     write_specs: Option<PathBuf>,
+    /// Solve without Clarabel's chordal decomposition (experiment).
+    #[arg(long, hide = true)]
+    no_chordal: bool,
+    /// Factor the KKT systems with QDLDL instead of faer (experiment).
+    #[arg(long, hide = true)]
+    qdldl: bool,
     /// Print the model data of SPEC as JSON (for bench/compare_cvxpy.py) and exit.
     #[arg(long, hide = true, value_name = "SPEC")]
     dump_model: Option<PathBuf>,
@@ -139,6 +145,11 @@ fn run(cli: &Cli) -> Result<(), String> {
         return Ok(());
     }
     let repeat = cli.repeat.max(1);
+    let mut settings = Settings::default();
+    settings.solver.chordal_decomposition = !cli.no_chordal;
+    if cli.qdldl {
+        settings.solver.linear_solver = tsf_lmi::LinearSolver::Qdldl;
+    }
     let mut shipped = Vec::new();
     if !cli.no_shipped {
         let paths = if cli.only.is_empty() {
@@ -147,7 +158,7 @@ fn run(cli: &Cli) -> Result<(), String> {
             cli.only.clone()
         };
         for path in paths {
-            shipped.push(bench_spec(&path, repeat)?);
+            shipped.push(bench_spec(&path, repeat, &settings)?);
         }
         print_table("shipped specs", &shipped);
     }
@@ -159,7 +170,7 @@ fn run(cli: &Cli) -> Result<(), String> {
         ),
     };
     let ks: &[usize] = if cli.no_scaling { &[] } else { &cli.scaling };
-    let scaling = scaling_run(ks, &dir, repeat);
+    let scaling = scaling_run(ks, &dir, repeat, &settings);
     if !keep {
         // Best effort: a leftover temporary directory is harmless.
         let _ = std::fs::remove_dir_all(&dir);
@@ -197,7 +208,12 @@ fn shipped_specs(dir: &Path) -> Result<Vec<PathBuf>, String> {
 }
 
 /// Writes the scaling specs into `dir` and benchmarks them.
-fn scaling_run(ks: &[usize], dir: &Path, repeat: usize) -> Result<Vec<Row>, String> {
+fn scaling_run(
+    ks: &[usize],
+    dir: &Path,
+    repeat: usize,
+    settings: &Settings,
+) -> Result<Vec<Row>, String> {
     if ks.is_empty() {
         return Ok(Vec::new());
     }
@@ -210,7 +226,7 @@ fn scaling_run(ks: &[usize], dir: &Path, repeat: usize) -> Result<Vec<Row>, Stri
             let path = dir.join(format!("zhang_grid{k}x{k}.tsf"));
             std::fs::write(&path, zhang_like(k))
                 .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-            bench_spec(&path, repeat)
+            bench_spec(&path, repeat, settings)
         })
         .collect()
 }
@@ -233,13 +249,13 @@ fn load(
 }
 
 /// One full pipeline run: read, check, compile.
-fn pipeline(path: &Path) -> Result<(Report, Status), String> {
+fn pipeline(path: &Path, settings: &Settings) -> Result<(Report, Status), String> {
     let (source, model, front) = load(path)?;
     let info = SpecInfo {
         path: source.name.clone(),
         sha256: tsfc::report::sha256_hex(&source.bytes),
     };
-    let compiled = tsfc::compile::compile(&model, info, &Settings::default(), front);
+    let compiled = tsfc::compile::compile(&model, info, settings, front);
     Ok((compiled.report, compiled.status))
 }
 
@@ -253,16 +269,16 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Runs the pipeline `repeat` times (after one warm-up) and takes medians.
-fn bench_spec(path: &Path, repeat: usize) -> Result<Row, String> {
+fn bench_spec(path: &Path, repeat: usize, settings: &Settings) -> Result<Row, String> {
     let label = path.file_name().map_or_else(
         || path.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
     );
     eprintln!("bench: {label} ({repeat} runs)");
     let mut runs = Vec::with_capacity(repeat);
-    let (mut last, mut status) = pipeline(path)?;
+    let (mut last, mut status) = pipeline(path, settings)?;
     for _ in 0..repeat {
-        (last, status) = pipeline(path)?;
+        (last, status) = pipeline(path, settings)?;
         runs.push(Stages::from(&last.timings_s));
     }
     let stage = |f: fn(&Stages) -> f64| median(runs.iter().map(f).collect());
