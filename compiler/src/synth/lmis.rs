@@ -5,7 +5,7 @@
 //! Conventions (docs/lmi-reference in the design notes): Upsilon_ij =
 //! He(A_i X + B_i M_j); strict LMIs carry an explicit margin `eps`.
 
-use super::plan::{Bound, Plan};
+use super::plan::{Bound, LinfPlan, Plan};
 use super::relaxation::{relax, Family};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -29,6 +29,8 @@ pub struct Vars {
     pub linf_gamma: Option<Var>,
     /// xi of the L-inf objective, when not fixed.
     pub linf_xi: Option<Var>,
+    /// Saturation: S = T^{-1} (diagonal, m x m) and Z_j = G_j X (m x n).
+    pub saturation: Option<(Var, Vec<Var>)>,
 }
 
 /// A problem built for one plan.
@@ -108,6 +110,39 @@ fn upsilon(model: &TsModel, v: &Vars, i: usize, j: usize, shift: f64) -> Result<
         Ok(he)
     } else {
         he.add(Expr::var(v.x).scale(shift)?)
+    }
+}
+
+/// Adds the dead-zone signal psi of the generalized sector condition to a
+/// block: [[U, -B_i S + Z_j', (W)], [*, -2S, 0], [*, *, (-xi I)]], or returns
+/// `[[U, W], [*, -xi I]]` / `U` unchanged without saturation.
+fn with_sector(
+    model: &TsModel,
+    v: &Vars,
+    i: usize,
+    j: usize,
+    ups: Expr,
+    w: Option<(Expr, Expr)>,
+) -> Result<Expr, LmiError> {
+    let Some((s, zs)) = &v.saturation else {
+        return match w {
+            Some((d, xi)) => Expr::sym_blocks(vec![vec![Some(ups), Some(d)], vec![None, Some(xi)]]),
+            None => Ok(ups),
+        };
+    };
+    let m = model.m;
+    let b = &model.rules[i].b;
+    let cross = Expr::product(b, *s, &DMatrix::identity(m, m))?
+        .scale(-1.0)?
+        .add(Expr::var(zs[j]).transpose())?;
+    let psi = Expr::var(*s).scale(-2.0)?;
+    match w {
+        Some((d, xi)) => Expr::sym_blocks(vec![
+            vec![Some(ups), Some(cross), Some(d)],
+            vec![None, Some(psi), None],
+            vec![None, None, Some(xi)],
+        ]),
+        None => Expr::sym_blocks(vec![vec![Some(ups), Some(cross)], vec![None, Some(psi)]]),
     }
 }
 
@@ -216,7 +251,18 @@ fn build_inner(
         Some(l) if l.xi.is_none() => Some(problem.scalar("xi")?),
         _ => None,
     };
+    let saturation = match &plan.saturation {
+        Some(_) => {
+            let s = problem.diagonal("S", m)?;
+            let z = (0..r)
+                .map(|j| problem.full(&format!("Z{}", j + 1), m, n))
+                .collect::<Result<Vec<_>, _>>()?;
+            Some((s, z))
+        }
+        None => None,
+    };
     let vars = Vars {
+        saturation,
         x,
         m: mvars,
         hinf_g,
@@ -242,7 +288,16 @@ fn build_inner(
         };
         let fam = Family {
             name: name.into(),
-            q: Box::new(|i, j| upsilon(model, &vars, i, j, 2.0 * alpha)),
+            q: Box::new(|i, j| {
+                with_sector(
+                    model,
+                    &vars,
+                    i,
+                    j,
+                    upsilon(model, &vars, i, j, 2.0 * alpha)?,
+                    None,
+                )
+            }),
         };
         relax(
             &mut problem,
@@ -313,16 +368,18 @@ fn build_inner(
         let fam = Family {
             name: "linf".into(),
             q: Box::new(|i, j| {
-                Expr::sym_blocks(vec![
-                    vec![
-                        Some(upsilon(model, &vars, i, j, phi)?),
-                        Some(Expr::constant(&ch.d[i])?),
-                    ],
-                    vec![
-                        None,
-                        Some(scalar_times_identity(vars.linf_xi, xi_fixed, q)?.scale(-1.0)?),
-                    ],
-                ])
+                let w = (
+                    Expr::constant(&ch.d[i])?,
+                    scalar_times_identity(vars.linf_xi, xi_fixed, q)?.scale(-1.0)?,
+                );
+                with_sector(
+                    model,
+                    &vars,
+                    i,
+                    j,
+                    upsilon(model, &vars, i, j, phi)?,
+                    Some(w),
+                )
             }),
         };
         relax(
@@ -417,6 +474,54 @@ fn build_inner(
         nonstrict_psd(&mut problem, &mut nonstrict, "output norm", e, eps)?;
         if let (Some(s), Bound::Minimize) = (vars.output_s, o.bound) {
             problem.minimize(Expr::var(s))?;
+        }
+    }
+    if let (Some(sat), Some((s, zs))) = (&plan.saturation, &vars.saturation) {
+        if plan.hinf.is_some() {
+            return Err(LmiError::Dimension { what: "the saturation region is supported with stability, decay rate and L-inf objectives, not with H-inf".into() });
+        }
+        problem.psd("S > 0", Expr::var(*s), eps)?;
+        // With a disturbance bounded by tau, V stays below 1 + xi tau^2 / phi
+        // only if the linear region holds on the larger level set: shrink the
+        // levels by that factor (Xu & Huang (19)/(40)).
+        let shrink = match (&plan.linf, sat.disturbance_bound) {
+            (
+                Some(LinfPlan {
+                    xi: Some(xi), phi, ..
+                }),
+                Some(tau),
+            ) => 1.0 + xi * tau * tau / phi,
+            (Some(LinfPlan { xi: None, .. }), Some(_)) => {
+                return Err(LmiError::Dimension { what: "the saturation region with a bounded disturbance needs a fixed xi: write `objective linf(...) ... with xi = ...`".into() });
+            }
+            _ => 1.0,
+        };
+        for j in 0..r {
+            for (k, level) in sat.levels.iter().enumerate() {
+                let mut sel = DMatrix::zeros(1, m);
+                sel[(0, k)] = 1.0;
+                let id = DMatrix::identity(n, n);
+                let row =
+                    Expr::product(&sel, vars.m[j], &id)?.sub(Expr::product(&sel, zs[j], &id)?)?;
+                let e = Expr::sym_blocks(vec![
+                    vec![Some(Expr::var(x)), Some(row.transpose())],
+                    vec![
+                        None,
+                        Some(Expr::constant(&DMatrix::from_element(
+                            1,
+                            1,
+                            level * level / shrink,
+                        ))?),
+                    ],
+                ])?;
+                nonstrict_psd(
+                    &mut problem,
+                    &mut nonstrict,
+                    &format!("linear region [{},{}]", j + 1, k + 1),
+                    e,
+                    eps,
+                )?;
+            }
         }
     }
     Ok(Built {

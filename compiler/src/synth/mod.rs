@@ -325,6 +325,43 @@ impl Runner<'_> {
         Ok(Some((best, (lo, hi))))
     }
 
+    /// Smallest fixed xi for which `plan` is feasible (L-inf with saturation and
+    /// a bounded disturbance, where xi enters the linear-region level):
+    /// (design, (largest infeasible, smallest feasible)).
+    fn min_xi(&mut self, plan: &Plan) -> Result<Option<(Design, Bracket)>, SynthError> {
+        let with = |xi: f64| {
+            let mut p = plan.clone();
+            if let Some(l) = &mut p.linf {
+                l.xi = Some(xi);
+            }
+            p
+        };
+        let (mut lo, mut hi) = (0.0, 1e-3);
+        let mut best = None;
+        while hi < 1e8 {
+            if let Attempt::Solved(d) = self.attempt(&with(hi))? {
+                best = Some(*d);
+                break;
+            }
+            lo = hi;
+            hi *= 4.0;
+        }
+        let Some(mut best) = best else {
+            return Ok(None);
+        };
+        while hi - lo > self.settings.bisection_rel_tol * hi {
+            let mid = 0.5 * (lo + hi);
+            match self.attempt(&with(mid))? {
+                Attempt::Solved(d) => {
+                    best = *d;
+                    hi = mid;
+                }
+                Attempt::Infeasible | Attempt::Trouble(_) => lo = mid,
+            }
+        }
+        Ok(Some((best, (lo, hi))))
+    }
+
     /// Solves `plan` as the goal says (no diagnosis).
     fn run(&mut self, plan: &Plan, goal: Goal) -> Result<Option<Design>, SynthError> {
         if goal == Goal::MaxDecay {
@@ -334,6 +371,21 @@ impl Runner<'_> {
                     "decay rate maximized by bisection: feasible at {:.6}, not at {:.6}",
                     bracket.0, bracket.1
                 ));
+                d
+            }));
+        }
+        let xi_free = plan.linf.as_ref().is_some_and(|l| l.xi.is_none());
+        if xi_free
+            && plan
+                .saturation
+                .as_ref()
+                .is_some_and(|s| s.disturbance_bound.is_some())
+        {
+            if self.linf_phi_free() {
+                return Err(SynthError::Unsupported("L-inf with saturation and a bounded disturbance needs a fixed phi (`with phi = ...`): the linear-region level depends on xi / phi".into()));
+            }
+            return Ok(self.min_xi(plan)?.map(|(mut d, (lo, hi))| {
+                d.notes.push(format!("xi minimized by bisection (the linear-region level depends on it): feasible at {hi:.6}, not at {lo:.6}"));
                 d
             }));
         }

@@ -73,6 +73,18 @@ pub struct Plan {
     pub input_norm: Option<InputNormPlan>,
     /// Output norm.
     pub output_norm: Option<OutputNormPlan>,
+    /// Actuator saturation (generalized sector condition), if the spec asks
+    /// for the saturation region.
+    pub saturation: Option<SaturationPlan>,
+}
+
+/// Actuator saturation: levels and the disturbance bound that shrinks them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SaturationPlan {
+    /// u_bar_s per channel.
+    pub levels: Vec<f64>,
+    /// Bound on ||w(t)||, if declared.
+    pub disturbance_bound: Option<f64>,
 }
 
 /// What the spec asks to optimize, if anything.
@@ -100,7 +112,13 @@ pub fn initial_plan(spec: &Spec, default_phi: f64) -> (Plan, Goal) {
     let mut goal = Goal::Feasibility;
     for o in &spec.objectives {
         match &o.node {
-            Objective::Stability | Objective::SaturationRegion => {}
+            Objective::Stability => {}
+            Objective::SaturationRegion => {
+                plan.saturation = spec.saturation.clone().map(|levels| SaturationPlan {
+                    levels,
+                    disturbance_bound: spec.disturbance_bound,
+                });
+            }
             Objective::DecayRate(t) => match t {
                 Target::Optimize => {
                     plan.decay = Some(0.0);
