@@ -49,10 +49,16 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// Arc tangent in `[-pi/2, pi/2]`, see [`crate::math::atan`].
     fn atan(self) -> Self;
+    /// Sine, see [`crate::math::sin`].
+    fn sin(self) -> Self;
+    /// Cosine, see [`crate::math::cos`].
+    fn cos(self) -> Self;
+    /// `sin(v)/v` with 1 at 0, see [`crate::math::sinc`].
+    fn sinc(self) -> Self;
 }
 
 macro_rules! impl_real {
-    ($t:ty, $bits:ty, $scale:expr, $exp:expr, $sqrt:expr, $atan:expr) => {
+    ($t:ty, $bits:ty, $scale:expr, $exp:expr, $sqrt:expr, $atan:expr, $sin:expr, $cos:expr, $sinc:expr) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -93,6 +99,18 @@ macro_rules! impl_real {
             fn atan(self) -> Self {
                 $atan(self)
             }
+            #[inline]
+            fn sin(self) -> Self {
+                $sin(self)
+            }
+            #[inline]
+            fn cos(self) -> Self {
+                $cos(self)
+            }
+            #[inline]
+            fn sinc(self) -> Self {
+                $sinc(self)
+            }
         }
     };
 }
@@ -108,7 +126,10 @@ impl_real!(
         / (1u128 << 104) as f64,
     crate::math::exp,
     crate::math::sqrt,
-    crate::math::atan
+    crate::math::atan,
+    crate::math::sin,
+    crate::math::cos,
+    crate::math::sinc
 );
 impl_real!(
     f32,
@@ -116,5 +137,8 @@ impl_real!(
     1.0 / (1u128 << 70) as f32,
     crate::math::expf,
     crate::math::sqrtf,
-    crate::math::atanf
+    crate::math::atanf,
+    crate::math::sinf,
+    crate::math::cosf,
+    crate::math::sincf
 );
