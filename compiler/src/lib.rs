@@ -7,6 +7,7 @@
 
 #![allow(clippy::result_large_err)] // diagnostics travel on the cold error path
 
+pub mod builder;
 pub mod certify;
 pub mod codegen;
 pub mod compile;
@@ -15,3 +16,5 @@ pub mod model;
 pub mod report;
 pub mod summary;
 pub mod synth;
+
+pub use builder::Builder;

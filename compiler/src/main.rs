@@ -25,6 +25,14 @@ struct Cli {
     command: Command,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Target {
+    /// A `no_std` Rust module.
+    Rust,
+    /// A C99 header and source.
+    C,
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum Format {
     /// rustc-style messages on stderr.
@@ -54,6 +62,9 @@ enum Command {
         /// Report path (default: OUT/<controller>.report.json).
         #[arg(long)]
         report: Option<PathBuf>,
+        /// Code targets (default: the spec's `emit` line).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        emit: Option<Vec<Target>>,
     },
 }
 
@@ -61,7 +72,12 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Check { specs, format } => check(&specs, format),
-        Command::Compile { spec, out, report } => compile(&spec, &out, report),
+        Command::Compile {
+            spec,
+            out,
+            report,
+            emit,
+        } => compile(&spec, &out, report, emit),
     }
 }
 
@@ -69,6 +85,7 @@ fn compile(
     path: &std::path::Path,
     out: &std::path::Path,
     report_path: Option<PathBuf>,
+    emit: Option<Vec<Target>>,
 ) -> ExitCode {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
     let source = match frontend::read_source(path) {
@@ -113,6 +130,45 @@ fn compile(
         "{}",
         tsfc::summary::summary(&model, &compiled, &report_path)
     );
+    if let Ok((design, cert)) = &compiled.outcome {
+        if cert.ok {
+            let targets: Vec<tsf_lang::spec::Emit> = match emit {
+                Some(t) => t
+                    .iter()
+                    .map(|t| {
+                        if *t == Target::Rust {
+                            tsf_lang::spec::Emit::Rust
+                        } else {
+                            tsf_lang::spec::Emit::C
+                        }
+                    })
+                    .collect(),
+                None => model.spec.emit.clone(),
+            };
+            let files = match tsfc::codegen::generate(
+                &model,
+                design,
+                cert,
+                &source.name,
+                &tsfc::report::sha256_hex(&source.bytes),
+                &targets,
+            ) {
+                Ok(f) => f,
+                Err(e) => {
+                    eprintln!("error: code generation failed: {e}");
+                    return ExitCode::from(exit::INFEASIBLE);
+                }
+            };
+            for f in files {
+                let path = out.join(&f.name);
+                if let Err(e) = tsfc::report::write_atomic(&path, f.text.as_bytes()) {
+                    eprintln!("error: cannot write `{}`: {e}", path.display());
+                    return ExitCode::from(exit::IO);
+                }
+                eprintln!("  wrote                {}", path.display());
+            }
+        }
+    }
     match compiled.status {
         tsfc::compile::Status::Certified => ExitCode::SUCCESS,
         _ => ExitCode::from(exit::INFEASIBLE),

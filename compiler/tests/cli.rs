@@ -198,3 +198,47 @@ fn compile_of_an_infeasible_spec_exits_3_without_gains() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("input_norm"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_failed_compile_leaves_earlier_outputs_untouched() {
+    let dir = tmp_dir("atomic");
+    let good = fixture("specs/inverted_pendulum.tsf");
+    let run = |spec: &std::path::Path| {
+        tsfc()
+            .arg("compile")
+            .arg(spec)
+            .arg("--out")
+            .arg(&dir)
+            .arg("--emit")
+            .arg("rust")
+            .output()
+            .expect("runs tsfc")
+    };
+    let first = run(&good);
+    assert_eq!(
+        first.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let out = dir.join("inverted_pendulum.rs");
+    let before = std::fs::read(&out).expect("generated");
+    let bad = dir.join("bad.tsf");
+    let text = std::fs::read_to_string(&good).expect("spec");
+    std::fs::write(
+        &bad,
+        text.replace(
+            "objective decay_rate >= 0.5;",
+            "objective decay_rate >= 0.5;\nobjective input_norm(u) <= 0.001 for x0 = [1.0, 0];",
+        ),
+    )
+    .expect("write");
+    let second = run(&bad);
+    assert_eq!(second.status.code(), Some(3));
+    assert_eq!(
+        std::fs::read(&out).expect("still there"),
+        before,
+        "the earlier output changed"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -6,7 +6,49 @@
 //! carry a `@generated` marker with the spec's hash, no timestamps, no
 //! absolute paths.
 
+pub mod c;
 pub mod sym;
 pub mod tables;
 
 pub use tables::{tables, Header, PremiseCode, Tables};
+pub mod rust;
+
+use crate::certify::Certificate;
+use crate::model::TsModel;
+use crate::synth::Design;
+use tsf_lang::spec::Emit;
+
+/// One generated file: its name (in the output folder) and its text.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GeneratedFile {
+    /// File name, e.g. `zhang_multiobjective.rs`.
+    pub name: String,
+    /// Contents.
+    pub text: String,
+}
+
+/// Generates the requested targets for a certified design.
+pub fn generate(
+    model: &TsModel,
+    design: &Design,
+    cert: &Certificate,
+    spec_path: &str,
+    spec_sha256: &str,
+    targets: &[Emit],
+) -> Result<Vec<GeneratedFile>, String> {
+    if !cert.ok {
+        return Err("the certificate was refused: no code is generated".into());
+    }
+    let t = tables(model, design, cert, spec_path, spec_sha256)?;
+    let mut out = Vec::new();
+    for target in targets {
+        match target {
+            Emit::Rust => out.push(GeneratedFile {
+                name: format!("{}.rs", t.name),
+                text: rust::emit_rust(&t)?,
+            }),
+            Emit::C => return Err("C output is not available in this build".into()),
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,161 @@
+//! A `build.rs` API in the style of prost-build: compile specs into Rust (and
+//! C) sources in `OUT_DIR`, to be `include!`d by the crate.
+//!
+//! ```no_run
+//! // build.rs
+//! fn main() -> Result<(), Box<dyn std::error::Error>> {
+//!     tsfc::Builder::new().spec("specs/controller.tsf").emit_rust(true).compile()?;
+//!     Ok(())
+//! }
+//! // src/lib.rs:  include!(concat!(env!("OUT_DIR"), "/<controller>.rs"));
+//! ```
+
+use crate::codegen::{generate, GeneratedFile};
+use crate::compile::{compile, Status};
+use crate::frontend;
+use crate::report::{sha256_hex, write_atomic, SpecInfo};
+use crate::synth::Settings;
+use std::path::{Path, PathBuf};
+use tsf_lang::spec::Emit;
+
+/// Why a build failed; `Display` gives the full message (diagnostics included).
+#[derive(Debug)]
+pub struct BuildError(pub String);
+
+impl std::fmt::Display for BuildError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BuildError {}
+
+/// Configures and runs spec compilation from a build script.
+#[derive(Debug, Clone)]
+pub struct Builder {
+    specs: Vec<PathBuf>,
+    rust: bool,
+    c: bool,
+    out_dir: Option<PathBuf>,
+    settings: Settings,
+}
+
+impl Default for Builder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Builder {
+    /// A builder emitting Rust into `OUT_DIR`.
+    pub fn new() -> Self {
+        Builder {
+            specs: Vec::new(),
+            rust: true,
+            c: false,
+            out_dir: None,
+            settings: Settings::default(),
+        }
+    }
+
+    /// Adds a spec file.
+    pub fn spec(mut self, path: impl AsRef<Path>) -> Self {
+        self.specs.push(path.as_ref().to_path_buf());
+        self
+    }
+
+    /// Whether to write `<controller>.rs` (default on).
+    pub fn emit_rust(mut self, on: bool) -> Self {
+        self.rust = on;
+        self
+    }
+
+    /// Whether to write `<controller>.h` and `<controller>.c` (default off).
+    pub fn emit_c(mut self, on: bool) -> Self {
+        self.c = on;
+        self
+    }
+
+    /// Output folder (default: the `OUT_DIR` cargo gives build scripts).
+    pub fn out_dir(mut self, dir: impl AsRef<Path>) -> Self {
+        self.out_dir = Some(dir.as_ref().to_path_buf());
+        self
+    }
+
+    /// Synthesis settings.
+    pub fn settings(mut self, settings: Settings) -> Self {
+        self.settings = settings;
+        self
+    }
+
+    /// Compiles every spec; returns the paths written. Prints
+    /// `cargo:rerun-if-changed` for each spec.
+    pub fn compile(self) -> Result<Vec<PathBuf>, BuildError> {
+        let out = match &self.out_dir {
+            Some(d) => d.clone(),
+            None => PathBuf::from(std::env::var_os("OUT_DIR").ok_or_else(|| {
+                BuildError("OUT_DIR is not set: call from a build script or set `out_dir`".into())
+            })?),
+        };
+        let mut targets = Vec::new();
+        if self.rust {
+            targets.push(Emit::Rust);
+        }
+        if self.c {
+            targets.push(Emit::C);
+        }
+        let mut written = Vec::new();
+        for spec in &self.specs {
+            println!("cargo:rerun-if-changed={}", spec.display());
+            for f in self.compile_one(spec, &targets)? {
+                let path = out.join(&f.name);
+                write_atomic(&path, f.text.as_bytes())
+                    .map_err(|e| BuildError(format!("cannot write {}: {e}", path.display())))?;
+                written.push(path);
+            }
+        }
+        Ok(written)
+    }
+
+    fn compile_one(&self, spec: &Path, targets: &[Emit]) -> Result<Vec<GeneratedFile>, BuildError> {
+        let source = frontend::read_source(spec).map_err(|e| BuildError(e.message))?;
+        let checked = frontend::check(&source);
+        let Some(model) = checked.model else {
+            return Err(BuildError(tsf_lang::diag::render(
+                &source.name,
+                &source.text,
+                &checked.diagnostics,
+                false,
+            )));
+        };
+        // Header paths name the spec by file name only: OUT_DIR builds must not
+        // depend on where the workspace lives.
+        let shown = spec
+            .file_name()
+            .map_or_else(|| source.name.clone(), |n| n.to_string_lossy().into_owned());
+        let sha = sha256_hex(&source.bytes);
+        let info = SpecInfo {
+            path: shown.clone(),
+            sha256: sha.clone(),
+        };
+        let compiled = compile(
+            &model,
+            info,
+            &self.settings,
+            (checked.parse_time, checked.model_time),
+        );
+        match (&compiled.status, &compiled.outcome) {
+            (Status::Certified, Ok((design, cert))) => {
+                generate(&model, design, cert, &shown, &sha, targets).map_err(BuildError)
+            }
+            _ => Err(BuildError(format!(
+                "{}: not certified ({})",
+                spec.display(),
+                compiled.report.diagnosis.as_ref().map_or_else(
+                    || compiled.report.status.to_string(),
+                    |d| format!("{}; {}", d.message, d.achievable.join("; "))
+                )
+            ))),
+        }
+    }
+}
