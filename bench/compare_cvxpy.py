@@ -26,7 +26,7 @@ Timings (medians over --repeat fresh runs, seconds):
   tsfc: the library pipeline from bench-compile (parse .. certify), whose total
   also includes parsing the spec, the model stage and the certificate.
 
-Usage: python3 bench/compare_cvxpy.py [--spec SPEC] [--repeat N] [--json PATH]
+Usage: python3 bench/compare_cvxpy.py [--spec SPEC] [--repeat N] [--json PATH] [--bench-bin BIN]
 (needs `pip install cvxpy clarabel`; runs `cargo run --release -p tsfc --bin
 bench-compile`, honouring CARGO_TARGET_DIR).
 """
@@ -46,9 +46,15 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+BENCH_BIN = None  # a built bench-compile binary, else `cargo run`
+
+
 def bench_compile(*args):
     """Runs bench-compile with `args` and returns its stdout."""
-    cmd = ["cargo", "run", "--quiet", "--release", "-p", "tsfc", "--bin", "bench-compile", "--", *args]
+    if BENCH_BIN:
+        cmd = [BENCH_BIN, *args]
+    else:
+        cmd = ["cargo", "run", "--quiet", "--release", "-p", "tsfc", "--bin", "bench-compile", "--", *args]
     out = subprocess.run(cmd, cwd=ROOT, check=True, capture_output=True, text=True)
     return out.stdout
 
@@ -131,7 +137,10 @@ def main():
     ap.add_argument("--spec", default=os.path.join(ROOT, "specs", "zhang2013_multiobjective.tsf"))
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--json", help="write the comparison as JSON to this path")
+    ap.add_argument("--bench-bin", help="path of a built bench-compile (default: cargo run)")
     args = ap.parse_args()
+    global BENCH_BIN
+    BENCH_BIN = args.bench_bin
 
     d = json.loads(bench_compile("--dump-model", args.spec))
     with tempfile.TemporaryDirectory() as tmp:
@@ -163,7 +172,7 @@ def main():
     print()
     print(f"problem size: tsfc {tsfc['problem']['rows']} rows x {tsfc['problem']['scalar_unknowns']} unknowns; "
           f"CVXPY {cv['rows']} rows x {cv['unknowns']} unknowns; "
-          f"iterations: tsfc {tsfc['problem'].get('iterations', '?')}, CVXPY {cv['iterations']}")
+          f"iterations: tsfc {tsfc.get('iterations', '?')}, CVXPY {cv['iterations']}")
     goals = [
         ("tsfc end-to-end >= 10x faster than CVXPY compile+solve", speedup >= 10, f"{speedup:.2f}x"),
         ("tsfc overhead (total - solve) < 20% of total", overhead < 20, f"{overhead:.1f}%"),

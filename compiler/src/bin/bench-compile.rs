@@ -102,6 +102,8 @@ struct Row {
     objectives: serde_json::Value,
     /// SDPs solved per compile.
     sdps: usize,
+    /// Interior-point iterations of the kept SDP.
+    iterations: u32,
     /// Size of the kept SDP, as in the report.
     problem: serde_json::Value,
     /// Median of each stage over the timed runs, seconds.
@@ -299,6 +301,7 @@ fn bench_spec(path: &Path, repeat: usize, settings: &Settings) -> Result<Row, St
         hinf_gamma: objectives.get("hinf_gamma").and_then(|g| g.as_f64()),
         objectives,
         sdps: last.solver.solves,
+        iterations: last.solver.iterations,
         problem: serde_json::to_value(&last.solver.problem).unwrap_or_default(),
         median_s,
         overhead_pct,
