@@ -1,8 +1,10 @@
-//! Compiles the shipped Zhang & Zeng spec into `OUT_DIR/zhang_multiobjective.rs`.
+//! Compiles the shipped specs into `OUT_DIR/<controller>.rs` with tsfc's Builder.
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     tsfc::Builder::new()
         .spec("../../specs/zhang2013_multiobjective.tsf")
+        .spec("../../specs/xu2020_event_triggered.tsf")
+        .spec("../../specs/inverted_pendulum.tsf")
         .emit_rust(true)
         .compile()?;
     Ok(())

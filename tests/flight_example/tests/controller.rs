@@ -54,3 +54,29 @@ fn non_finite_state_gives_zero_command_and_fault() {
     assert_eq!(u, [0.0; M]);
     assert!(c.fault());
 }
+
+#[test]
+fn event_triggered_controller_saturates_at_two_newton_metres() {
+    use flight_example::event_triggered as xu;
+    let mut c = xu::Controller::new();
+    let u = c.step(&[1.0, -1.0, 1.0, 0.5, -0.5, 0.5]);
+    assert!(u.iter().all(|v| v.abs() <= 2.0), "{u:?}");
+    assert!(
+        c.saturated(),
+        "a large state must hit the 2 N m limit: {u:?}"
+    );
+}
+
+#[test]
+fn pendulum_premise_is_the_sector_function() {
+    use flight_example::pendulum as p;
+    // z = sinc(theta): the generated premise code uses the runtime's sin.
+    let theta: f64 = 0.7;
+    let z = p::premises(&[theta, 0.0]);
+    assert!((z[0] - theta.sin() / theta).abs() < 1e-15, "{z:?}");
+    let mut c = p::Controller::new();
+    let u = c.step(&[theta, 0.0]);
+    // Pushing the cart under the falling pole: u has the sign that reduces theta
+    // (B = [0; -a cos(theta)/den] < 0, so a positive theta needs positive u).
+    assert!(u[0] > 0.0, "u = {u:?}");
+}
