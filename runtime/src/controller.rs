@@ -68,11 +68,18 @@ impl<'a, T: Real> Rule<'a, T> {
         Rule { terms }
     }
 
-    /// Weight `w = ((1 * d_1) * d_2) * ...`, in `[0, 1]`.
+    /// Weight `w = ((1 * d_1) * d_2) * ...`, in `[0, 1]`. Stops at the first
+    /// zero factor (degrees are never NaN or infinite, so the product is 0
+    /// exactly as if every term were evaluated): most rules do not fire.
     pub fn weight(&self, z: &[T]) -> T {
-        self.terms
-            .iter()
-            .fold(T::ONE, |acc, term| acc * term.degree(z))
+        let mut acc = T::ONE;
+        for term in self.terms {
+            acc = acc * term.degree(z);
+            if acc == T::ZERO {
+                break;
+            }
+        }
+        acc
     }
 }
 
