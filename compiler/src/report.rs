@@ -75,6 +75,19 @@ pub struct Timings {
     pub total: f64,
 }
 
+/// The ellipsoid {x : x' U x <= 1} certified invariant and inside the linear
+/// region of the saturation (generalized sector condition).
+#[derive(Debug, Serialize)]
+pub struct RegionOfAttraction {
+    /// U = P (n x n rows).
+    #[serde(rename = "U")]
+    pub u: Vec<Vec<f64>>,
+    /// x0' U x0 for the scenario's initial state (<= 1 means inside).
+    pub x0_level: Option<f64>,
+    /// Whether the scenario's initial state lies in the region.
+    pub contains_x0: Option<bool>,
+}
+
 /// Why there is no certified design.
 #[derive(Debug, Serialize)]
 pub struct Diagnosis {
@@ -122,6 +135,8 @@ pub struct Report {
     pub notes: Vec<String>,
     /// Diagnosis when not certified.
     pub diagnosis: Option<Diagnosis>,
+    /// Estimated region of attraction E(P, 1) under actuator saturation.
+    pub region_of_attraction: Option<RegionOfAttraction>,
     /// Solver.
     pub solver: SolverInfo,
     /// Timings.
@@ -262,6 +277,19 @@ pub fn report(
         reductions: design.map(|d| d.reductions.clone()).unwrap_or_default(),
         notes: design.map(|d| d.notes.clone()).unwrap_or_default(),
         diagnosis,
+        region_of_attraction: design
+            .filter(|d| certified && d.plan.saturation.is_some())
+            .map(|d| {
+                let level = model.spec.simulate.as_ref().map(|sim| {
+                    let x0 = nalgebra::DVector::from_column_slice(&sim.x0);
+                    (x0.transpose() * &d.p * &x0)[(0, 0)]
+                });
+                RegionOfAttraction {
+                    u: rows(&d.p),
+                    x0_level: level,
+                    contains_x0: level.map(|l| l <= 1.0),
+                }
+            }),
         solver: SolverInfo {
             name: "clarabel",
             status: design

@@ -1794,7 +1794,11 @@ impl<'a> Checker<'a> {
                         return None;
                     }
                 }
-                Some(Objective::SaturationRegion)
+                let contain = match for_ {
+                    Some(_) => Some(initial(self)?),
+                    None => None,
+                };
+                Some(Objective::SaturationRegion { contain })
             }
             other => {
                 let mut d = Diagnostic::error(name.span, format!("unknown objective `{other}`"))

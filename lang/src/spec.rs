@@ -203,7 +203,10 @@ pub enum Objective {
         initial: InitialSet,
     },
     /// Actuator saturation with an estimated region of attraction.
-    SaturationRegion,
+    SaturationRegion {
+        /// Initial states the region must contain (`for x0 = ...` / `in ellipsoid(R)`).
+        contain: Option<InitialSet>,
+    },
 }
 
 /// An objective with its span.

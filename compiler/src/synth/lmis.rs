@@ -481,6 +481,16 @@ fn build_inner(
             return Err(LmiError::Dimension { what: "the saturation region is supported with stability, decay rate and L-inf objectives, not with H-inf".into() });
         }
         problem.psd("S > 0", Expr::var(*s), eps)?;
+        if let Some(init) = &sat.contain {
+            initial_set(
+                &mut problem,
+                &mut nonstrict,
+                eps,
+                &vars,
+                init,
+                "region of attraction",
+            )?;
+        }
         // With a disturbance bounded by tau, V stays below 1 + xi tau^2 / phi
         // only if the linear region holds on the larger level set: shrink the
         // levels by that factor (Xu & Huang (19)/(40)).

@@ -85,6 +85,8 @@ pub struct SaturationPlan {
     pub levels: Vec<f64>,
     /// Bound on ||w(t)||, if declared.
     pub disturbance_bound: Option<f64>,
+    /// Initial states the region E(P, 1) must contain.
+    pub contain: Option<InitialSet>,
 }
 
 /// What the spec asks to optimize, if anything.
@@ -113,10 +115,11 @@ pub fn initial_plan(spec: &Spec, default_phi: f64) -> (Plan, Goal) {
     for o in &spec.objectives {
         match &o.node {
             Objective::Stability => {}
-            Objective::SaturationRegion => {
+            Objective::SaturationRegion { contain } => {
                 plan.saturation = spec.saturation.clone().map(|levels| SaturationPlan {
                     levels,
                     disturbance_bound: spec.disturbance_bound,
+                    contain: contain.clone(),
                 });
             }
             Objective::DecayRate(t) => match t {
