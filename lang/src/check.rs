@@ -1160,9 +1160,7 @@ impl<'a> Checker<'a> {
                     format!("unknown membership function `{other}`"),
                 )
                 .with_label("use tri, trap, gauss or sigmoid");
-                if let Some(c) = suggest(other, ["tri", "trap", "gauss", "sigmoid"]) {
-                    d = d.with_help(format!("did you mean `{c}`?"));
-                }
+                d = d.with_suggestion(other, ["tri", "trap", "gauss", "sigmoid"]);
                 self.err(d);
                 return None;
             }
@@ -1354,11 +1352,10 @@ impl<'a> Checker<'a> {
                             format!("`{}` is not a state", a.name.node),
                         )
                         .with_label("`at(...)` sets states");
-                        if let Some(c) =
-                            suggest(&a.name.node, self.states.iter().map(|s| s.name.as_str()))
-                        {
-                            d = d.with_help(format!("did you mean `{c}`?"));
-                        }
+                        d = d.with_suggestion(
+                            &a.name.node,
+                            self.states.iter().map(|s| s.name.as_str()),
+                        );
                         self.err(d);
                         good = false;
                         continue;
@@ -1584,10 +1581,7 @@ impl<'a> Checker<'a> {
             if found.is_none() && !this.poisoned.contains(&s.node) {
                 let mut d = Diagnostic::error(s.span, format!("`{}` is not a disturbance", s.node))
                     .with_label("expected a declared disturbance");
-                if let Some(c) = suggest(&s.node, this.disturbances.iter().map(|d| d.name.as_str()))
-                {
-                    d = d.with_help(format!("did you mean `{c}`?"));
-                }
+                d = d.with_suggestion(&s.node, this.disturbances.iter().map(|d| d.name.as_str()));
                 this.err(d);
             }
             found
@@ -1801,12 +1795,13 @@ impl<'a> Checker<'a> {
                 Some(Objective::SaturationRegion { contain })
             }
             other => {
-                let mut d = Diagnostic::error(name.span, format!("unknown objective `{other}`"))
-                    .with_label(format!("objectives: {}", kinds.join(", ")));
-                if let Some(c) = suggest(other, kinds) {
-                    d = d.with_help(format!("did you mean `{c}`?"));
-                }
-                self.err(d);
+                self.err(unknown_choice(
+                    name.span,
+                    "objective",
+                    "objectives",
+                    other,
+                    &kinds,
+                ));
                 None
             }
         }
@@ -1884,12 +1879,13 @@ impl<'a> Checker<'a> {
                 Some(Relaxation::MembershipMismatch { kappa })
             }
             other => {
-                let mut d = Diagnostic::error(name.span, format!("unknown relaxation `{other}`"))
-                    .with_label(format!("relaxations: {}", kinds.join(", ")));
-                if let Some(c) = suggest(other, kinds) {
-                    d = d.with_help(format!("did you mean `{c}`?"));
-                }
-                self.err(d);
+                self.err(unknown_choice(
+                    name.span,
+                    "relaxation",
+                    "relaxations",
+                    other,
+                    &kinds,
+                ));
                 None
             }
         }
@@ -1944,12 +1940,9 @@ impl<'a> Checker<'a> {
             "mixed" => &["sampling", "beta", "rho"],
             other => {
                 let kinds = ["continuous", "periodic", "aperiodic", "mixed"];
-                let mut d = Diagnostic::error(kind.span, format!("unknown trigger `{other}`"))
-                    .with_label(format!("triggers: {}", kinds.join(", ")));
-                if let Some(c) = suggest(other, kinds) {
-                    d = d.with_help(format!("did you mean `{c}`?"));
-                }
-                self.err(d);
+                self.err(unknown_choice(
+                    kind.span, "trigger", "triggers", other, &kinds,
+                ));
                 return None;
             }
         };
@@ -2176,15 +2169,13 @@ impl<'a> Checker<'a> {
                         },
                         other => {
                             let keys = ["x0", "time", "seed", "integrator"];
-                            let mut d = Diagnostic::error(
+                            self.err(unknown_choice(
                                 s.key.span,
-                                format!("unknown simulate setting `{other}`"),
-                            )
-                            .with_label(format!("settings: {}", keys.join(", ")));
-                            if let Some(c) = suggest(other, keys) {
-                                d = d.with_help(format!("did you mean `{c}`?"));
-                            }
-                            self.err(d);
+                                "simulate setting",
+                                "settings",
+                                other,
+                                &keys,
+                            ));
                             ok = false;
                         }
                     }
@@ -2403,6 +2394,19 @@ impl<'a> Checker<'a> {
             span,
         })
     }
+}
+
+/// "unknown <what> `word`" with the valid choices and a "did you mean" hint.
+fn unknown_choice(
+    span: Span,
+    what: &str,
+    plural: &str,
+    word: &str,
+    choices: &[&str],
+) -> Diagnostic {
+    Diagnostic::error(span, format!("unknown {what} `{word}`"))
+        .with_label(format!("{plural}: {}", choices.join(", ")))
+        .with_suggestion(word, choices.iter().copied())
 }
 
 fn is_c_identifier(s: &str) -> bool {

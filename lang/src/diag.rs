@@ -94,6 +94,18 @@ impl Diagnostic {
         self
     }
 
+    /// Adds a "did you mean" help line when a candidate is close to `name`.
+    pub fn with_suggestion<'a>(
+        self,
+        name: &str,
+        candidates: impl IntoIterator<Item = &'a str>,
+    ) -> Self {
+        match crate::eval::suggest(name, candidates) {
+            Some(c) => self.with_help(format!("did you mean `{c}`?")),
+            None => self,
+        }
+    }
+
     /// Whether this is an error.
     pub fn is_error(&self) -> bool {
         self.severity == Severity::Error

@@ -90,11 +90,7 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
                     );
                     // Recover: drop the rest of this item.
                     stack.clear();
-                    i = skip_to_item_end(bytes, i + 1);
-                    chunks.push(Chunk {
-                        span: Span::new(item_start, i),
-                        broken: true,
-                    });
+                    i = skip_broken_item(bytes, i, item_start, &mut chunks);
                     start = None;
                     continue;
                 }
@@ -106,11 +102,7 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
                         )
                         .with_label("nothing opened this bracket"),
                     );
-                    i = skip_to_item_end(bytes, i + 1);
-                    chunks.push(Chunk {
-                        span: Span::new(item_start, i),
-                        broken: true,
-                    });
+                    i = skip_broken_item(bytes, i, item_start, &mut chunks);
                     start = None;
                     continue;
                 }
@@ -148,6 +140,17 @@ pub fn split_items(source: &str, diags: &mut Vec<Diagnostic>) -> Vec<Chunk> {
         });
     }
     chunks
+}
+
+/// After a bracket error at `i`: records the item from `item_start` as broken
+/// up to the next `;` and returns the index after it.
+fn skip_broken_item(bytes: &[u8], i: usize, item_start: usize, chunks: &mut Vec<Chunk>) -> usize {
+    let end = skip_to_item_end(bytes, i + 1);
+    chunks.push(Chunk {
+        span: Span::new(item_start, end),
+        broken: true,
+    });
+    end
 }
 
 /// After a bracket error: the index after the next top-level `;` (or the end).

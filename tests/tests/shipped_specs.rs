@@ -1,22 +1,9 @@
 //! Every shipped spec checks clean (no errors) and has the documented size.
 
-use std::path::Path;
-use tsfc::frontend;
+mod common;
 
 fn check(name: &str) -> tsfc::model::TsModel {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../specs")
-        .join(name);
-    let source = frontend::read_source(&path).unwrap_or_else(|e| panic!("{}", e.message));
-    let checked = frontend::check(&source);
-    let errors: Vec<_> = checked
-        .diagnostics
-        .iter()
-        .filter(|d| d.is_error())
-        .map(|d| d.message.clone())
-        .collect();
-    assert!(errors.is_empty(), "{name}: {errors:?}");
-    checked.model.expect("a model for a clean spec")
+    common::shipped(name)
 }
 
 #[test]

@@ -3,37 +3,14 @@
 
 use nalgebra::DMatrix;
 use std::path::Path;
+
+mod common;
 use tsfc::compile::{compile, Status};
-use tsfc::frontend::{self, Source};
 use tsfc::model::TsModel;
 use tsfc::report::SpecInfo;
 use tsfc::synth::{self, Settings, SynthError};
 
-fn model_of(name: &str, text: &str) -> TsModel {
-    let source = Source {
-        name: name.into(),
-        text: text.into(),
-        bytes: text.as_bytes().to_vec(),
-    };
-    let checked = frontend::check(&source);
-    let errors: Vec<_> = checked
-        .diagnostics
-        .iter()
-        .filter(|d| d.is_error())
-        .map(|d| d.message.clone())
-        .collect();
-    assert!(errors.is_empty(), "{name}: {errors:?}");
-    checked.model.expect("model")
-}
-
-fn shipped(name: &str) -> TsModel {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../specs")
-        .join(name);
-    let source = frontend::read_source(&path).expect("readable");
-    let checked = frontend::check(&source);
-    checked.model.expect("shipped spec checks clean")
-}
+use common::{model_of, shipped};
 
 fn info() -> SpecInfo {
     SpecInfo {
