@@ -14,6 +14,7 @@ pub mod compile;
 pub mod frontend;
 pub mod model;
 pub mod report;
+pub mod sim;
 pub mod summary;
 pub mod synth;
 

@@ -66,6 +66,20 @@ enum Command {
         #[arg(long, value_enum, value_delimiter = ',')]
         emit: Option<Vec<Target>>,
     },
+    /// Compile the design and run the spec's `simulate` scenario (CSV, metrics JSON, plots).
+    Simulate {
+        /// Spec file.
+        spec: PathBuf,
+        /// Output folder.
+        #[arg(long, default_value = "tsfc-out")]
+        out: PathBuf,
+        /// Initial state, comma-separated (default: the spec's x0).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        x0: Option<Vec<f64>>,
+        /// Simulated time in seconds from t0 (default: the spec's span).
+        #[arg(long)]
+        horizon: Option<f64>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -78,6 +92,12 @@ fn main() -> ExitCode {
             report,
             emit,
         } => compile(&spec, &out, report, emit),
+        Command::Simulate {
+            spec,
+            out,
+            x0,
+            horizon,
+        } => simulate(&spec, &out, x0, horizon),
     }
 }
 
@@ -172,6 +192,52 @@ fn compile(
     match compiled.status {
         tsfc::compile::Status::Certified => ExitCode::SUCCESS,
         _ => ExitCode::from(exit::INFEASIBLE),
+    }
+}
+
+fn simulate(
+    path: &std::path::Path,
+    out: &std::path::Path,
+    x0: Option<Vec<f64>>,
+    horizon: Option<f64>,
+) -> ExitCode {
+    let run = || -> Result<Vec<PathBuf>, tsfc::sim::SimError> {
+        let prepared = tsfc::sim::prepare(path)?;
+        let opts = tsfc::sim::Options {
+            x0,
+            horizon,
+            progress: true,
+            ..tsfc::sim::Options::default()
+        };
+        let outcome = tsfc::sim::simulate(&prepared, &opts)?;
+        let m = &outcome.metrics;
+        eprintln!(
+            "simulated `{}`: {} samples, {} transmissions, final ||x|| = {:.3e} ({}converged, tol {:.3e}), max |u| = {:?}, {:.2} s",
+            outcome.name,
+            m.samples,
+            m.transmissions,
+            m.final_state_norm,
+            if m.converged { "" } else { "not " },
+            m.convergence_tolerance,
+            m.max_abs_u,
+            m.wall_time_s
+        );
+        tsfc::sim::write_outputs(&outcome, out)
+    };
+    match run() {
+        Ok(files) => {
+            for f in files {
+                eprintln!("  wrote                {}", f.display());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprint!("{}", e.message);
+            if !e.message.ends_with('\n') {
+                eprintln!();
+            }
+            ExitCode::from(e.exit_code())
+        }
     }
 }
 

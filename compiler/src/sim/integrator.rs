@@ -1,0 +1,302 @@
+//! ODE integrators: fixed-step classical Runge-Kutta 4 and adaptive
+//! Dormand-Prince 5(4). Both advance exactly from `t0` to `t1` (the caller's
+//! sampling and triggering instants), never stepping over `t1`.
+
+use super::SimError;
+
+/// A right-hand side `dy = f(t, y)`.
+pub trait System {
+    /// Writes `f(t, y)` into `dy` (same length as `y`).
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), SimError>;
+}
+
+impl<F> System for F
+where
+    F: FnMut(f64, &[f64], &mut [f64]) -> Result<(), SimError>,
+{
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), SimError> {
+        self(t, y, dy)
+    }
+}
+
+/// `out = y + h * sum_j c_j k_j`.
+fn combine(out: &mut [f64], y: &[f64], h: f64, terms: &[(f64, &[f64])]) {
+    for (i, (o, &yi)) in out.iter_mut().zip(y).enumerate() {
+        let s = terms.iter().fold(0.0, |acc, &(c, k)| {
+            acc + c * k.get(i).copied().unwrap_or(0.0)
+        });
+        *o = yi + h * s;
+    }
+}
+
+/// Fixed-step classical RK4 with at most `h` per step: an interval is split
+/// into `ceil((t1 - t0) / h)` equal steps so that `t1` is hit exactly.
+#[derive(Debug, Clone)]
+pub struct Rk4 {
+    /// Largest step.
+    pub h: f64,
+    k: [Vec<f64>; 4],
+    tmp: Vec<f64>,
+    /// Right-hand side evaluations so far.
+    pub evals: u64,
+}
+
+impl Rk4 {
+    /// An integrator for `dim` states with step at most `h`.
+    pub fn new(dim: usize, h: f64) -> Self {
+        Rk4 {
+            h,
+            k: std::array::from_fn(|_| vec![0.0; dim]),
+            tmp: vec![0.0; dim],
+            evals: 0,
+        }
+    }
+
+    /// One RK4 step of size `h` from `(t, y)`, in place.
+    pub fn step(
+        &mut self,
+        sys: &mut impl System,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+    ) -> Result<(), SimError> {
+        let [k1, k2, k3, k4] = &mut self.k;
+        sys.rhs(t, y, k1)?;
+        combine(&mut self.tmp, y, 0.5 * h, &[(1.0, k1)]);
+        sys.rhs(t + 0.5 * h, &self.tmp, k2)?;
+        combine(&mut self.tmp, y, 0.5 * h, &[(1.0, k2)]);
+        sys.rhs(t + 0.5 * h, &self.tmp, k3)?;
+        combine(&mut self.tmp, y, h, &[(1.0, k3)]);
+        sys.rhs(t + h, &self.tmp, k4)?;
+        self.evals += 4;
+        let inc = [
+            (1.0 / 6.0, &k1[..]),
+            (1.0 / 3.0, k2),
+            (1.0 / 3.0, k3),
+            (1.0 / 6.0, k4),
+        ];
+        combine(&mut self.tmp, y, h, &inc);
+        y.copy_from_slice(&self.tmp);
+        Ok(())
+    }
+
+    /// Advances `y` from `t0` to `t1` (no-op when `t1 <= t0`).
+    pub fn advance(
+        &mut self,
+        sys: &mut impl System,
+        t0: f64,
+        t1: f64,
+        y: &mut [f64],
+    ) -> Result<(), SimError> {
+        let span = t1 - t0;
+        if span <= 0.0 {
+            return Ok(());
+        }
+        // The 1e-9 slack keeps an interval of exactly k steps from becoming k + 1.
+        let steps = ((span / self.h) - 1e-9).ceil().max(1.0);
+        let h = span / steps;
+        let steps = steps as u64;
+        for i in 0..steps {
+            self.step(sys, t0 + i as f64 * h, h, y)?;
+        }
+        Ok(())
+    }
+}
+
+/// Dormand-Prince 5(4) (Dormand & Prince 1980; Hairer, Norsett & Wanner,
+/// Table II.5.2) with local extrapolation and a standard step-size controller:
+/// the scaled RMS error `sqrt(mean((err_i / (atol + rtol max(|y_i|, |y+_i|)))^2))`
+/// must be `<= 1`; the next step is `h * clamp(0.9 err^(-1/5), 0.2, 5)`.
+#[derive(Debug, Clone)]
+pub struct Dopri5 {
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance.
+    pub atol: f64,
+    /// Largest step (also the first trial step).
+    pub h_max: f64,
+    h: f64,
+    k: [Vec<f64>; 7],
+    tmp: Vec<f64>,
+    ynew: Vec<f64>,
+    /// Accepted steps so far.
+    pub accepted: u64,
+    /// Rejected steps so far.
+    pub rejected: u64,
+    /// Right-hand side evaluations so far.
+    pub evals: u64,
+}
+
+const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
+const A2: [f64; 1] = [0.2];
+const A3: [f64; 2] = [3.0 / 40.0, 9.0 / 40.0];
+const A4: [f64; 3] = [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0];
+const A5: [f64; 4] = [
+    19372.0 / 6561.0,
+    -25360.0 / 2187.0,
+    64448.0 / 6561.0,
+    -212.0 / 729.0,
+];
+const A6: [f64; 5] = [
+    9017.0 / 3168.0,
+    -355.0 / 33.0,
+    46732.0 / 5247.0,
+    49.0 / 176.0,
+    -5103.0 / 18656.0,
+];
+/// Fifth-order weights (also the stage-7 row: first same as last).
+const B5: [f64; 6] = [
+    35.0 / 384.0,
+    0.0,
+    500.0 / 1113.0,
+    125.0 / 192.0,
+    -2187.0 / 6784.0,
+    11.0 / 84.0,
+];
+/// Fifth minus fourth-order weights (error estimate).
+const E: [f64; 7] = [
+    71.0 / 57600.0,
+    0.0,
+    -71.0 / 16695.0,
+    71.0 / 1920.0,
+    -17253.0 / 339200.0,
+    22.0 / 525.0,
+    -1.0 / 40.0,
+];
+
+impl Dopri5 {
+    /// An integrator for `dim` states with tolerances and a largest step.
+    pub fn new(dim: usize, rtol: f64, atol: f64, h_max: f64) -> Self {
+        Dopri5 {
+            rtol,
+            atol,
+            h_max,
+            h: h_max,
+            k: std::array::from_fn(|_| vec![0.0; dim]),
+            tmp: vec![0.0; dim],
+            ynew: vec![0.0; dim],
+            accepted: 0,
+            rejected: 0,
+            evals: 0,
+        }
+    }
+
+    /// One trial step of size `h`; returns the scaled error (new state in `ynew`).
+    fn trial(&mut self, sys: &mut impl System, t: f64, h: f64, y: &[f64]) -> Result<f64, SimError> {
+        let rows: [&[f64]; 5] = [&A2, &A3, &A4, &A5, &A6];
+        sys.rhs(t, y, &mut self.k[0])?;
+        for (s, row) in rows.iter().enumerate() {
+            let (done, rest) = self.k.split_at_mut(s + 1);
+            let terms: Vec<(f64, &[f64])> = row
+                .iter()
+                .zip(done.iter())
+                .map(|(&a, k)| (a, &k[..]))
+                .collect();
+            combine(&mut self.tmp, y, h, &terms);
+            sys.rhs(t + C[s + 1] * h, &self.tmp, &mut rest[0])?;
+        }
+        let terms: Vec<(f64, &[f64])> = B5
+            .iter()
+            .zip(self.k.iter())
+            .map(|(&b, k)| (b, &k[..]))
+            .collect();
+        combine(&mut self.ynew, y, h, &terms);
+        let (first6, last) = self.k.split_at_mut(6);
+        sys.rhs(t + h, &self.ynew, &mut last[0])?;
+        self.evals += 7;
+        let all: Vec<&[f64]> = first6
+            .iter()
+            .map(|k| &k[..])
+            .chain([&last[0][..]])
+            .collect();
+        let mut sum = 0.0;
+        for (i, (&yi, &yn)) in y.iter().zip(&self.ynew).enumerate() {
+            let err = h * E.iter().zip(&all).fold(0.0, |acc, (&e, k)| {
+                acc + e * k.get(i).copied().unwrap_or(0.0)
+            });
+            let sc = self.atol + self.rtol * yi.abs().max(yn.abs());
+            sum += (err / sc) * (err / sc);
+        }
+        Ok((sum / y.len().max(1) as f64).sqrt())
+    }
+
+    /// Advances `y` from `t0` to `t1` with error control, landing on `t1` exactly.
+    pub fn advance(
+        &mut self,
+        sys: &mut impl System,
+        t0: f64,
+        t1: f64,
+        y: &mut [f64],
+    ) -> Result<(), SimError> {
+        let mut t = t0;
+        while t < t1 {
+            let remaining = t1 - t;
+            let planned = self.h.min(self.h_max);
+            let mut h = planned.min(remaining);
+            // Do not leave a sliver: stretch to the end when it is within 1e-3 h.
+            if remaining - h < 1e-3 * h {
+                h = remaining;
+            }
+            if !(h > 1e-14 * (t.abs() + 1.0)) {
+                return Err(SimError::numeric(format!(
+                    "dopri5: step size underflow at t = {t} (h = {h:e}); the system is too stiff or not finite"
+                )));
+            }
+            let err = self.trial(sys, t, h, y)?;
+            if err <= 1.0 {
+                self.accepted += 1;
+                t = if h == remaining { t1 } else { t + h };
+                y.copy_from_slice(&self.ynew);
+                let grow = if err == 0.0 {
+                    5.0
+                } else {
+                    (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
+                };
+                // A step shortened to hit t1 does not shrink the planned step.
+                if !(h < planned && grow >= 1.0) {
+                    self.h = h * grow;
+                }
+            } else if err.is_finite() {
+                self.rejected += 1;
+                self.h = h * (0.9 * err.powf(-0.2)).clamp(0.2, 1.0);
+            } else {
+                self.rejected += 1;
+                self.h = h * 0.2;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The integrator a simulation uses.
+#[derive(Debug, Clone)]
+pub enum Stepper {
+    /// Fixed-step RK4.
+    Rk4(Rk4),
+    /// Adaptive Dormand-Prince 5(4).
+    Dopri5(Dopri5),
+}
+
+impl Stepper {
+    /// Advances `y` from `t0` to `t1` exactly.
+    pub fn advance(
+        &mut self,
+        sys: &mut impl System,
+        t0: f64,
+        t1: f64,
+        y: &mut [f64],
+    ) -> Result<(), SimError> {
+        match self {
+            Stepper::Rk4(s) => s.advance(sys, t0, t1, y),
+            Stepper::Dopri5(s) => s.advance(sys, t0, t1, y),
+        }
+    }
+
+    /// Right-hand side evaluations so far.
+    pub fn evals(&self) -> u64 {
+        match self {
+            Stepper::Rk4(s) => s.evals,
+            Stepper::Dopri5(s) => s.evals,
+        }
+    }
+}
