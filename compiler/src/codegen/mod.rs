@@ -47,7 +47,12 @@ pub fn generate(
                 name: format!("{}.rs", t.name),
                 text: rust::emit_rust(&t)?,
             }),
-            Emit::C => return Err("C output is not available in this build".into()),
+            Emit::C => {
+                let files = c::emit_c(&t);
+                let (h, src) = c::c_file_names(&t);
+                out.push(GeneratedFile { name: h, text: files.header });
+                out.push(GeneratedFile { name: src, text: files.source });
+            }
         }
     }
     Ok(out)
