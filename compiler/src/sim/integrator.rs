@@ -237,7 +237,7 @@ impl Dopri5 {
             if remaining - h < 1e-3 * h {
                 h = remaining;
             }
-            if !(h > 1e-14 * (t.abs() + 1.0)) {
+            if h.is_nan() || h <= 1e-14 * (t.abs() + 1.0) {
                 return Err(SimError::numeric(format!(
                     "dopri5: step size underflow at t = {t} (h = {h:e}); the system is too stiff or not finite"
                 )));

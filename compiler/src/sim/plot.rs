@@ -38,10 +38,10 @@ struct Panel {
     dots: Series,
 }
 
-fn stride<T: Copy>(v: &[T]) -> Vec<T> {
+fn stride<T: Copy + PartialEq>(v: &[T]) -> Vec<T> {
     let step = v.len().div_ceil(MAX_POINTS).max(1);
     let mut out: Vec<T> = v.iter().step_by(step).copied().collect();
-    if let (Some(last), true) = (v.last(), (v.len() - 1) % step != 0) {
+    if let Some(last) = v.last().filter(|&l| out.last() != Some(l)) {
         out.push(*last);
     }
     out
