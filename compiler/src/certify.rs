@@ -39,6 +39,51 @@ pub struct Certificate {
     pub lmis: Vec<LmiMargin>,
 }
 
+/// Margins of every constraint of `problem` at the named `values` (variables
+/// the solved, reduced problem did not have are zero, e.g. a relaxation slack
+/// proven unnecessary).
+fn margins_of(
+    problem: &tsf_lmi::Problem,
+    nonstrict: &[String],
+    named: &[(String, nalgebra::DMatrix<f64>)],
+) -> Result<Vec<LmiMargin>, String> {
+    let mut values = problem.assignment();
+    for (name, v) in problem.vars() {
+        if let Some((_, value)) = named.iter().find(|(n, _)| n == name) {
+            values
+                .set(v, value.clone())
+                .map_err(|e| format!("internal error: {e}"))?;
+        }
+    }
+    let margins = problem
+        .margins(&values)
+        .map_err(|e| format!("internal error: {e}"))?;
+    Ok(margins
+        .into_iter()
+        .map(|m| {
+            let (strict, size) = match m.kind {
+                ConstraintKind::Lmi { margin, size, .. } => {
+                    (margin > 0.0 && !nonstrict.contains(&m.name), size)
+                }
+                ConstraintKind::Scalar { .. } => (false, 1),
+            };
+            let ok = if strict {
+                m.slack > m.error_bound
+            } else {
+                m.slack >= -m.error_bound
+            };
+            LmiMargin {
+                name: m.name,
+                margin: m.slack,
+                error_bound: m.error_bound,
+                strict,
+                size,
+                ok,
+            }
+        })
+        .collect())
+}
+
 /// Checks `design` against the full set of conditions of its plan.
 pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, String> {
     let built = build(
@@ -48,41 +93,15 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, String> 
         design.eps,
         false,
     )?;
-    let problem = &built.problem;
-    // Variables the solved (reduced) problem did not have are zero (e.g. a
-    // relaxation slack proven unnecessary).
-    let mut values = problem.assignment();
-    for (name, v) in problem.vars() {
-        if let Some((_, value)) = design.values.iter().find(|(n, _)| n == name) {
-            values
-                .set(v, value.clone())
-                .map_err(|e| format!("internal error: {e}"))?;
-        }
-    }
-    let margins = problem
-        .margins(&values)
-        .map_err(|e| format!("internal error: {e}"))?;
-    let mut lmis = Vec::with_capacity(margins.len());
-    for m in margins {
-        let (strict, size) = match m.kind {
-            ConstraintKind::Lmi { margin, size, .. } => {
-                (margin > 0.0 && !built.nonstrict.contains(&m.name), size)
-            }
-            ConstraintKind::Scalar { .. } => (false, 1),
+    let mut lmis = margins_of(&built.problem, &built.nonstrict, &design.values)?;
+    if let Some(t) = &design.trigger {
+        // The gains checked are the design's (the ones emitted), not a copy.
+        let plan = crate::synth::TriggerPlan {
+            gains: design.gains.clone(),
+            ..t.plan.clone()
         };
-        let ok = if strict {
-            m.slack > m.error_bound
-        } else {
-            m.slack >= -m.error_bound
-        };
-        lmis.push(LmiMargin {
-            name: m.name,
-            margin: m.slack,
-            error_bound: m.error_bound,
-            strict,
-            size,
-            ok,
-        });
+        let tb = crate::synth::trigger::build(model, &plan, design.eps, false)?;
+        lmis.extend(margins_of(&tb.problem, &tb.nonstrict, &t.values)?);
     }
     let min_margin = lmis
         .iter()

@@ -88,6 +88,32 @@ pub struct RegionOfAttraction {
     pub contains_x0: Option<bool>,
 }
 
+/// The synthesized event trigger: transmit x(t_k^l) when
+/// e' Upsilon e >= nu x(t_k)' Upsilon x(t_k), e = x(t_k^l) - x(t_k).
+#[derive(Debug, Serialize)]
+pub struct TriggerReport {
+    /// Upsilon (n x n rows).
+    pub weight: Vec<Vec<f64>>,
+    /// Largest certified threshold nu.
+    pub nu: f64,
+    /// (feasible, infeasible) bracket of the nu bisection.
+    pub nu_bracket: [f64; 2],
+    /// The spec's threshold (the adaptive law's lower bound), if any.
+    pub nu_spec: Option<f64>,
+    /// Whether the spec's threshold is within the certified one.
+    pub nu_spec_certified: Option<bool>,
+    /// [h_min, h_max] in s.
+    pub sampling: [f64; 2],
+    /// Design method.
+    pub method: &'static str,
+    /// Certified L-inf bound of the event-triggered, sampled loop.
+    pub linf_gamma: f64,
+    /// Its xi.
+    pub linf_xi: f64,
+    /// Eigenvalues of Upsilon, ascending.
+    pub weight_eigenvalues: Vec<f64>,
+}
+
 /// Why there is no certified design.
 #[derive(Debug, Serialize)]
 pub struct Diagnosis {
@@ -135,17 +161,31 @@ pub struct Report {
     pub notes: Vec<String>,
     /// Diagnosis when not certified.
     pub diagnosis: Option<Diagnosis>,
-    /// Estimated region of attraction E(P, 1) under actuator saturation.
+    /// Estimated region of attraction E(P, 1) under actuator saturation (with
+    /// a synthesized trigger: P of the event-triggered loop's functional).
     pub region_of_attraction: Option<RegionOfAttraction>,
+    /// The synthesized event trigger.
+    pub trigger: Option<TriggerReport>,
     /// Solver.
     pub solver: SolverInfo,
     /// Timings.
     pub timings_s: Timings,
 }
 
-fn objectives(design: &Design) -> BTreeMap<String, serde_json::Value> {
+fn objectives(model: &TsModel, design: &Design) -> BTreeMap<String, serde_json::Value> {
     let a = &design.achieved;
     let mut o = BTreeMap::new();
+    if a.linf_gamma.is_some() {
+        if let Some(g) = model.spec.linf_paper {
+            o.insert("linf_gamma_paper".into(), serde_json::json!(g));
+        }
+    }
+    if let Some(t) = &design.trigger {
+        o.insert(
+            "linf_gamma_event_triggered".into(),
+            serde_json::json!(t.gamma),
+        );
+    }
     let mut put = |k: &str, v: Option<f64>| {
         if let Some(v) = v {
             o.insert(k.to_string(), serde_json::json!(v));
@@ -255,7 +295,7 @@ pub fn report(
         status,
         relaxation: format!("{:?}", model.spec.relaxation.node),
         lmi_margin_eps: design.map(|d| d.eps),
-        objectives: design.map(objectives).unwrap_or_default(),
+        objectives: design.map(|d| objectives(model, d)).unwrap_or_default(),
         gains: if certified {
             design
                 .map(|d| {
@@ -274,22 +314,35 @@ pub fn report(
         },
         p: design.map(|d| rows(&d.p)).unwrap_or_default(),
         certificate: cert,
-        reductions: design.map(|d| d.reductions.clone()).unwrap_or_default(),
+        reductions: design
+            .map(|d| {
+                let mut r = d.reductions.clone();
+                if let Some(t) = &d.trigger {
+                    r.extend(t.reductions.iter().cloned());
+                }
+                r
+            })
+            .unwrap_or_default(),
         notes: design.map(|d| d.notes.clone()).unwrap_or_default(),
         diagnosis,
         region_of_attraction: design
             .filter(|d| certified && d.plan.saturation.is_some())
             .map(|d| {
+                let p = d.trigger.as_ref().map_or(&d.p, |t| &t.p);
                 let level = model.spec.simulate.as_ref().map(|sim| {
                     let x0 = nalgebra::DVector::from_column_slice(&sim.x0);
-                    (x0.transpose() * &d.p * &x0)[(0, 0)]
+                    (x0.transpose() * p * &x0)[(0, 0)]
                 });
                 RegionOfAttraction {
-                    u: rows(&d.p),
+                    u: rows(p),
                     x0_level: level,
                     contains_x0: level.map(|l| l <= 1.0),
                 }
             }),
+        trigger: design
+            .filter(|_| certified)
+            .and_then(|d| d.trigger.as_ref())
+            .map(|t| trigger_report(model, t)),
         solver: SolverInfo {
             name: "clarabel",
             status: design
@@ -300,6 +353,36 @@ pub fn report(
             problem,
         },
         timings_s: timings,
+    }
+}
+
+fn trigger_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> TriggerReport {
+    let nu_spec = match model.spec.trigger.as_ref().map(|t| &t.node) {
+        Some(tsf_lang::spec::Trigger::Aperiodic { threshold, .. }) => {
+            threshold.as_ref().map(|th| th.nu)
+        }
+        _ => None,
+    };
+    let mut eig: Vec<f64> = t
+        .weight
+        .clone()
+        .symmetric_eigen()
+        .eigenvalues
+        .iter()
+        .copied()
+        .collect();
+    eig.sort_by(f64::total_cmp);
+    TriggerReport {
+        weight: rows(&t.weight),
+        nu: t.plan.nu,
+        nu_bracket: [t.nu_bracket.0, t.nu_bracket.1],
+        nu_spec,
+        nu_spec_certified: nu_spec.map(|v| v <= t.plan.nu),
+        sampling: [t.plan.sampling.0, t.plan.sampling.1],
+        method: t.method,
+        linf_gamma: t.gamma,
+        linf_xi: t.xi,
+        weight_eigenvalues: eig,
     }
 }
 

@@ -51,6 +51,8 @@ struct Checker<'a> {
     poisoned: HashSet<String>,
     /// First words of items that failed to parse.
     broken_keywords: HashSet<String>,
+    /// `paper = ...` of the L-inf objective (a source's reported gamma).
+    linf_paper: Option<f64>,
 }
 
 /// Checks a parsed file. Returns the spec when there is no error, and all diagnostics.
@@ -70,6 +72,7 @@ pub fn check(file: &File) -> (Option<Spec>, Vec<Diagnostic>) {
             .flat_map(|b| b.names.iter().cloned())
             .collect(),
         broken_keywords: file.broken.iter().map(|b| b.keyword.clone()).collect(),
+        linf_paper: None,
     };
     let spec = c.run();
     let has_error = c.diags.iter().any(Diagnostic::is_error);
@@ -509,6 +512,7 @@ impl<'a> Checker<'a> {
         let mut objectives = Vec::new();
         let mut relaxation: Option<Spanned<Relaxation>> = None;
         let mut trigger: Option<Spanned<Trigger>> = None;
+        let mut trigger_synthesis = None;
         let mut emit = Vec::new();
         let mut emit_seen = None;
         let mut precision = Precision::F64;
@@ -603,6 +607,15 @@ impl<'a> Checker<'a> {
                     let mut seen = trigger.as_ref().map(|t| t.span);
                     if self.singleton(&mut seen, it.span, "the trigger") {
                         if let Some(t) = self.trigger(kind, settings, n) {
+                            if matches!(
+                                t,
+                                Trigger::Aperiodic {
+                                    weight: Weight::Synthesize,
+                                    ..
+                                }
+                            ) {
+                                trigger_synthesis = self.trigger_synthesis(settings);
+                            }
                             trigger = Some(Spanned::new(t, it.span));
                         }
                     }
@@ -763,10 +776,58 @@ impl<'a> Checker<'a> {
             objectives,
             relaxation,
             trigger,
+            trigger_synthesis,
+            linf_paper: self.linf_paper,
             emit,
             precision,
             simulate,
         })
+    }
+
+    /// The design method of a synthesized trigger weight: `weight = synthesize;`
+    /// (none yet: the weight is left to later stages), `weight = synthesize two_step;`
+    /// (gains first, then the weight) or `weight = synthesize theorem2(eps1 = .., eps2 = .., eps3 = ..,
+    /// xi = .., reading = ..);` (Xu & Huang Theorem 2; every argument optional).
+    fn trigger_synthesis(&mut self, settings: &[Setting]) -> Option<TriggerSynthesis> {
+        let s = settings.iter().find(|s| s.key.node == "weight")?;
+        let mut out = None;
+        for m in &s.modifiers {
+            if m.name.node == "two_step" {
+                self.named(&m.args, &[], "`two_step`")?;
+                out = Some(TriggerSynthesis::TwoStep);
+                continue;
+            }
+            if m.name.node != "theorem2" {
+                self.err(
+                    Diagnostic::error(
+                        m.name.span,
+                        format!("unknown weight design method `{}`", m.name.node),
+                    )
+                    .with_help("write `weight = synthesize two_step;` or `weight = synthesize theorem2(eps1 = 1, eps2 = 1, eps3 = 1);`"),
+                );
+                return None;
+            }
+            let p = self.named(
+                &m.args,
+                &["eps1", "eps2", "eps3", "xi", "reading"],
+                "`theorem2`",
+            )?;
+            let reading = p.get("reading").copied().unwrap_or(1.0);
+            if ![1.0, 2.0, 3.0].contains(&reading) {
+                self.err(Diagnostic::error(
+                    m.name.span,
+                    "`reading` is 1 (as printed), 2 (block (1,2) from the derivation) or 3 (2 and the sector multiplier by congruence)",
+                ));
+                return None;
+            }
+            let eps = |k: &str| p.get(k).copied().unwrap_or(1.0);
+            out = Some(TriggerSynthesis::Theorem2 {
+                eps: [eps("eps1"), eps("eps2"), eps("eps3")],
+                xi: p.get("xi").copied(),
+                reading: reading as u8,
+            });
+        }
+        out
     }
 
     /// Checks that every name in every function body is a parameter, constant or function.
@@ -1670,7 +1731,7 @@ impl<'a> Checker<'a> {
             this.positive(&a.value, key)
         };
         let allowed_with: &[&str] = if name.node == "linf" {
-            &["xi", "phi"]
+            &["xi", "phi", "paper"]
         } else {
             &[]
         };
@@ -1737,6 +1798,7 @@ impl<'a> Checker<'a> {
             "linf" => {
                 let (from, to) = pair(self)?;
                 let t = target(self, "minimize", "<=")?;
+                self.linf_paper = param(self, "paper");
                 Some(Objective::Linf {
                     from,
                     to,

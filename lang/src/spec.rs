@@ -249,6 +249,24 @@ pub enum Weight {
     Given(Mat),
 }
 
+/// How a synthesized trigger weight is designed
+/// (`weight = synthesize two_step;` or `weight = synthesize theorem2(...);`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum TriggerSynthesis {
+    /// Gains first (the spec's objectives), then the weight and the largest
+    /// threshold for those gains.
+    TwoStep,
+    /// Xu & Huang (2020) Theorem 2, LMIs (37)-(41), co-designing gains and weight.
+    Theorem2 {
+        /// Slack scalars eps_1, eps_2, eps_3 (Q_k = eps_k Q).
+        eps: [f64; 3],
+        /// xi, if given here (else the L-inf objective's).
+        xi: Option<f64>,
+        /// OCR reading (1, 2 or 3; docs/event_trigger.md).
+        reading: u8,
+    },
+}
+
 /// A triggering law.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Trigger {
@@ -375,6 +393,12 @@ pub struct Spec {
     pub relaxation: Spanned<Relaxation>,
     /// Trigger (default continuous).
     pub trigger: Option<Spanned<Trigger>>,
+    /// How a synthesized trigger weight is designed (aperiodic trigger with
+    /// `weight = synthesize`; None otherwise).
+    pub trigger_synthesis: Option<TriggerSynthesis>,
+    /// The L-inf gamma a source reports (`with paper = ...`), echoed in the
+    /// report as `objectives.linf_gamma_paper`; not used by synthesis.
+    pub linf_paper: Option<f64>,
     /// Code targets.
     pub emit: Vec<Emit>,
     /// Precision.

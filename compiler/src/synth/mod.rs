@@ -9,9 +9,14 @@
 mod lmis;
 pub mod plan;
 mod relaxation;
+mod sampled;
+pub mod theorem2;
+pub mod trigger;
 
 pub use lmis::{build, common_b, Built, Vars};
 pub use plan::{Bound, Goal, Plan};
+pub use sampled::Block12;
+pub use trigger::{TriggerBuilt, TriggerPlan};
 
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -108,6 +113,31 @@ pub struct Design {
     /// Whether the solver reached only reduced accuracy (`AlmostSolved`):
     /// such a solution is used only to explain infeasibility, never emitted.
     pub approximate: bool,
+    /// The synthesized event trigger (aperiodic trigger with `weight = synthesize`).
+    pub trigger: Option<TriggerDesign>,
+}
+
+/// A synthesized event trigger for the gains of a [`Design`] (two-step method).
+#[derive(Debug, Clone)]
+pub struct TriggerDesign {
+    /// The problem data (with the certified nu).
+    pub plan: TriggerPlan,
+    /// Method name for the report.
+    pub method: &'static str,
+    /// Trigger weight Upsilon (n x n).
+    pub weight: DMatrix<f64>,
+    /// P of the event-triggered loop's functional: the region is E(P, 1).
+    pub p: DMatrix<f64>,
+    /// Certified L-inf bound of the event-triggered loop at that nu.
+    pub gamma: f64,
+    /// xi at that nu.
+    pub xi: f64,
+    /// (largest feasible, smallest infeasible) nu found by the bisection.
+    pub nu_bracket: (f64, f64),
+    /// Values of every variable of the solved trigger problem.
+    pub values: Vec<(String, DMatrix<f64>)>,
+    /// Reductions applied to the solved trigger problem.
+    pub reductions: Vec<String>,
 }
 
 /// Why synthesis produced no design.
@@ -280,6 +310,7 @@ impl Runner<'_> {
             log: SolverLog::default(),
             certify_time: Duration::ZERO,
             approximate,
+            trigger: None,
         })))
     }
 
@@ -477,6 +508,9 @@ impl Runner<'_> {
 
 /// Synthesizes gains for `model`'s objectives.
 pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthError> {
+    if let Some(e) = theorem2::synthesize(model, settings) {
+        return Err(e);
+    }
     let (plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
     let mut runner = Runner {
         model,
@@ -486,6 +520,11 @@ pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthE
     };
     match runner.run(&plan, goal) {
         Ok(Some(mut d)) => {
+            if trigger::wanted(model) {
+                let (t, notes) = runner.trigger(&d)?;
+                d.notes.extend(notes);
+                d.trigger = Some(t);
+            }
             d.log = std::mem::take(&mut runner.log);
             Ok(d)
         }

@@ -1,0 +1,400 @@
+//! Event-trigger synthesis for fixed PDC gains (the "two-step" method; the
+//! derivation is in docs/event_trigger.md).
+//!
+//! Step 1 (the rest of this crate) designs F_j and the sector gains G_j for the
+//! continuous loop. Step 2, here, keeps F_j and G_j and finds, for the
+//! aperiodically sampled, event-triggered loop with sampling intervals in
+//! [h_min, h_max], a Lyapunov-Krasovskii functional
+//!
+//!   V = x' P x + (s + h - t) int_s^t e^{-phi (t - a)} x'(a)' Y x'(a) da,
+//!
+//! descriptor slacks Q_1..Q_3, free matrices L_1, L_2, a diagonal sector
+//! multiplier T > 0 and the trigger weight W = Upsilon > 0 such that, while the
+//! event condition e' W e <= nu x(t_k)' W x(t_k) holds between transmissions,
+//! V' + phi V - xi tau' tau < 0 on E(P, 1 + xi tau_bar^2 / phi) (which lies in
+//! the linear region of the sector condition), and ||y||_inf < gamma ||tau||_inf.
+//! Every term is linear in the unknowns because F_j and G_j are constants.
+//! nu enters as nu W: the largest nu is found by bisection.
+
+use super::lmis::nonstrict_psd;
+use super::relaxation::{relax, Family};
+use super::sampled::{lambda, Block12, Terms, Vertex};
+use super::{Design, Runner, SynthError, TriggerDesign};
+use crate::model::TsModel;
+use nalgebra::DMatrix;
+use std::time::{Duration, Instant};
+use tsf_lang::spec::{Relaxation, Trigger, TriggerSynthesis, Weight};
+use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
+
+/// Data of the trigger problem (everything but nu is fixed by step 1 and the spec).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TriggerPlan {
+    /// Sampling intervals [h_min, h_max].
+    pub sampling: (f64, f64),
+    /// Threshold nu (bisected).
+    pub nu: f64,
+    /// phi of V' + phi V - xi tau' tau < 0.
+    pub phi: f64,
+    /// Upper bound on xi; the region level is 1 + xi_max tau_bar^2 / phi.
+    pub xi_max: f64,
+    /// Bound tau_bar on ||tau(t)||.
+    pub tau_bar: f64,
+    /// Saturation levels u_bar_s.
+    pub levels: Vec<f64>,
+    /// PDC gains F_j (m x n), fixed.
+    pub gains: Vec<DMatrix<f64>>,
+    /// Sector gains G_j (m x n), fixed.
+    pub sector: Vec<DMatrix<f64>>,
+    /// Disturbance columns D_i of the L-inf channel, per rule.
+    pub d: Vec<DMatrix<f64>>,
+    /// Output map y = C x + G_y tau.
+    pub c: DMatrix<f64>,
+    /// Disturbance feedthrough G_y.
+    pub g: DMatrix<f64>,
+}
+
+/// The variables of the trigger problem.
+#[derive(Debug, Clone)]
+pub struct TriggerVars {
+    /// P of V1 = x' P x.
+    pub p: Var,
+    /// Trigger weight Upsilon.
+    pub w: Var,
+    /// L-inf gain gamma.
+    pub gamma: Var,
+    /// xi.
+    pub xi: Var,
+}
+
+/// A built trigger problem.
+#[derive(Debug)]
+pub struct TriggerBuilt {
+    /// The LMI problem.
+    pub problem: Problem,
+    /// Its main variables.
+    pub vars: TriggerVars,
+    /// Reductions applied.
+    pub reductions: Vec<String>,
+    /// Constraints non-strict in the theory.
+    pub nonstrict: Vec<String>,
+}
+
+/// Builds the trigger LMIs. With `reduce`, the h = h_min vertices are left
+/// out: every Lambda_r(h) is Xi + h Pi_r with Pi_r >= 0, so h_max implies them.
+pub fn build(
+    model: &TsModel,
+    plan: &TriggerPlan,
+    eps: f64,
+    reduce: bool,
+) -> Result<TriggerBuilt, String> {
+    build_inner(model, plan, eps, reduce)
+        .map_err(|e| format!("internal LMI construction error: {e}"))
+}
+
+fn build_inner(
+    model: &TsModel,
+    plan: &TriggerPlan,
+    eps: f64,
+    reduce: bool,
+) -> Result<TriggerBuilt, LmiError> {
+    let (n, m, r) = (model.n, model.m, model.r());
+    let q = plan.d.first().map_or(0, |d| d.ncols());
+    let mut problem = Problem::new();
+    let p = problem.symmetric("Ptr", n)?;
+    let y = problem.symmetric("Ytr", n)?;
+    let w = problem.symmetric("Upsilon", n)?;
+    let l = [problem.full("L1", n, n)?, problem.full("L2", n, n)?];
+    let qv = [
+        problem.full("Q1", n, n)?,
+        problem.full("Q2", n, n)?,
+        problem.full("Q3", n, n)?,
+    ];
+    let t = problem.diagonal("T", m)?;
+    let gamma = problem.scalar("gamma_tr")?;
+    let xi = problem.scalar("xi_tr")?;
+    let mut nonstrict = Vec::new();
+    let mut reductions = Vec::new();
+    problem.psd("trigger P > 0", Expr::var(p), eps)?;
+    problem.psd("trigger Y > 0", Expr::var(y), eps)?;
+    problem.psd("trigger Upsilon > 0", Expr::var(w), eps)?;
+    problem.psd("trigger T > 0", Expr::var(t), eps)?;
+    let id_n = DMatrix::identity(n, n);
+    let id_m = DMatrix::identity(m, m);
+    let terms = |i: usize, j: usize| -> Result<Terms, LmiError> {
+        let a = &model.rules[i].a;
+        let b = &model.rules[i].b;
+        let bf = b * &plan.gains[j];
+        let prod = |k: usize, c: &DMatrix<f64>| Expr::product(&id_n, qv[k], c);
+        let each = |c: &DMatrix<f64>| -> Result<[Expr; 3], LmiError> {
+            Ok([prod(0, c)?, prod(1, c)?, prod(2, c)?])
+        };
+        // 2 dz' T G_j x(t_k) = 2 dz' T G_j (x(s) - e).
+        let tg = Expr::product(&id_m, t, &plan.sector[j])?.transpose();
+        Ok(Terms {
+            q: [Expr::var(qv[0]), Expr::var(qv[1]), Expr::var(qv[2])],
+            qa: each(a)?,
+            qbf: each(&bf)?,
+            qb: each(b)?,
+            qd: each(&plan.d[i])?,
+            u: Expr::var(p),
+            y: Expr::var(y),
+            l: [Expr::var(l[0]), Expr::var(l[1])],
+            w: Expr::var(w),
+            s35: tg.clone(),
+            s45: Some(tg.scale(-1.0)?),
+            s55: Expr::var(t).scale(-2.0)?,
+            xi: Expr::scaled(xi, &DMatrix::identity(q, q))?,
+        })
+    };
+    let (h_min, h_max) = plan.sampling;
+    let hs: &[f64] = if reduce { &[h_max] } else { &[h_min, h_max] };
+    if reduce {
+        reductions.push(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r));
+    }
+    for &h in hs {
+        for rr in [1u8, 2] {
+            let vertex = Vertex {
+                phi: plan.phi,
+                nu: plan.nu,
+                h,
+                h_max,
+                r: rr,
+                block12: Block12::Derived,
+            };
+            let fam = Family {
+                name: format!("trigger r={rr} h={h}"),
+                q: Box::new(move |i, j| lambda(terms(i, j)?, vertex)),
+            };
+            relax(
+                &mut problem,
+                model,
+                &fam,
+                Relaxation::MembershipMismatch { kappa: 0.0 },
+                eps,
+                false,
+                &mut reductions,
+                &mut nonstrict,
+            )?;
+        }
+    }
+    // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi.
+    let level = 1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi;
+    for j in 0..r {
+        let fg = &plan.gains[j] - &plan.sector[j];
+        for (s, ub) in plan.levels.iter().enumerate() {
+            let e = Expr::sym_blocks(vec![
+                vec![
+                    Some(Expr::var(p)),
+                    Some(Expr::constant(&DMatrix::from_iterator(
+                        n,
+                        1,
+                        fg.row(s).iter().copied(),
+                    ))?),
+                ],
+                vec![
+                    None,
+                    Some(Expr::constant(&DMatrix::from_element(
+                        1,
+                        1,
+                        ub * ub / level,
+                    ))?),
+                ],
+            ])?;
+            nonstrict_psd(
+                &mut problem,
+                &mut nonstrict,
+                &format!("trigger linear region [{},{}]", j + 1, s + 1),
+                e,
+                eps,
+            )?;
+        }
+    }
+    // Output peak: [phi P, 0, C'; *, (gamma - xi) I, G'; *, *, gamma I] > 0.
+    let pdim = plan.c.nrows();
+    let peak = Expr::sym_blocks(vec![
+        vec![
+            Some(Expr::var(p).scale(plan.phi)?),
+            None,
+            Some(Expr::constant(&plan.c.transpose())?),
+        ],
+        vec![
+            None,
+            Some(
+                Expr::scaled(gamma, &DMatrix::identity(q, q))?
+                    .sub(Expr::scaled(xi, &DMatrix::identity(q, q))?)?,
+            ),
+            Some(Expr::constant(&plan.g.transpose())?),
+        ],
+        vec![
+            None,
+            None,
+            Some(Expr::scaled(gamma, &DMatrix::identity(pdim, pdim))?),
+        ],
+    ])?;
+    problem.psd("trigger linf peak", peak, eps)?;
+    problem.add_scalar("trigger xi > 0", Expr::var(xi), Relation::Ge, eps)?;
+    problem.add_scalar(
+        "trigger xi <= xi_max",
+        Expr::var(xi),
+        Relation::Le,
+        plan.xi_max,
+    )?;
+    problem.minimize(Expr::var(gamma))?;
+    Ok(TriggerBuilt {
+        problem,
+        vars: TriggerVars { p, w, gamma, xi },
+        reductions,
+        nonstrict,
+    })
+}
+
+/// Whether the spec asks for a synthesized trigger weight with the two-step
+/// method (`weight = synthesize two_step;`).
+pub fn wanted(model: &TsModel) -> bool {
+    matches!(
+        model.spec.trigger.as_ref().map(|t| &t.node),
+        Some(Trigger::Aperiodic {
+            weight: Weight::Synthesize,
+            ..
+        })
+    ) && model.spec.trigger_synthesis == Some(TriggerSynthesis::TwoStep)
+}
+
+/// The trigger problem for the gains of `design` (threshold 0: the caller sets nu).
+pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthError> {
+    let unsupported = |m: &str| SynthError::Unsupported(format!("event-trigger synthesis: {m}"));
+    let Some(Trigger::Aperiodic { sampling, .. }) = model.spec.trigger.as_ref().map(|t| &t.node)
+    else {
+        return Err(unsupported("needs an aperiodic trigger"));
+    };
+    let (Some(linf), Some(sat)) = (&design.plan.linf, &design.plan.saturation) else {
+        return Err(unsupported(
+            "needs an L-inf objective and `objective saturation region` (the shipped method is Xu & Huang's setting)",
+        ));
+    };
+    let out = &model.spec.outputs[linf.to];
+    if out.e.iter().any(|v| *v != 0.0) {
+        return Err(unsupported("the L-inf output must not depend on u"));
+    }
+    let sig = &model.spec.disturbances[linf.from];
+    let value = |name: &str| {
+        design
+            .values
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.clone())
+            .ok_or_else(|| unsupported(&format!("step-1 variable `{name}` missing")))
+    };
+    // G_j = Z_j X^{-1} = Z_j P.
+    let sector = (0..model.r())
+        .map(|j| value(&format!("Z{}", j + 1)).map(|z| z * &design.p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let xi1 = design.achieved.linf_xi.unwrap_or(0.0);
+    Ok(TriggerPlan {
+        sampling: *sampling,
+        nu: 0.0,
+        phi: linf.phi,
+        xi_max: XI_FACTOR * xi1.max(f64::EPSILON),
+        tau_bar: sat.disturbance_bound.unwrap_or(0.0),
+        levels: sat.levels.clone(),
+        gains: design.gains.clone(),
+        sector,
+        d: model
+            .rules
+            .iter()
+            .map(|r| r.d.columns(sig.offset, sig.len).into_owned())
+            .collect(),
+        c: out.c.clone(),
+        g: out.g.columns(sig.offset, sig.len).into_owned(),
+    })
+}
+
+/// xi of the event-triggered loop may be up to this multiple of step 1's xi
+/// (the region level 1 + xi tau_bar^2 / phi is computed with the bound).
+pub const XI_FACTOR: f64 = 4.0;
+
+impl Runner<'_> {
+    /// One trigger SDP at threshold `nu`: the design, or None when not solved.
+    fn trigger_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<TriggerDesign>, SynthError> {
+        let t0 = Instant::now();
+        let built =
+            build(self.model, plan, self.settings.eps, true).map_err(SynthError::Unsupported)?;
+        self.log.build_time += t0.elapsed();
+        let sol = built.problem.solve(&self.settings.solver).map_err(|e| {
+            SynthError::Unsupported(format!("solver refused the trigger problem: {e}"))
+        })?;
+        self.log.solves += 1;
+        self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
+        if sol.status != SolveStatus::Solved {
+            return Ok(None);
+        }
+        let values = sol
+            .assignment()
+            .map_err(|e| SynthError::Unsupported(format!("{e}")))?;
+        let get = |v: Var| {
+            values
+                .value(v)
+                .cloned()
+                .map_err(|e| SynthError::Unsupported(format!("{e}")))
+        };
+        let all = built
+            .problem
+            .vars()
+            .map(|(name, v)| get(v).map(|m| (name.to_string(), m)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Some(TriggerDesign {
+            plan: plan.clone(),
+            method: "two_step",
+            weight: get(built.vars.w)?,
+            p: get(built.vars.p)?,
+            gamma: get(built.vars.gamma)?[(0, 0)],
+            xi: get(built.vars.xi)?[(0, 0)],
+            nu_bracket: (plan.nu, plan.nu),
+            values: all,
+            reductions: built.reductions,
+        }))
+    }
+
+    /// The largest threshold nu (bisection) for the gains of `design`.
+    pub(super) fn trigger(
+        &mut self,
+        design: &Design,
+    ) -> Result<(TriggerDesign, Vec<String>), SynthError> {
+        let base = plan_for(self.model, design)?;
+        let with = |nu: f64| TriggerPlan { nu, ..base.clone() };
+        let Some(mut best) = self.trigger_attempt(&with(0.0))? else {
+            return Err(SynthError::Infeasible {
+                message: format!(
+                    "event trigger: the gains of the continuous design are not certified for aperiodic sampling in [{}, {}] s even with nu = 0 (every sample transmitted)",
+                    base.sampling.0, base.sampling.1
+                ),
+                achievable: Vec::new(),
+            });
+        };
+        let (mut lo, mut hi) = (0.0, 1.0);
+        while let Some(d) = self.trigger_attempt(&with(hi))? {
+            best = d;
+            lo = hi;
+            hi *= 2.0;
+            if hi > 64.0 {
+                break;
+            }
+        }
+        while hi - lo > self.settings.bisection_rel_tol.max(1e-3) * hi {
+            let mid = 0.5 * (lo + hi);
+            match self.trigger_attempt(&with(mid))? {
+                Some(d) => {
+                    best = d;
+                    lo = mid;
+                }
+                None => hi = mid,
+            }
+        }
+        best.nu_bracket = (lo, hi);
+        let notes = vec![format!(
+            "trigger threshold nu maximized by bisection for the fixed gains: feasible at {lo:.6}, not at {hi:.6}; event-triggered L-inf gamma at that nu = {:.6} (xi = {:.6})",
+            best.gamma, best.xi
+        )];
+        Ok((best, notes))
+    }
+}
