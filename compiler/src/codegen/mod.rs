@@ -50,8 +50,14 @@ pub fn generate(
             Emit::C => {
                 let files = c::emit_c(&t);
                 let (h, src) = c::c_file_names(&t);
-                out.push(GeneratedFile { name: h, text: files.header });
-                out.push(GeneratedFile { name: src, text: files.source });
+                out.push(GeneratedFile {
+                    name: h,
+                    text: files.header,
+                });
+                out.push(GeneratedFile {
+                    name: src,
+                    text: files.source,
+                });
             }
         }
     }

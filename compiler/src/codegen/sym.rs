@@ -112,8 +112,8 @@ impl Sym {
     fn div(a: Sym, b: Sym) -> Sym {
         match (a, b) {
             (Sym::Const(x), Sym::Const(y)) => c(x / y),
-            (e, Sym::Const(o)) if o == 1.0 => e,
-            (Sym::Const(z), _) if z == 0.0 => c(0.0),
+            (e, Sym::Const(1.0)) => e,
+            (Sym::Const(0.0), _) => c(0.0),
             (a, b) => Sym::Div(Box::new(a), Box::new(b)),
         }
     }

@@ -506,13 +506,12 @@ fn build_inner(
             }
             _ => 1.0,
         };
-        for j in 0..r {
+        for (j, (&mj, &zj)) in vars.m.iter().zip(zs).enumerate() {
             for (k, level) in sat.levels.iter().enumerate() {
                 let mut sel = DMatrix::zeros(1, m);
                 sel[(0, k)] = 1.0;
                 let id = DMatrix::identity(n, n);
-                let row =
-                    Expr::product(&sel, vars.m[j], &id)?.sub(Expr::product(&sel, zs[j], &id)?)?;
+                let row = Expr::product(&sel, mj, &id)?.sub(Expr::product(&sel, zj, &id)?)?;
                 let e = Expr::sym_blocks(vec![
                     vec![Some(Expr::var(x)), Some(row.transpose())],
                     vec![
