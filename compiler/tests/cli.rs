@@ -242,3 +242,15 @@ fn a_failed_compile_leaves_earlier_outputs_untouched() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The README's first command is `cargo run --release -p tsfc -- compile ...`:
+/// with several binaries in the package, cargo needs `default-run`.
+#[test]
+fn readme_command_runs_the_tsfc_binary_by_default() {
+    let manifest =
+        std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml"))
+            .expect("manifest");
+    assert!(manifest.contains("default-run = \"tsfc\""));
+    let readme = std::fs::read_to_string(fixture("README.md")).expect("README");
+    assert!(readme.contains("cargo run --release -p tsfc -- compile specs/"));
+}
