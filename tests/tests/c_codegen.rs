@@ -10,15 +10,12 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
-use tsf_lang::spec::SetShape;
 use tsf_runtime::{
-    math, AdaptiveTrigger, Controller, Membership, MixedTrigger, PeriodicTrigger, RelativeTrigger,
-    Rule, Term,
+    math, AdaptiveTrigger, Controller, MixedTrigger, PeriodicTrigger, RelativeTrigger, Rule,
 };
 use tsfc::codegen::c::{c_file_names, emit_c, CFiles};
 use tsfc::codegen::sym::{Func, Sym};
 use tsfc::codegen::{PremiseCode, Tables};
-use tsfc::model::TermSpec;
 
 /// Shipped specs the generator is tested on; the first two must compile.
 const SPECS: [(&str, bool); 3] = [
@@ -298,39 +295,7 @@ struct Row {
     nu: f64,
 }
 
-fn membership(s: SetShape) -> Membership<f64> {
-    match s {
-        SetShape::Tri(a, b, c) => Membership::tri(a, b, c),
-        SetShape::Trap(a, b, c, d) => Membership::trap(a, b, c, d),
-        SetShape::Gauss(c, s) => Membership::gauss(c, s),
-        SetShape::Sigmoid(k, c) => Membership::sigmoid(k, c),
-    }
-}
-
-fn runtime_terms(t: &Tables) -> Vec<Vec<Term<'_, f64>>> {
-    t.terms
-        .iter()
-        .map(|rule| {
-            rule.iter()
-                .map(|term| match term {
-                    TermSpec::Is { var, set } => Term::Is {
-                        var: *var,
-                        set: membership(*set),
-                    },
-                    TermSpec::About {
-                        first,
-                        point,
-                        sigma,
-                    } => Term::About {
-                        first: *first,
-                        point,
-                        sigma: *sigma,
-                    },
-                })
-                .collect()
-        })
-        .collect()
-}
+use tsfc::sim::controller::runtime_terms;
 
 /// A premise expression evaluated with the runtime's elementary functions.
 fn eval_sym(s: &Sym, x: &[f64]) -> f64 {

@@ -86,11 +86,10 @@ pub fn membership(s: SetShape) -> Membership<f64> {
     }
 }
 
-/// Rule weight (product t-norm) at premise vector `z`, computed by the runtime.
-pub fn rule_weight(terms: &[TermSpec], z: &[f64]) -> f64 {
-    let rt: Vec<Term<'_, f64>> = terms
-        .iter()
-        .map(|t| match t {
+impl TermSpec {
+    /// The runtime's term for this conjunct (borrowing an `about` point).
+    pub fn runtime(&self) -> Term<'_, f64> {
+        match self {
             TermSpec::Is { var, set } => Term::Is {
                 var: *var,
                 set: membership(*set),
@@ -104,8 +103,13 @@ pub fn rule_weight(terms: &[TermSpec], z: &[f64]) -> f64 {
                 point,
                 sigma: *sigma,
             },
-        })
-        .collect();
+        }
+    }
+}
+
+/// Rule weight (product t-norm) at premise vector `z`, computed by the runtime.
+pub fn rule_weight(terms: &[TermSpec], z: &[f64]) -> f64 {
+    let rt: Vec<Term<'_, f64>> = terms.iter().map(TermSpec::runtime).collect();
     Rule::new(&rt).weight(z)
 }
 

@@ -12,7 +12,6 @@
 use super::SimError;
 use crate::codegen::{PremiseCode, Tables};
 use crate::model::TermSpec;
-use tsf_lang::spec::SetShape;
 use tsf_runtime::{premises_linear, Controller, Flags, Membership, Rule, Term};
 
 /// A padding rule's only term: premise index `usize::MAX` is out of range, degree 0.
@@ -21,40 +20,12 @@ static NEVER: [Term<'static, f64>; 1] = [Term::Is {
     set: Membership::tri(0.0, 0.0, 0.0),
 }];
 
-/// The runtime's membership for a set shape.
-fn membership(s: SetShape) -> Membership<f64> {
-    match s {
-        SetShape::Tri(a, b, c) => Membership::tri(a, b, c),
-        SetShape::Trap(a, b, c, d) => Membership::trap(a, b, c, d),
-        SetShape::Gauss(c, s) => Membership::gauss(c, s),
-        SetShape::Sigmoid(k, c) => Membership::sigmoid(k, c),
-    }
-}
-
 /// The runtime terms of every rule (borrowing `about` points from the tables).
 pub fn runtime_terms(tables: &Tables) -> Vec<Vec<Term<'_, f64>>> {
     tables
         .terms
         .iter()
-        .map(|rule| {
-            rule.iter()
-                .map(|t| match t {
-                    TermSpec::Is { var, set } => Term::Is {
-                        var: *var,
-                        set: membership(*set),
-                    },
-                    TermSpec::About {
-                        first,
-                        point,
-                        sigma,
-                    } => Term::About {
-                        first: *first,
-                        point,
-                        sigma: *sigma,
-                    },
-                })
-                .collect()
-        })
+        .map(|rule| rule.iter().map(TermSpec::runtime).collect())
         .collect()
 }
 
