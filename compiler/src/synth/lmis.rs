@@ -48,6 +48,22 @@ pub struct Built {
     pub nonstrict: Vec<String>,
 }
 
+/// Row `k` of `L v` as an expression (`v` has `m` rows and `n` columns).
+pub(super) fn var_row(v: Var, k: usize, m: usize, n: usize) -> Result<Expr, LmiError> {
+    let mut sel = DMatrix::zeros(1, m);
+    sel[(0, k)] = 1.0;
+    Expr::product(&sel, v, &DMatrix::identity(n, n))
+}
+
+/// The linear-region block `[W, row'; *, rhs]` (>= 0 puts the ellipsoid of
+/// `W` inside `|row x| <= sqrt(rhs)`, by a Schur complement).
+pub(super) fn region_block(w: Expr, row: Expr, rhs: Expr) -> Result<Expr, LmiError> {
+    Expr::sym_blocks(vec![
+        vec![Some(w), Some(row.transpose())],
+        vec![None, Some(rhs)],
+    ])
+}
+
 /// Adds `E >= 0` (non-strict in the theory), solved as `E >= eps I`.
 pub(super) fn nonstrict_psd(
     problem: &mut Problem,
@@ -508,21 +524,9 @@ fn build_inner(
         };
         for (j, (&mj, &zj)) in vars.m.iter().zip(zs).enumerate() {
             for (k, level) in sat.levels.iter().enumerate() {
-                let mut sel = DMatrix::zeros(1, m);
-                sel[(0, k)] = 1.0;
-                let id = DMatrix::identity(n, n);
-                let row = Expr::product(&sel, mj, &id)?.sub(Expr::product(&sel, zj, &id)?)?;
-                let e = Expr::sym_blocks(vec![
-                    vec![Some(Expr::var(x)), Some(row.transpose())],
-                    vec![
-                        None,
-                        Some(Expr::constant(&DMatrix::from_element(
-                            1,
-                            1,
-                            level * level / shrink,
-                        ))?),
-                    ],
-                ])?;
+                let row = var_row(mj, k, m, n)?.sub(var_row(zj, k, m, n)?)?;
+                let rhs = Expr::constant(&DMatrix::from_element(1, 1, level * level / shrink))?;
+                let e = region_block(Expr::var(x), row, rhs)?;
                 nonstrict_psd(
                     &mut problem,
                     &mut nonstrict,

@@ -19,6 +19,7 @@
 //! blocks of size 30-36, (39) alone is a 420 x 420 LMI per r with ~1e5 slack
 //! unknowns in P_ijr, G_ijr, K_ijr, beyond what Clarabel solves here.
 
+use super::lmis::{region_block, var_row};
 use super::relaxation::{relax, Family};
 use super::sampled::{lambda, Block12, Terms, Vertex};
 use super::{Settings, SynthError};
@@ -220,16 +221,12 @@ pub fn build(model: &TsModel, p: &Theorem2Plan, eps: f64) -> Result<(Problem, Va
     let level = 1.0 + p.xi * p.tau_bar * p.tau_bar / p.phi;
     for j in 0..r {
         for (k, ub) in p.levels.iter().enumerate() {
-            let mut sel = DMatrix::zeros(1, m);
-            sel[(0, k)] = 1.0;
-            let row = Expr::product(&sel, f[j], &id_n)?.sub(Expr::product(&sel, nh[j], &id_n)?)?;
-            let e = Expr::sym_blocks(vec![
-                vec![
-                    Some(Expr::var(uh).scale(ub * ub / level)?),
-                    Some(row.transpose()),
-                ],
-                vec![None, Some(Expr::identity(1))],
-            ])?;
+            let row = var_row(f[j], k, m, n)?.sub(var_row(nh[j], k, m, n)?)?;
+            let e = region_block(
+                Expr::var(uh).scale(ub * ub / level)?,
+                row,
+                Expr::identity(1),
+            )?;
             problem.psd(&format!("(40) [{},{}]", j + 1, k + 1), e, eps)?;
         }
     }

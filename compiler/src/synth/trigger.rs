@@ -16,7 +16,7 @@
 //! Every term is linear in the unknowns because F_j and G_j are constants.
 //! nu enters as nu W: the largest nu is found by bisection.
 
-use super::lmis::nonstrict_psd;
+use super::lmis::{nonstrict_psd, region_block};
 use super::relaxation::{relax, Family};
 use super::sampled::{lambda, Block12, Terms, Vertex};
 use super::{Design, Runner, SynthError, TriggerDesign};
@@ -182,24 +182,9 @@ fn build_inner(
     for j in 0..r {
         let fg = &plan.gains[j] - &plan.sector[j];
         for (s, ub) in plan.levels.iter().enumerate() {
-            let e = Expr::sym_blocks(vec![
-                vec![
-                    Some(Expr::var(p)),
-                    Some(Expr::constant(&DMatrix::from_iterator(
-                        n,
-                        1,
-                        fg.row(s).iter().copied(),
-                    ))?),
-                ],
-                vec![
-                    None,
-                    Some(Expr::constant(&DMatrix::from_element(
-                        1,
-                        1,
-                        ub * ub / level,
-                    ))?),
-                ],
-            ])?;
+            let row = Expr::constant(&DMatrix::from_iterator(1, n, fg.row(s).iter().copied()))?;
+            let rhs = Expr::constant(&DMatrix::from_element(1, 1, ub * ub / level))?;
+            let e = region_block(Expr::var(p), row, rhs)?;
             nonstrict_psd(
                 &mut problem,
                 &mut nonstrict,
