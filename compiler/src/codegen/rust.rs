@@ -163,6 +163,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, String> {
                     let len = Literal::usize_unsuffixed(point.len());
                     let vals = array(point, prec);
                     statics.push(quote! {
+                        #[allow(clippy::approx_constant, clippy::excessive_precision)]
                         static #pt: [#ty; #len] = #vals;
                     });
                     let first = Literal::usize_unsuffixed(*first);
@@ -178,6 +179,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, String> {
         );
         statics.push(quote! {
             #[doc = #doc]
+            #[allow(clippy::approx_constant, clippy::excessive_precision)]
             static #terms_ident: [Term<'static, #ty>; #count] = [#(#items),*];
         });
         rule_refs.push(quote!(Rule::new(&#terms_ident)));
