@@ -2075,6 +2075,7 @@ impl<'a> Checker<'a> {
                             return None;
                         }
                         let mut adaptive = None;
+                        let mut max = None;
                         for m in &s.modifiers {
                             if m.name.node != "adaptive" {
                                 self.err(
@@ -2082,11 +2083,25 @@ impl<'a> Checker<'a> {
                                         m.name.span,
                                         format!("unknown threshold modifier `{}`", m.name.node),
                                     )
-                                    .with_help("write `adaptive(mu1 = .., mu2 = .., mu3 = ..)`"),
+                                    .with_help("write `adaptive(mu1 = .., mu2 = .., mu3 = ..)` or `adaptive(mu1 = .., mu2 = .., mu3 = .., max = ..)`"),
                                 );
                                 return None;
                             }
-                            let p = self.named(&m.args, &["mu1", "mu2", "mu3"], "`adaptive`")?;
+                            let p =
+                                self.named(&m.args, &["mu1", "mu2", "mu3", "max"], "`adaptive`")?;
+                            if let Some(&top) = p.get("max") {
+                                if top < nu {
+                                    self.err(
+                                        Diagnostic::error(
+                                            m.name.span,
+                                            format!("the adaptive ceiling max = {top} is below the threshold nu = {nu}"),
+                                        )
+                                        .with_help("the law keeps nu(t_k) in [nu, max]: give max >= nu"),
+                                    );
+                                    return None;
+                                }
+                                max = Some(top);
+                            }
                             match (p.get("mu1"), p.get("mu2"), p.get("mu3")) {
                                 (Some(a), Some(b), Some(c)) => adaptive = Some((*a, *b, *c)),
                                 _ => {
@@ -2098,7 +2113,7 @@ impl<'a> Checker<'a> {
                                 }
                             }
                         }
-                        Some(Threshold { nu, adaptive })
+                        Some(Threshold { nu, adaptive, max })
                     }
                     None => None,
                 };

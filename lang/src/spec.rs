@@ -238,6 +238,16 @@ pub struct Threshold {
     pub nu: f64,
     /// Adaptive law parameters (mu1, mu2, mu3), if adaptive.
     pub adaptive: Option<(f64, f64, f64)>,
+    /// Ceiling of the adaptive law (`adaptive(.., max = ..)`): the threshold the
+    /// event-triggered loop is certified for; `nu` itself when absent.
+    pub max: Option<f64>,
+}
+
+impl Threshold {
+    /// The largest threshold nu(t_k) the trigger may use: the certified one.
+    pub fn ceiling(&self) -> f64 {
+        self.max.unwrap_or(self.nu)
+    }
 }
 
 /// Trigger weight: given, or synthesized.

@@ -136,9 +136,11 @@ impl<T: Real, const N: usize> RelativeTrigger<T, N> {
 ///
 /// Evaluated as `g = (mu1 * (2/pi)) * atan(mu2 * (||e|| - mu3))`,
 /// `cand = nu * (1 - g)`, `||.||` Euclidean. Floating-point additions to the
-/// law: `cand` is clamped to `<= T::MAX` (the law is unbounded above;
-/// an infinite `nu` would make `nu * 0` NaN), and a NaN `cand` resets `nu`
-/// to `nu_min`. The first transmission has no previous state and leaves
+/// law: `cand` is clamped to `<= nu_max` ([`AdaptiveTrigger::with_max`];
+/// `T::MAX` by default: the law is unbounded above and an infinite `nu` would
+/// make `nu * 0` NaN), and a NaN `cand` resets `nu` to `nu_min`. A stability
+/// certificate obtained for `nu <= nu_cert` holds for the adaptive law only
+/// with `nu_max = nu_cert`. The first transmission has no previous state and leaves
 /// `nu` unchanged.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdaptiveTrigger<T, const N: usize> {
@@ -151,6 +153,8 @@ pub struct AdaptiveTrigger<T, const N: usize> {
     pub mu3: T,
     /// Lower bound `nu_min` (the paper's underlined nu), also `nu(0)`.
     pub nu_min: T,
+    /// Upper bound `nu_max` of the law (`T::MAX` unless set by [`AdaptiveTrigger::with_max`]).
+    pub nu_max: T,
 }
 
 impl<T: Real, const N: usize> AdaptiveTrigger<T, N> {
@@ -162,7 +166,15 @@ impl<T: Real, const N: usize> AdaptiveTrigger<T, N> {
             mu2,
             mu3,
             nu_min,
+            nu_max: T::MAX,
         }
+    }
+
+    /// The same trigger with `nu(t_k)` kept `<= nu_max` (`nu_max >= nu_min`;
+    /// a smaller value is raised to `nu_min`).
+    pub const fn with_max(mut self, nu_max: T) -> Self {
+        self.nu_max = nu_max;
+        self
     }
 
     /// Current threshold `nu(t_k)`.
@@ -185,8 +197,13 @@ impl<T: Real, const N: usize> AdaptiveTrigger<T, N> {
             let g = (self.mu1 * T::FRAC_2_PI) * (self.mu2 * (norm(&e) - self.mu3)).atan();
             let cand = self.inner.nu * (T::ONE - g);
             self.inner.nu = if cand >= self.nu_min {
-                if cand > T::MAX {
-                    T::MAX
+                if cand > self.nu_max {
+                    // nu_max < nu_min (misuse) keeps nu_min.
+                    if self.nu_max >= self.nu_min {
+                        self.nu_max
+                    } else {
+                        self.nu_min
+                    }
                 } else {
                     cand
                 }

@@ -222,6 +222,30 @@ fn adaptive_trigger_law() {
 }
 
 #[test]
+fn adaptive_trigger_ceiling() {
+    // States alternate between 0 and 0.01: every sample transmits while nu <= 1
+    // (e^2 = 1e-4 >= nu * x_k^2 with x_k in {0, 0.01}) and every jump
+    // ||dx|| = 0.01 < mu3 makes the law grow nu by 1 + (20/pi) atan(0.01) = 1.064.
+    let (mu1, mu2, mu3) = (10.0, 1.0, 0.02);
+    let mut free = AdaptiveTrigger::new([[1.0]], 0.01, mu1, mu2, mu3);
+    let mut capped = free.with_max(0.05);
+    for k in 0..60 {
+        let x = [if k % 2 == 0 { 0.0 } else { 0.01 }];
+        assert!(free.decide(&x) && capped.decide(&x), "sample {k} transmits");
+        assert!((0.01..=0.05).contains(&capped.nu()), "{}", capped.nu());
+    }
+    // The law itself leaves the ceiling (so the assertion above can fail).
+    assert!(free.nu() > 0.2, "unbounded law: {}", free.nu());
+    assert_eq!(capped.nu(), 0.05);
+    // A ceiling below nu_min keeps nu_min.
+    let mut low = AdaptiveTrigger::new([[1.0]], 0.2, mu1, mu2, mu3).with_max(0.1);
+    for x in [0.0, 0.01, 0.0, 0.01] {
+        low.decide(&[x]);
+    }
+    assert_eq!(low.nu(), 0.2);
+}
+
+#[test]
 fn mixed_trigger() {
     let mut t = MixedTrigger::new(0.5, 0.01);
     assert!(t.decide(&[1.0, 0.0, 0.0]));

@@ -40,7 +40,11 @@ impl Default for Settings {
     fn default() -> Self {
         Settings {
             eps: 1e-7,
-            solver: SolveSettings::default(),
+            solver: SolveSettings {
+                // TSFC_SOLVER_VERBOSE=1 prints Clarabel's iteration log (diagnosis of slow solves).
+                verbose: std::env::var_os("TSFC_SOLVER_VERBOSE").is_some_and(|v| v == "1"),
+                ..SolveSettings::default()
+            },
             bisection_rel_tol: 1e-3,
             default_phi: 0.1,
         }

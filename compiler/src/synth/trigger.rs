@@ -18,7 +18,6 @@
 
 use super::lmis::{nonstrict_psd, region_block};
 use super::relaxation::{relax, Family};
-use super::sampled::{lambda, Block12, Terms, Vertex};
 use super::{Design, Runner, SynthError, TriggerDesign};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -79,6 +78,83 @@ pub struct TriggerBuilt {
     pub nonstrict: Vec<String>,
 }
 
+/// The unknowns entering Lambda_{ij r}(h).
+#[derive(Debug, Clone, Copy)]
+struct LoopVars {
+    p: Var,
+    y: Var,
+    l: [Var; 2],
+    w: Var,
+    t: Var,
+    xi: Var,
+}
+
+/// Selector of rows `at .. at + len` of a vector of length `k`, as a `len x k` matrix.
+fn pick(len: usize, at: usize, k: usize) -> DMatrix<f64> {
+    DMatrix::from_fn(len, k, |r, c| if c == at + r { 1.0 } else { 0.0 })
+}
+
+/// Lambda_{ij r}(h) with the derivative eliminated (gains fixed, so
+/// x' = Phi_ij psi with a constant Phi_ij and every term is linear in the
+/// unknowns). psi = [x; x(s); e; dz; tau] (size 3n + m + q):
+///
+///   Xi = He(E_x' P Phi) + phi E_x' P E_x + He([E_x; E_s]' L (E_x - E_s))
+///        + nu (E_s - E_e)' W (E_s - E_e) - E_e' W E_e
+///        + He(E_dz' T G_j (E_s - E_e)) - 2 E_dz' T E_dz - xi E_tau' E_tau,
+///   r = 1: Xi + h Phi' Y Phi,
+///   r = 2: [Xi, sqrt(h) (E_x' L1 + E_s' L2); *, -e^{-phi h_max} Y].
+///
+/// Plant rule i and controller rule j differ (membership mismatch), so the
+/// bound Phi(h)' Y Phi(h) <= sum h_i h_j Phi_ij' Y Phi_ij (convexity, Y > 0)
+/// makes the vertex conditions sufficient.
+fn lambda(
+    model: &TsModel,
+    plan: &TriggerPlan,
+    v: &LoopVars,
+    (i, j): (usize, usize),
+    h: f64,
+    r: u8,
+) -> Result<Expr, LmiError> {
+    let (n, m) = (model.n, model.m);
+    let q = plan.d[i].ncols();
+    let k = 3 * n + m + q;
+    let (ex, es, ee) = (pick(n, 0, k), pick(n, n, k), pick(n, 2 * n, k));
+    let (edz, etau) = (pick(m, 3 * n, k), pick(q, 3 * n + m, k));
+    let b = &model.rules[i].b;
+    let bf = b * &plan.gains[j];
+    let phi_m = &model.rules[i].a * &ex + &bf * (&es - &ee) - b * &edz + &plan.d[i] * &etau;
+    let s_e = &es - &ee;
+    let exs = &ex - &es;
+    let xi_block = Expr::product(&ex.transpose(), v.p, &phi_m)?
+        .he()?
+        .add(Expr::product(&ex.transpose(), v.p, &ex)?.scale(plan.phi)?)?
+        .add(
+            Expr::product(&ex.transpose(), v.l[0], &exs)?
+                .add(Expr::product(&es.transpose(), v.l[1], &exs)?)?
+                .he()?,
+        )?
+        .add(Expr::product(&s_e.transpose(), v.w, &s_e)?.scale(plan.nu)?)?
+        .sub(Expr::product(&ee.transpose(), v.w, &ee)?)?
+        .add(Expr::product(&edz.transpose(), v.t, &(&plan.sector[j] * &s_e))?.he()?)?
+        .sub(Expr::product(&edz.transpose(), v.t, &edz)?.scale(2.0)?)?
+        .sub(Expr::scaled(v.xi, &(etau.transpose() * &etau))?)?;
+    if r == 1 {
+        return xi_block.add(Expr::product(&phi_m.transpose(), v.y, &phi_m)?.scale(h)?);
+    }
+    let id = DMatrix::identity(n, n);
+    let col = Expr::product(&ex.transpose(), v.l[0], &id)?
+        .add(Expr::product(&es.transpose(), v.l[1], &id)?)?
+        .scale(h.sqrt())?;
+    let (_, h_max) = plan.sampling;
+    Expr::sym_blocks(vec![
+        vec![Some(xi_block), Some(col)],
+        vec![
+            None,
+            Some(Expr::var(v.y).scale(-(-plan.phi * h_max).exp())?),
+        ],
+    ])
+}
+
 /// Builds the trigger LMIs. With `reduce`, the h = h_min vertices are left
 /// out: every Lambda_r(h) is Xi + h Pi_r with Pi_r >= 0, so h_max implies them.
 pub fn build(
@@ -104,11 +180,6 @@ fn build_inner(
     let y = problem.symmetric("Ytr", n)?;
     let w = problem.symmetric("Upsilon", n)?;
     let l = [problem.full("L1", n, n)?, problem.full("L2", n, n)?];
-    let qv = [
-        problem.full("Q1", n, n)?,
-        problem.full("Q2", n, n)?,
-        problem.full("Q3", n, n)?,
-    ];
     let t = problem.diagonal("T", m)?;
     let gamma = problem.scalar("gamma_tr")?;
     let xi = problem.scalar("xi_tr")?;
@@ -118,34 +189,7 @@ fn build_inner(
     problem.psd("trigger Y > 0", Expr::var(y), eps)?;
     problem.psd("trigger Upsilon > 0", Expr::var(w), eps)?;
     problem.psd("trigger T > 0", Expr::var(t), eps)?;
-    let id_n = DMatrix::identity(n, n);
-    let id_m = DMatrix::identity(m, m);
-    let terms = |i: usize, j: usize| -> Result<Terms, LmiError> {
-        let a = &model.rules[i].a;
-        let b = &model.rules[i].b;
-        let bf = b * &plan.gains[j];
-        let prod = |k: usize, c: &DMatrix<f64>| Expr::product(&id_n, qv[k], c);
-        let each = |c: &DMatrix<f64>| -> Result<[Expr; 3], LmiError> {
-            Ok([prod(0, c)?, prod(1, c)?, prod(2, c)?])
-        };
-        // 2 dz' T G_j x(t_k) = 2 dz' T G_j (x(s) - e).
-        let tg = Expr::product(&id_m, t, &plan.sector[j])?.transpose();
-        Ok(Terms {
-            q: [Expr::var(qv[0]), Expr::var(qv[1]), Expr::var(qv[2])],
-            qa: each(a)?,
-            qbf: each(&bf)?,
-            qb: each(b)?,
-            qd: each(&plan.d[i])?,
-            u: Expr::var(p),
-            y: Expr::var(y),
-            l: [Expr::var(l[0]), Expr::var(l[1])],
-            w: Expr::var(w),
-            s35: tg.clone(),
-            s45: Some(tg.scale(-1.0)?),
-            s55: Expr::var(t).scale(-2.0)?,
-            xi: Expr::scaled(xi, &DMatrix::identity(q, q))?,
-        })
-    };
+    let vars = LoopVars { p, y, l, w, t, xi };
     let (h_min, h_max) = plan.sampling;
     let hs: &[f64] = if reduce { &[h_max] } else { &[h_min, h_max] };
     if reduce {
@@ -153,17 +197,9 @@ fn build_inner(
     }
     for &h in hs {
         for rr in [1u8, 2] {
-            let vertex = Vertex {
-                phi: plan.phi,
-                nu: plan.nu,
-                h,
-                h_max,
-                r: rr,
-                block12: Block12::Derived,
-            };
             let fam = Family {
                 name: format!("trigger r={rr} h={h}"),
-                q: Box::new(move |i, j| lambda(terms(i, j)?, vertex)),
+                q: Box::new(move |i, j| lambda(model, plan, &vars, (i, j), h, rr)),
             };
             relax(
                 &mut problem,
@@ -234,7 +270,7 @@ fn build_inner(
 }
 
 /// Whether the spec asks for a synthesized trigger weight with the two-step
-/// method (`weight = synthesize two_step;`).
+/// method (`weight = synthesize;`, the default, or `weight = synthesize two_step;`).
 pub fn wanted(model: &TsModel) -> bool {
     matches!(
         model.spec.trigger.as_ref().map(|t| &t.node),
@@ -242,7 +278,10 @@ pub fn wanted(model: &TsModel) -> bool {
             weight: Weight::Synthesize,
             ..
         })
-    ) && model.spec.trigger_synthesis == Some(TriggerSynthesis::TwoStep)
+    ) && matches!(
+        model.spec.trigger_synthesis,
+        None | Some(TriggerSynthesis::TwoStep)
+    )
 }
 
 /// The trigger problem for the gains of `design` (threshold 0: the caller sets nu).
@@ -340,46 +379,66 @@ impl Runner<'_> {
         }))
     }
 
-    /// The largest threshold nu (bisection) for the gains of `design`.
+    /// The trigger for the gains of `design` at the spec's certified threshold
+    /// (the adaptive ceiling `max`, else `nu`; 0 without a threshold). When that
+    /// threshold is not certified, the largest one that is (bisection) goes into
+    /// the error.
     pub(super) fn trigger(
         &mut self,
         design: &Design,
     ) -> Result<(TriggerDesign, Vec<String>), SynthError> {
         let base = plan_for(self.model, design)?;
         let with = |nu: f64| TriggerPlan { nu, ..base.clone() };
-        let Some(mut best) = self.trigger_attempt(&with(0.0))? else {
+        let target = certified_threshold(self.model);
+        if let Some(d) = self.trigger_attempt(&with(target))? {
+            let notes = vec![format!(
+                "event trigger certified for nu(t_k) <= {target} with the fixed gains: L-inf gamma of the event-triggered loop = {:.6} (xi = {:.6})",
+                d.gamma, d.xi
+            )];
+            return Ok((d, notes));
+        }
+        let sampling = format!(
+            "aperiodic sampling in [{}, {}] s",
+            base.sampling.0, base.sampling.1
+        );
+        if target == 0.0 || self.trigger_attempt(&with(0.0))?.is_none() {
             return Err(SynthError::Infeasible {
                 message: format!(
-                    "event trigger: the gains of the continuous design are not certified for aperiodic sampling in [{}, {}] s even with nu = 0 (every sample transmitted)",
-                    base.sampling.0, base.sampling.1
+                    "event trigger: the gains of the continuous design are not certified for {sampling} even with nu = 0 (every sample transmitted)"
                 ),
-                achievable: Vec::new(),
+                achievable: vec!["shorten h_max or weaken the objectives that set the gains".into()],
             });
-        };
-        let (mut lo, mut hi) = (0.0, 1.0);
-        while let Some(d) = self.trigger_attempt(&with(hi))? {
-            best = d;
-            lo = hi;
-            hi *= 2.0;
-            if hi > 64.0 {
-                break;
-            }
         }
-        while hi - lo > self.settings.bisection_rel_tol.max(1e-3) * hi {
+        let (mut lo, mut hi) = (0.0, target);
+        while hi - lo > TRIGGER_NU_REL_TOL * hi {
             let mid = 0.5 * (lo + hi);
-            match self.trigger_attempt(&with(mid))? {
-                Some(d) => {
-                    best = d;
-                    lo = mid;
-                }
-                None => hi = mid,
+            if self.trigger_attempt(&with(mid))?.is_some() {
+                lo = mid;
+            } else {
+                hi = mid;
             }
         }
-        best.nu_bracket = (lo, hi);
-        let notes = vec![format!(
-            "trigger threshold nu maximized by bisection for the fixed gains: feasible at {lo:.6}, not at {hi:.6}; event-triggered L-inf gamma at that nu = {:.6} (xi = {:.6})",
-            best.gamma, best.xi
-        )];
-        Ok((best, notes))
+        Err(SynthError::Infeasible {
+            message: format!(
+                "event trigger: threshold nu = {target} is not certified for the gains with {sampling}"
+            ),
+            achievable: vec![format!(
+                "the largest certified threshold is in [{lo:.4}, {hi:.4}]: write `threshold nu = {lo:.4}` (or `adaptive(.., max = {lo:.4})`)"
+            )],
+        })
+    }
+}
+
+/// Relative width at which the diagnostic nu bisection stops.
+const TRIGGER_NU_REL_TOL: f64 = 0.05;
+
+/// The threshold the trigger LMIs are solved for: the adaptive law's ceiling,
+/// else the static nu, else 0 (no threshold: every sample transmitted).
+pub fn certified_threshold(model: &TsModel) -> f64 {
+    match model.spec.trigger.as_ref().map(|t| &t.node) {
+        Some(Trigger::Aperiodic {
+            threshold: Some(t), ..
+        }) => t.ceiling(),
+        _ => 0.0,
     }
 }
