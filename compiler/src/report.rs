@@ -94,14 +94,13 @@ pub struct RegionOfAttraction {
 pub struct TriggerReport {
     /// Upsilon (n x n rows).
     pub weight: Vec<Vec<f64>>,
-    /// Largest certified threshold nu.
+    /// Certified threshold: the loop is certified for every nu(t_k) <= nu (the
+    /// adaptive law's ceiling `max`, else the spec's nu).
     pub nu: f64,
-    /// (feasible, infeasible) bracket of the nu bisection.
-    pub nu_bracket: [f64; 2],
-    /// The spec's threshold (the adaptive law's lower bound), if any.
-    pub nu_spec: Option<f64>,
-    /// Whether the spec's threshold is within the certified one.
-    pub nu_spec_certified: Option<bool>,
+    /// The spec's threshold (the adaptive law's lower bound and nu(0)), if any.
+    pub nu_min: Option<f64>,
+    /// Adaptive law (mu1, mu2, mu3), if any.
+    pub adaptive: Option<[f64; 3]>,
     /// [h_min, h_max] in s.
     pub sampling: [f64; 2],
     /// Design method.
@@ -357,10 +356,8 @@ pub fn report(
 }
 
 fn trigger_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> TriggerReport {
-    let nu_spec = match model.spec.trigger.as_ref().map(|t| &t.node) {
-        Some(tsf_lang::spec::Trigger::Aperiodic { threshold, .. }) => {
-            threshold.as_ref().map(|th| th.nu)
-        }
+    let threshold = match model.spec.trigger.as_ref().map(|t| &t.node) {
+        Some(tsf_lang::spec::Trigger::Aperiodic { threshold, .. }) => threshold.as_ref(),
         _ => None,
     };
     let mut eig: Vec<f64> = t
@@ -375,9 +372,10 @@ fn trigger_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> TriggerRe
     TriggerReport {
         weight: rows(&t.weight),
         nu: t.plan.nu,
-        nu_bracket: [t.nu_bracket.0, t.nu_bracket.1],
-        nu_spec,
-        nu_spec_certified: nu_spec.map(|v| v <= t.plan.nu),
+        nu_min: threshold.map(|th| th.nu),
+        adaptive: threshold
+            .and_then(|th| th.adaptive)
+            .map(|(a, b, c)| [a, b, c]),
         sampling: [t.plan.sampling.0, t.plan.sampling.1],
         method: t.method,
         linf_gamma: t.gamma,

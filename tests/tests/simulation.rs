@@ -144,18 +144,23 @@ fn lowering_nu_raises_the_transmission_count() {
             "xu2020_event_triggered.tsf",
             &Options {
                 horizon: Some(40.0),
-                trigger: Some(aperiodic(Some(Threshold { nu, adaptive: None }))),
+                trigger: Some(aperiodic(Some(Threshold {
+                    nu,
+                    adaptive: None,
+                    max: None,
+                }))),
                 ..Options::default()
             },
         )
         .metrics
         .transmissions
     };
-    let (low, high) = (count(0.02), count(0.2));
-    eprintln!("static trigger over 40 s: nu = 0.02 -> {low}, nu = 0.2 -> {high} transmissions");
+    // Both thresholds are within the certified nu <= 0.05.
+    let (low, high) = (count(0.01), count(0.05));
+    eprintln!("static trigger over 40 s: nu = 0.01 -> {low}, nu = 0.05 -> {high} transmissions");
     assert!(
         low > high,
-        "nu = 0.02: {low} transmissions, nu = 0.2: {high}"
+        "nu = 0.01: {low} transmissions, nu = 0.05: {high}"
     );
 }
 

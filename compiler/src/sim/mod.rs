@@ -187,14 +187,10 @@ pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
     };
     let tables = crate::codegen::tables(&model, &design, &cert, &source.name, &sha)
         .map_err(SimError::spec)?;
-    // The design stores a co-designed trigger weight as the variable `Upsilon`
-    // when synthesis produces one; otherwise `weight = synthesize` falls back to
-    // P / lambda_max(P) (see `trigger::trigger_weight`).
-    let trigger_weight = design
-        .values
-        .iter()
-        .find(|(name, _)| name == "Upsilon")
-        .map(|(_, v)| v.clone());
+    // The synthesized trigger weight Upsilon (two-step method); without one,
+    // `weight = synthesize` falls back to P / lambda_max(P) (see
+    // `trigger::trigger_weight`).
+    let trigger_weight = design.trigger.as_ref().map(|t| t.weight.clone());
     Ok(Prepared {
         model,
         tables,

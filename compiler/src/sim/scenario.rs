@@ -43,8 +43,9 @@ fn describe_trigger(t: Option<&Trigger>) -> String {
                 None => "every sample transmitted".to_string(),
                 Some(th) => match th.adaptive {
                     Some((a, b, c)) => format!(
-                        "relative e'Ue >= nu x_k'Ux_k, adaptive nu (nu_min = {}, mu = {a}, {b}, {c})",
-                        th.nu
+                        "relative e'Ue >= nu x_k'Ux_k, adaptive nu in [{}, {}] (mu = {a}, {b}, {c})",
+                        th.nu,
+                        th.ceiling()
                     ),
                     None => format!("relative e'Ue >= nu x_k'Ux_k, nu = {}", th.nu),
                 },

@@ -142,13 +142,15 @@ fn event_gate<const N: usize>(kind: &EventKind, weight: &DMatrix<f64>) -> Box<dy
         EventKind::Relative { nu } => {
             Box::new(RelativeTrigger::<f64, N>::new(pad_matrix(weight), nu))
         }
-        EventKind::Adaptive { nu, mu1, mu2, mu3 } => Box::new(AdaptiveTrigger::<f64, N>::new(
-            pad_matrix(weight),
+        EventKind::Adaptive {
             nu,
+            max,
             mu1,
             mu2,
             mu3,
-        )),
+        } => Box::new(
+            AdaptiveTrigger::<f64, N>::new(pad_matrix(weight), nu, mu1, mu2, mu3).with_max(max),
+        ),
         EventKind::Mixed { beta, rho } => Box::new(MixedTrigger::<f64, N>::new(beta, rho)),
     }
 }
@@ -159,6 +161,8 @@ enum EventKind {
     },
     Adaptive {
         nu: f64,
+        /// Ceiling of the law (the certified threshold).
+        max: f64,
         mu1: f64,
         mu2: f64,
         mu3: f64,
@@ -266,6 +270,7 @@ pub fn sampler(
             let kind = threshold.as_ref().map(|th| match th.adaptive {
                 Some((mu1, mu2, mu3)) => EventKind::Adaptive {
                     nu: th.nu,
+                    max: th.ceiling(),
                     mu1,
                     mu2,
                     mu3,

@@ -136,8 +136,6 @@ pub struct TriggerDesign {
     pub gamma: f64,
     /// xi at that nu.
     pub xi: f64,
-    /// (largest feasible, smallest infeasible) nu found by the bisection.
-    pub nu_bracket: (f64, f64),
     /// Values of every variable of the solved trigger problem.
     pub values: Vec<(String, DMatrix<f64>)>,
     /// Reductions applied to the solved trigger problem.

@@ -66,6 +66,9 @@ pub struct Theorem2Outcome {
     pub size: (usize, usize),
     /// Seconds in Clarabel.
     pub solve_time: f64,
+    /// Status of the first attempt (chordal decomposition on) when it gave no
+    /// verdict and the problem was solved again without the decomposition.
+    pub first_attempt: Option<SolveStatus>,
 }
 
 impl Theorem2Outcome {
@@ -73,10 +76,11 @@ impl Theorem2Outcome {
     pub fn describe(&self) -> String {
         let p = &self.plan;
         format!(
-            "Theorem 2 reading {} (xi = {}, phi = {}, nu = {}, eps = {:?}, h in {{{}, {}}}): solver status {:?} after {} iterations ({} LMIs, {} unknowns, {:.1} s){}",
+            "Theorem 2 reading {} (xi = {}, phi = {}, nu = {}, eps = {:?}, h in {{{}, {}}}): solver status {:?} after {} iterations ({} LMIs, {} unknowns, {:.1} s){}{}",
             p.reading, p.xi, p.phi, p.nu, p.eps, p.sampling.0, p.sampling.1, self.status,
             self.iterations, self.size.0, self.size.1, self.solve_time,
-            if self.status == SolveStatus::Solved { format!(", gamma = {:.6}", self.gamma) } else { String::new() }
+            if self.status == SolveStatus::Solved { format!(", gamma = {:.6}", self.gamma) } else { String::new() },
+            self.first_attempt.map_or(String::new(), |s| format!(" without chordal decomposition (with it: {s:?})"))
         )
     }
 }
@@ -113,7 +117,7 @@ pub fn plan_of(model: &TsModel) -> Result<Option<Theorem2Plan>, SynthError> {
         eps: *eps,
         xi,
         phi: linf.phi,
-        nu: threshold.as_ref().map_or(0.0, |t| t.nu),
+        nu: threshold.as_ref().map_or(0.0, |t| t.ceiling()),
         sampling: *sampling,
         levels: sat.levels,
         tau_bar: sat.disturbance_bound.unwrap_or(0.0),
@@ -266,10 +270,27 @@ pub fn solve(
     let (problem, gamma) = build(model, plan, settings.eps)
         .map_err(|e| SynthError::Unsupported(format!("internal LMI construction error: {e}")))?;
     let stats = problem.stats();
-    let sol = problem
-        .solve(&settings.solver)
-        .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))?;
+    let run = |solver: &tsf_lmi::SolveSettings| {
+        problem
+            .solve(solver)
+            .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))
+    };
+    let mut sol = run(&settings.solver)?;
+    let mut first_attempt = None;
+    let verdict = |s: SolveStatus| s == SolveStatus::Solved || s.is_primal_infeasible();
+    if !verdict(sol.status) && settings.solver.chordal_decomposition {
+        // Clarabel's chordal decomposition sometimes stalls where the plain
+        // cones reach a verdict (observed on the continuous L-inf problem).
+        let plain = tsf_lmi::SolveSettings {
+            chordal_decomposition: false,
+            ..settings.solver.clone()
+        };
+        let second = run(&plain)?;
+        first_attempt = Some(sol.status);
+        sol = second;
+    }
     Ok(Theorem2Outcome {
+        first_attempt,
         plan: plan.clone(),
         status: sol.status,
         iterations: sol.iterations,

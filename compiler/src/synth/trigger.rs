@@ -373,7 +373,6 @@ impl Runner<'_> {
             p: get(built.vars.p)?,
             gamma: get(built.vars.gamma)?[(0, 0)],
             xi: get(built.vars.xi)?[(0, 0)],
-            nu_bracket: (plan.nu, plan.nu),
             values: all,
             reductions: built.reductions,
         }))
