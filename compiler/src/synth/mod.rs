@@ -43,6 +43,8 @@ impl Default for Settings {
             solver: SolveSettings {
                 // TSFC_SOLVER_VERBOSE=1 prints Clarabel's iteration log (diagnosis of slow solves).
                 verbose: std::env::var_os("TSFC_SOLVER_VERBOSE").is_some_and(|v| v == "1"),
+                chordal_decomposition: std::env::var_os("TSFC_SOLVER_CHORDAL")
+                    .is_none_or(|v| v != "0"),
                 ..SolveSettings::default()
             },
             bisection_rel_tol: 1e-3,

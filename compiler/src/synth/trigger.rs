@@ -390,10 +390,15 @@ impl Runner<'_> {
         let with = |nu: f64| TriggerPlan { nu, ..base.clone() };
         let target = certified_threshold(self.model);
         if let Some(d) = self.trigger_attempt(&with(target))? {
-            let notes = vec![format!(
+            let mut notes = vec![format!(
                 "event trigger certified for nu(t_k) <= {target} with the fixed gains: L-inf gamma of the event-triggered loop = {:.6} (xi = {:.6})",
                 d.gamma, d.xi
             )];
+            notes.extend(
+                INTERPRETATIONS
+                    .iter()
+                    .map(|s| format!("interpretation: {s}")),
+            );
             return Ok((d, notes));
         }
         let sampling = format!(
@@ -427,6 +432,16 @@ impl Runner<'_> {
         })
     }
 }
+
+/// Readings of Xu & Huang (2020) the two-step trigger design rests on
+/// (docs/event_trigger.md), repeated in the report.
+pub const INTERPRETATIONS: [&str; 5] = [
+    "two-step route instead of Theorem 2 (37)-(41): gains F_j and sector gains G_j from the continuous design, then Upsilon, P, Y, L1, L2, T, xi for every sampling interval in [h_min, h_max] with the looped functional (21)",
+    "sector condition evaluated at x(t_k) (the paper's N x(t_k^l) does not match u = F x(t_k))",
+    "the event condition is used with the certified ceiling nu_c of the adaptive law (the proof's (25) needs nu(t_k) <= nu_c; the printed law is unbounded above), so generated code clamps nu(t_k) to [nu, nu_c]",
+    "membership mismatch: every plant/controller rule pair (i, j) is imposed (sufficient for any mismatch; kappa is not used)",
+    "(41)'s (gamma - rho) I read as (gamma - xi) I, from (20) and (35)",
+];
 
 /// Relative width at which the diagnostic nu bisection stops.
 const TRIGGER_NU_REL_TOL: f64 = 0.05;
