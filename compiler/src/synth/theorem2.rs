@@ -26,7 +26,7 @@ use super::{Settings, SynthError};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use tsf_lang::spec::{Relaxation, Trigger, TriggerSynthesis};
-use tsf_lmi::{Expr, LmiError, Problem, SolveStatus, Var};
+use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
 
 /// The numbers of one Theorem 2 problem.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,9 +66,9 @@ pub struct Theorem2Outcome {
     pub size: (usize, usize),
     /// Seconds in Clarabel.
     pub solve_time: f64,
-    /// Status of the first attempt (chordal decomposition on) when it gave no
-    /// verdict and the problem was solved again without the decomposition.
-    pub first_attempt: Option<SolveStatus>,
+    /// When minimizing gamma gave no verdict: the feasibility problem with gamma
+    /// fixed slightly above the last iterate, and its status.
+    pub fixed_gamma: Option<(f64, SolveStatus)>,
 }
 
 impl Theorem2Outcome {
@@ -80,7 +80,7 @@ impl Theorem2Outcome {
             p.reading, p.xi, p.phi, p.nu, p.eps, p.sampling.0, p.sampling.1, self.status,
             self.iterations, self.size.0, self.size.1, self.solve_time,
             if self.status == SolveStatus::Solved { format!(", gamma = {:.6}", self.gamma) } else { String::new() },
-            self.first_attempt.map_or(String::new(), |s| format!(" without chordal decomposition (with it: {s:?})"))
+            self.fixed_gamma.map_or(String::new(), |(g, s)| format!("; feasibility with gamma fixed at {g:.4}: {s:?}"))
         )
     }
 }
@@ -270,27 +270,38 @@ pub fn solve(
     let (problem, gamma) = build(model, plan, settings.eps)
         .map_err(|e| SynthError::Unsupported(format!("internal LMI construction error: {e}")))?;
     let stats = problem.stats();
-    let run = |solver: &tsf_lmi::SolveSettings| {
-        problem
-            .solve(solver)
-            .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))
-    };
-    let mut sol = run(&settings.solver)?;
-    let mut first_attempt = None;
+    let sol = problem
+        .solve(&settings.solver)
+        .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))?;
     let verdict = |s: SolveStatus| s == SolveStatus::Solved || s.is_primal_infeasible();
-    if !verdict(sol.status) && settings.solver.chordal_decomposition {
-        // Clarabel's chordal decomposition sometimes stalls where the plain
-        // cones reach a verdict (observed on the continuous L-inf problem).
-        let plain = tsf_lmi::SolveSettings {
-            chordal_decomposition: false,
-            ..settings.solver.clone()
+    let gamma_iterate = sol
+        .assignment_any_status()
+        .value(gamma)
+        .map_or(f64::NAN, |g| g[(0, 0)]);
+    let mut fixed_gamma = None;
+    if !verdict(sol.status) {
+        // Minimizing gamma drives (41) to a degenerate face (gamma -> xi+ when Uhat
+        // allows it); the feasibility problem at a fixed gamma is better posed.
+        let g = if gamma_iterate.is_finite() {
+            1.05 * gamma_iterate.max(plan.xi)
+        } else {
+            2.0 * plan.xi
         };
-        let second = run(&plain)?;
-        first_attempt = Some(sol.status);
-        sol = second;
+        let (mut fixed, gv) = build(model, plan, settings.eps).map_err(|e| {
+            SynthError::Unsupported(format!("internal LMI construction error: {e}"))
+        })?;
+        let pin = fixed
+            .add_scalar("gamma fixed", Expr::var(gv), Relation::Eq, g)
+            .and_then(|_| fixed.minimize(Expr::zeros(1, 1)));
+        pin.map_err(|e| SynthError::Unsupported(format!("internal LMI construction error: {e}")))?;
+        let status = fixed
+            .solve(&settings.solver)
+            .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))?
+            .status;
+        fixed_gamma = Some((g, status));
     }
     Ok(Theorem2Outcome {
-        first_attempt,
+        fixed_gamma,
         plan: plan.clone(),
         status: sol.status,
         iterations: sol.iterations,
