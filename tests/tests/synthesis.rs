@@ -248,3 +248,30 @@ fn a_tampered_design_is_refused_by_the_certificate() {
     assert!(!bad.ok);
     assert!(bad.worst.contains("decay"), "worst: {}", bad.worst);
 }
+
+/// `linf <= g` with saturation and a bounded disturbance: xi (gamma >= xi) is
+/// searched below g only. The growing bracket 1e-3 * 4^k used to jump from
+/// 0.256 (infeasible) to 1.024 (> g): "infeasible" although every xi in
+/// [0.2905, g) is feasible.
+#[test]
+fn linf_bound_with_saturation_searches_xi_below_the_bound() {
+    let text =
+        std::fs::read_to_string(common::spec_path("xu2020_event_triggered.tsf")).expect("readable");
+    let start = text.find("trigger aperiodic {").expect("trigger block");
+    let end = start + text[start..].find("\n}\n").expect("block end") + 3;
+    let bounded = format!("{}{}", &text[..start], &text[end..]).replace(
+        "objective linf(tau -> y) minimize with phi = 0.05",
+        "objective linf(tau -> y) <= 0.5 with phi = 0.05",
+    );
+    assert!(bounded.contains("<= 0.5") && !bounded.contains("trigger aperiodic"));
+    let model = model_of("xu_bounded.tsf", &bounded);
+    let c = compile(&model, info(), &Settings::default(), Default::default());
+    assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
+    let (design, _) = c.outcome.as_ref().expect("certified");
+    let gamma = design.achieved.linf_gamma.expect("gamma");
+    let xi = design.achieved.linf_xi.expect("xi");
+    assert!(
+        gamma <= 0.5 && xi <= gamma && xi > 0.256,
+        "gamma {gamma}, xi {xi}"
+    );
+}

@@ -23,6 +23,9 @@ use nalgebra::DMatrix;
 use std::time::{Duration, Instant};
 use tsf_lmi::{ProblemStats, SolveSettings, SolveStatus};
 
+/// With `linf <= g`, the largest xi tried is g (1 - XI_CAP_REL).
+const XI_CAP_REL: f64 = 1e-6;
+
 /// Synthesis settings.
 #[derive(Debug, Clone)]
 pub struct Settings {
@@ -371,15 +374,25 @@ impl Runner<'_> {
             }
             p
         };
-        let (mut lo, mut hi) = (0.0, 1e-3);
+        // gamma >= xi ((gamma - xi) I > 0): with a fixed bound gamma <= g the
+        // search must stay below g, else the growing bracket can jump over the
+        // feasible window [xi_min, g).
+        let cap = match plan.linf.as_ref().map(|l| &l.bound) {
+            Some(Bound::Fixed(g)) => g * (1.0 - XI_CAP_REL),
+            _ => 1e8,
+        };
+        let (mut lo, mut hi) = (0.0, 1e-3f64.min(cap));
         let mut best = None;
-        while hi < 1e8 {
+        loop {
             if let Attempt::Solved(d) = self.attempt(&with(hi))? {
                 best = Some(*d);
                 break;
             }
+            if hi >= cap {
+                break;
+            }
             lo = hi;
-            hi *= 4.0;
+            hi = (hi * 4.0).min(cap);
         }
         let Some(mut best) = best else {
             return Ok(None);
