@@ -9,6 +9,10 @@
 //! }
 //! // src/lib.rs:  include!(concat!(env!("OUT_DIR"), "/<controller>.rs"));
 //! ```
+//!
+//! A spec with `trigger aperiodic { .. }` also yields the sensor-side trigger
+//! `<controller>_sensor.rs` (and `.h`/`.c` with C): include it in its own
+//! module, next to the controller it feeds.
 
 use crate::codegen::{generate, GeneratedFile};
 use crate::compile::{compile, Status};
@@ -64,13 +68,15 @@ impl Builder {
         self
     }
 
-    /// Whether to write `<controller>.rs` (default on).
+    /// Whether to write `<controller>.rs` (default on), and
+    /// `<controller>_sensor.rs` for an event-triggered loop.
     pub fn emit_rust(mut self, on: bool) -> Self {
         self.rust = on;
         self
     }
 
-    /// Whether to write `<controller>.h` and `<controller>.c` (default off).
+    /// Whether to write `<controller>.h` and `<controller>.c` (default off),
+    /// and `<controller>_sensor.h`/`.c` for an event-triggered loop.
     pub fn emit_c(mut self, on: bool) -> Self {
         self.c = on;
         self

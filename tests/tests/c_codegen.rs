@@ -5,6 +5,13 @@
 //! compared with `tsf_runtime::Controller` built here from the same tables:
 //! commands, strengths and premises to 1e-12 relative, flags and trigger
 //! decisions identical. The generated files are snapshotted.
+//!
+//! The sensor-side trigger module of the event-triggered spec
+//! (`<name>_sensor.h/.c`) is snapshotted too, built the same way and driven
+//! against `tsf_runtime::AdaptiveTrigger` (and `RelativeTrigger` for the
+//! static law) over thousands of state sequences: decisions and thresholds
+//! bit-identical, in double and in float; its atan is the runtime's, bit for
+//! bit.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -13,15 +20,15 @@ use std::sync::OnceLock;
 use tsf_runtime::{
     math, AdaptiveTrigger, Controller, MixedTrigger, PeriodicTrigger, RelativeTrigger, Rule,
 };
-use tsfc::codegen::c::{c_file_names, emit_c, CFiles};
+use tsfc::codegen::c::{c_file_names, c_sensor_file_names, emit_c, emit_c_sensor, CFiles};
 use tsfc::codegen::sym::{Func, Sym};
-use tsfc::codegen::{PremiseCode, Tables};
+use tsfc::codegen::{PremiseCode, SensorLaw, Tables};
 
-/// Shipped specs the generator is tested on; the first two must compile.
+/// Shipped specs the generator is tested on; all must compile.
 const SPECS: [(&str, bool); 3] = [
     ("zhang2013_multiobjective.tsf", true),
     ("inverted_pendulum.tsf", true),
-    ("xu2020_event_triggered.tsf", false),
+    ("xu2020_event_triggered.tsf", true),
 ];
 
 /// Tables of every shipped spec that compiles to a certified design.
@@ -98,7 +105,47 @@ fn generated_c_is_deterministic_and_snapshotted() {
         }
         insta::assert_snapshot!(format!("{}.h", t.name), a.header);
         insta::assert_snapshot!(format!("{}.c", t.name), a.source);
+        assert_eq!(
+            a.source
+                .contains("Controller-side role of the event-triggered loop"),
+            t.trigger.is_some(),
+            "{}: the controller-side note is for the event-triggered loop only",
+            t.name
+        );
+        if t.trigger.is_none() {
+            assert!(emit_c_sensor(t).is_err(), "{}: no sensor module", t.name);
+            continue;
+        }
+        let s1 = emit_c_sensor(t).expect("sensor module");
+        let s2 = emit_c_sensor(t).expect("sensor module");
+        assert_eq!(s1, s2, "{}: two sensor generations differ", t.name);
+        let (h, c) = c_sensor_file_names(t);
+        assert_eq!(
+            (h.as_str(), c.as_str()),
+            (
+                &*format!("{}_sensor.h", t.name),
+                &*format!("{}_sensor.c", t.name)
+            )
+        );
+        for text in [&s1.header, &s1.source] {
+            let first = text.lines().next().unwrap_or_default();
+            assert!(first.contains(&t.header.spec_sha256), "{first}: spec hash");
+            assert!(!text.contains("/work/") && !text.contains("malloc"));
+            // Self-contained: only the sensor's own header and standard ones.
+            for line in text.lines().filter(|l| l.starts_with("#include")) {
+                assert!(
+                    line == format!("#include \"{h}\"") || line == "#include <math.h>",
+                    "{h}: unexpected `{line}`"
+                );
+            }
+        }
+        insta::assert_snapshot!(h, s1.header);
+        insta::assert_snapshot!(c, s1.source);
     }
+    assert!(
+        shipped_tables().iter().any(|t| t.trigger.is_some()),
+        "the event-triggered spec must have a sensor module"
+    );
 }
 
 // ------------------------------------------------------------- C toolchain
@@ -175,6 +222,14 @@ fn sanitizers_work(cc: &str) -> bool {
             .env("ASAN_OPTIONS", "detect_leaks=0")
             .status()
             .is_ok_and(|s| s.success())
+}
+
+fn write_sensor_files(dir: &Path, t: &Tables, files: &CFiles) -> PathBuf {
+    let (h, c) = c_sensor_file_names(t);
+    std::fs::write(dir.join(h), &files.header).expect("write sensor header");
+    let c = dir.join(c);
+    std::fs::write(&c, &files.source).expect("write sensor source");
+    c
 }
 
 fn write_files(dir: &Path, t: &Tables, files: &CFiles) -> PathBuf {
@@ -647,6 +702,14 @@ fn generated_c_links_together_and_builds_as_float_and_cpp() {
     for t in tables {
         sources.push(write_files(&dir, t, &emit_c(t)));
         let _ = writeln!(main, "#include \"{}.h\"", t.name);
+        if t.trigger.is_some() {
+            sources.push(write_sensor_files(
+                &dir,
+                t,
+                &emit_c_sensor(t).expect("sensor"),
+            ));
+            let _ = writeln!(main, "#include \"{}_sensor.h\"", t.name);
+        }
     }
     main.push_str("int main(void) {\n    int bad = 0;\n");
     for t in tables {
@@ -655,6 +718,14 @@ fn generated_c_links_together_and_builds_as_float_and_cpp() {
             main,
             "    {{\n        {p}_t s;\n        {up}_REAL x[{up}_N] = {{0}}, u[{up}_M];\n        {p}_init(&s);\n        {p}_step(&s, x, u);\n        bad |= {p}_flags(&s) != 0 || u[0] != 0;\n    }}\n"
         );
+        if t.trigger.is_some() {
+            // The networked loop: the sensor decides, the controller steps on
+            // the transmitted state (the first sample is always transmitted).
+            let _ = write!(
+                main,
+                "    {{\n        {p}_sensor_t ts;\n        {p}_t s;\n        {up}_SENSOR_REAL x[{up}_SENSOR_N] = {{0}}, x_tx[{up}_SENSOR_N];\n        {up}_REAL u[{up}_M];\n        {p}_sensor_init(&ts);\n        {p}_init(&s);\n        x[0] = ({up}_SENSOR_REAL)0.01;\n        bad |= {p}_sensor_last(&ts) != 0;\n        bad |= {p}_sensor_nu(&ts) != ({up}_SENSOR_REAL){up}_SENSOR_NU_MIN;\n        if ({p}_sensor_sample(&ts, x, x_tx)) {{\n            {p}_step(&s, x_tx, u);\n        }} else {{\n            bad = 1;\n        }}\n        bad |= {p}_sensor_sample(&ts, x, x_tx) != 0 || {p}_sensor_last(&ts) == 0;\n        bad |= {p}_is_fault(&s) || !(u[0] < 0 || u[0] > 0);\n    }}\n"
+            );
+        }
     }
     main.push_str("    return bad;\n}\n");
     let main_c = dir.join("main.c");
@@ -699,5 +770,534 @@ fn generated_c_links_together_and_builds_as_float_and_cpp() {
             String::from_utf8_lossy(&o.stderr)
         ),
         Err(_) => eprintln!("note: no C++ compiler `{cxx}`; extern \"C\" guard not checked"),
+    }
+}
+
+// ------------------------------------------------- sensor-side trigger (C)
+
+use tsf_runtime::Real;
+
+/// One input line of the sensor driver.
+#[derive(Debug, Clone)]
+enum Cmd {
+    /// `<name>_sensor_init` (a new sequence).
+    Reset,
+    /// `<name>_sensor_sample` on this state.
+    Sample(Vec<f64>),
+}
+
+/// Sequences per conformance run and samples per sequence.
+const SENSOR_SEQUENCES: usize = 3000;
+const SENSOR_LEN: usize = 40;
+
+/// State sequences for the sensor: converging and wandering random walks at
+/// scales from 1e-3 to 3 with relative steps from 0.3 % to 100 % (small
+/// jumps below mu3 make the adaptive nu grow to its ceiling, large ones make
+/// it shrink to its floor), constant and zero states, and edge values
+/// (NaN, infinities, signed zeros, subnormals, 1e30: all within float range,
+/// so the float build converts them without overflow).
+fn sensor_sequences(n: usize, seed: u64) -> Vec<Cmd> {
+    const EDGE: [f64; 9] = [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        0.0,
+        -0.0,
+        5e-324,
+        1e-30,
+        1e30,
+        -1e30,
+    ];
+    let mut rng = Rng(seed);
+    let mut out = Vec::new();
+    for k in 0..SENSOR_SEQUENCES {
+        out.push(Cmd::Reset);
+        let scale = 10f64.powf(rng.uniform(-3.0, 0.5));
+        let step = 10f64.powf(rng.uniform(-2.5, 0.0)) * scale;
+        let decay = if k % 3 == 0 {
+            0.0
+        } else {
+            rng.uniform(0.0, 0.2)
+        };
+        let mut x: Vec<f64> = (0..n).map(|_| rng.uniform(-scale, scale)).collect();
+        for i in 0..SENSOR_LEN {
+            let mut v = x.clone();
+            match k % 50 {
+                // A held state: e = 0 every sample after the first.
+                1 => v.iter_mut().for_each(|c| *c = scale),
+                // Edge values in one component from time to time.
+                2 | 3 if i % 7 == 3 => {
+                    let at = (rng.next() % n as u64) as usize;
+                    v[at] = EDGE[(rng.next() % EDGE.len() as u64) as usize];
+                }
+                _ => {}
+            }
+            out.push(Cmd::Sample(v));
+            for c in x.iter_mut() {
+                *c = *c * (1.0 - decay) + rng.uniform(-step, step);
+            }
+        }
+    }
+    out
+}
+
+/// The runtime trigger a sensor law wraps.
+enum RefTrigger<T, const N: usize> {
+    Adaptive(AdaptiveTrigger<T, N>),
+    Relative(RelativeTrigger<T, N>),
+    Every,
+}
+
+/// The runtime's decisions and thresholds (as f64 bits) for every command:
+/// `(transmitted, nu)`; a reset reports the initial nu and `false`.
+fn sensor_reference<T: Real, const N: usize>(t: &Tables, cmds: &[Cmd]) -> Vec<(bool, u64)> {
+    let s = t.trigger.as_ref().expect("sensor tables");
+    let weight: [[T; N]; N] =
+        std::array::from_fn(|i| std::array::from_fn(|j| T::from_f64(s.weight[i][j])));
+    let r = T::from_f64;
+    let fresh = || match s.law {
+        SensorLaw::Adaptive(mu1, mu2, mu3) => RefTrigger::Adaptive(
+            AdaptiveTrigger::new(weight, r(s.nu_min), r(mu1), r(mu2), r(mu3)).with_max(r(s.nu_max)),
+        ),
+        SensorLaw::Relative => RefTrigger::Relative(RelativeTrigger::new(weight, r(s.nu_min))),
+        SensorLaw::EverySample => RefTrigger::Every,
+    };
+    let nu = |tr: &RefTrigger<T, N>| match tr {
+        RefTrigger::Adaptive(a) => a.nu(),
+        RefTrigger::Relative(rel) => rel.nu,
+        RefTrigger::Every => r(s.nu_min),
+    };
+    let mut tr = fresh();
+    cmds.iter()
+        .map(|c| match c {
+            Cmd::Reset => {
+                tr = fresh();
+                (false, nu(&tr).to_f64().to_bits())
+            }
+            Cmd::Sample(v) => {
+                let x: [T; N] = std::array::from_fn(|i| r(v[i]));
+                let d = match &mut tr {
+                    RefTrigger::Adaptive(a) => a.decide(&x),
+                    RefTrigger::Relative(rel) => rel.decide(&x),
+                    RefTrigger::Every => true,
+                };
+                (d, nu(&tr).to_f64().to_bits())
+            }
+        })
+        .collect()
+}
+
+fn sensor_reference_rows(t: &Tables, cmds: &[Cmd], float: bool) -> Vec<(bool, u64)> {
+    match (t.n, float) {
+        (6, false) => sensor_reference::<f64, 6>(t, cmds),
+        (6, true) => sensor_reference::<f32, 6>(t, cmds),
+        (n, _) => panic!("{}: n = {n} missing from sensor_reference_rows", t.name),
+    }
+}
+
+/// A driver that includes the sensor's source (so the static atan can be
+/// driven too) and reads commands: `r` (init), `s` + N hex doubles (sample),
+/// `a` + hex double (the binary64 atan), `w` + hex double (the atan of the
+/// real type). Each sample prints the decision, nu's bits as a double and
+/// whether `x_tx` and `last` behaved (copied on transmission, untouched
+/// otherwise).
+fn sensor_driver(t: &Tables) -> String {
+    let p = format!("{}_sensor_", t.name);
+    let u = p.to_ascii_uppercase();
+    let adaptive = matches!(
+        t.trigger.as_ref().map(|s| s.law),
+        Some(SensorLaw::Adaptive(..))
+    );
+    let atan = if adaptive {
+        format!(
+            r#"        if (cmd[0] == 'a') {{
+            put_bits({p}atan_f64(read_hex()));
+            continue;
+        }}
+        if (cmd[0] == 'w') {{
+            put_bits((double){p}atan(({u}REAL)read_hex()));
+            continue;
+        }}
+"#
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        r#"#include "{name}_sensor.c"
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double read_hex(void) {{
+    unsigned long long b;
+    double d;
+    if (scanf("%llx", &b) != 1) {{
+        exit(3);
+    }}
+    memcpy(&d, &b, sizeof d);
+    return d;
+}}
+
+static void put_bits(double d) {{
+    unsigned long long b;
+    memcpy(&b, &d, sizeof b);
+    printf("%016llx\n", b);
+}}
+
+int main(void) {{
+    {p}t s;
+    {u}REAL x[{u}N], x_tx[{u}N], before[{u}N];
+    const {u}REAL mark = ({u}REAL)-7.25;
+    char cmd[2];
+    {p}init(&s);
+    for (;;) {{
+        int k, d, ok = 1;
+        const {u}REAL *last;
+        if (scanf("%1s", cmd) != 1) {{
+            return 0;
+        }}
+        if (cmd[0] == 'r') {{
+            {p}init(&s);
+            printf("0 ");
+            put_bits((double){p}nu(&s));
+            continue;
+        }}
+{atan}        for (k = 0; k < {u}N; k++) {{
+            x[k] = ({u}REAL)read_hex();
+            x_tx[k] = mark;
+        }}
+        last = {p}last(&s);
+        if (last != 0) {{
+            memcpy(before, last, sizeof before);
+        }}
+        d = {p}sample(&s, x, x_tx);
+        if (d) {{
+            ok = memcmp(x_tx, x, sizeof x) == 0 && {p}last(&s) != 0 &&
+                 memcmp({p}last(&s), x, sizeof x) == 0;
+        }} else {{
+            for (k = 0; k < {u}N; k++) {{
+                ok = ok && memcmp(&x_tx[k], &mark, sizeof mark) == 0;
+            }}
+            ok = ok && last != 0 && memcmp({p}last(&s), before, sizeof before) == 0;
+        }}
+        printf("%d ", d + 2 * !ok);
+        put_bits((double){p}nu(&s));
+    }}
+}}
+"#,
+        name = t.name,
+    )
+}
+
+/// Writes the sensor files of `t` and the driver into `dir`; returns the
+/// driver's path.
+fn sensor_setup(dir: &Path, t: &Tables) -> PathBuf {
+    let files = emit_c_sensor(t).expect("sensor module");
+    write_sensor_files(dir, t, &files);
+    let drv = dir.join("sensor_driver.c");
+    std::fs::write(&drv, sensor_driver(t)).expect("write driver");
+    drv
+}
+
+fn hex_line(tag: &str, v: &[f64]) -> String {
+    let words: Vec<String> = v.iter().map(|x| format!("{:x}", x.to_bits())).collect();
+    format!("{tag} {}", words.join(" "))
+}
+
+/// The builds every sensor test runs: -O2 and (when available) UBSan + ASan,
+/// both without contraction across statements.
+fn sensor_builds(cc: &str) -> Vec<(&'static str, Vec<&'static str>)> {
+    let mut builds = vec![("O2", vec!["-O2", "-ffp-contract=off"])];
+    if sanitizers_work(cc) {
+        let mut flags = vec!["-O1", "-g", "-ffp-contract=off"];
+        flags.extend(SANITIZE);
+        builds.push(("ubsan+asan", flags));
+    }
+    builds
+}
+
+/// Builds and runs the sensor driver of `t` in `dir` on `cmds` with `extra`
+/// flags; asserts every decision and nu is the runtime's, bit for bit.
+/// Returns the number of samples compared.
+fn sensor_conformance(
+    cc: &str,
+    dir: &Path,
+    t: &Tables,
+    cmds: &[Cmd],
+    float: bool,
+    extra: &[&str],
+) -> usize {
+    let drv = sensor_setup(dir, t);
+    let mut input = String::new();
+    for c in cmds {
+        match c {
+            Cmd::Reset => input.push_str("r\n"),
+            Cmd::Sample(v) => {
+                input.push_str(&hex_line("s", v));
+                input.push('\n');
+            }
+        }
+    }
+    let input_path = dir.join("sensor_states.txt");
+    std::fs::write(&input_path, &input).expect("write states");
+    let reference = sensor_reference_rows(t, cmds, float);
+    for (tag, flags) in sensor_builds(cc) {
+        let exe = dir.join(format!("sensor_{}", tag.replace('+', "_")));
+        let mut all: Vec<&str> = flags.clone();
+        all.extend(extra);
+        build(cc, std::slice::from_ref(&drv), &exe, &all);
+        let out = run_driver(&exe, &input_path);
+        let lines: Vec<&str> = out.lines().collect();
+        assert_eq!(lines.len(), cmds.len(), "{tag}: one line per command");
+        for (i, ((line, (d, nu)), cmd)) in lines.iter().zip(&reference).zip(cmds).enumerate() {
+            let (cd, cnu) = line.split_once(' ').expect("two fields");
+            let cd: u8 = cd.parse().expect("decision");
+            let cnu = u64::from_str_radix(cnu, 16).expect("nu bits");
+            assert!(
+                cd < 2,
+                "{tag} {extra:?}: x_tx/last misbehaved at command {i} {cmd:?}"
+            );
+            assert_eq!(
+                (cd == 1, cnu),
+                (*d, *nu),
+                "{} {tag} {extra:?}: command {i} {cmd:?}: C (decision, nu) = ({}, {:e}), runtime ({d}, {:e})",
+                t.name,
+                cd == 1,
+                f64::from_bits(cnu),
+                f64::from_bits(*nu)
+            );
+        }
+    }
+    reference.len()
+}
+
+/// How the adaptive threshold moved over the reference run: (grew, shrank,
+/// samples at the ceiling, samples back at the floor after a decrease,
+/// transmissions, samples held).
+fn nu_motion(cmds: &[Cmd], rows: &[(bool, u64)], nu_min: f64, nu_max: f64) -> [usize; 6] {
+    let mut m = [0usize; 6];
+    let mut prev = f64::NAN;
+    for (c, (d, nu)) in cmds.iter().zip(rows) {
+        let nu = f64::from_bits(*nu);
+        if let Cmd::Sample(_) = c {
+            m[if *d { 4 } else { 5 }] += 1;
+            if nu > prev {
+                m[0] += 1;
+            }
+            if nu < prev {
+                m[1] += 1;
+                if nu == nu_min {
+                    m[3] += 1;
+                }
+            }
+            if nu == nu_max {
+                m[2] += 1;
+            }
+        }
+        prev = nu;
+    }
+    m
+}
+
+fn xu_tables() -> &'static Tables {
+    shipped_tables()
+        .iter()
+        .find(|t| t.trigger.is_some())
+        .expect("the event-triggered spec compiles and has a sensor module")
+}
+
+/// The generated sensor (adaptive law, the spec's co-designed weight) against
+/// `tsf_runtime::AdaptiveTrigger::new(U, NU_MIN, MU1, MU2, MU3).with_max(NU_MAX)`
+/// over 3000 sequences of 40 samples, in double and in float: identical
+/// decisions and nu, bit for bit.
+#[test]
+fn generated_sensor_c_matches_the_runtime_bit_for_bit() {
+    let cc = c_compiler();
+    let t = xu_tables();
+    let s = t.trigger.as_ref().expect("sensor tables");
+    let SensorLaw::Adaptive(..) = s.law else {
+        panic!("{}: the shipped sensor is adaptive ({:?})", t.name, s.law);
+    };
+    let cmds = sensor_sequences(t.n, 0x5e45);
+    let real = format!("-D{}_SENSOR_REAL=float", t.name.to_ascii_uppercase());
+    let mut summary = String::new();
+    for (float, extra) in [
+        (false, vec![]),
+        (true, vec![real.as_str(), "-Wdouble-promotion"]),
+    ] {
+        let rows = sensor_reference_rows(t, &cmds, float);
+        let (lo, hi) = if float {
+            (f64::from(s.nu_min as f32), f64::from(s.nu_max as f32))
+        } else {
+            (s.nu_min, s.nu_max)
+        };
+        let m = nu_motion(&cmds, &rows, lo, hi);
+        // The sequences exercise the whole law: nu grows, shrinks, sits at
+        // the ceiling, comes back to the floor; samples are sent and held.
+        assert!(
+            m.iter().all(|&k| k >= 200),
+            "float = {float}: nu motion {m:?}"
+        );
+        let dir = work_dir(&format!(
+            "sensor_{}",
+            if float { "float" } else { "double" }
+        ));
+        let n = sensor_conformance(&cc, &dir, t, &cmds, float, &extra);
+        let _ = writeln!(
+            summary,
+            "{}_sensor ({}): {n} commands, {} sequences bit-identical; nu grew {}, shrank {}, \
+             at the ceiling {}, back at the floor {}; sent {}, held {}",
+            t.name,
+            if float { "float" } else { "double" },
+            SENSOR_SEQUENCES,
+            m[0],
+            m[1],
+            m[2],
+            m[3],
+            m[4],
+            m[5]
+        );
+    }
+    println!("{summary}");
+}
+
+/// The other laws and the f32 spec setting, generated from the same tables:
+/// the static relative trigger (`RelativeTrigger`), no threshold (every
+/// sample sent) and `precision f32` (float by default, no -D).
+#[test]
+fn generated_sensor_c_variants_match_the_runtime() {
+    let cc = c_compiler();
+    let base = xu_tables();
+    let cmds = sensor_sequences(base.n, 0xfeed);
+    let cases = [
+        ("relative", SensorLaw::Relative, false),
+        ("every", SensorLaw::EverySample, false),
+        ("f32", base.trigger.as_ref().expect("sensor").law, true),
+    ];
+    for (tag, law, f32_spec) in cases {
+        let mut t = base.clone();
+        if let Some(s) = t.trigger.as_mut() {
+            // As `tables()` fills them: a static threshold is its own
+            // ceiling; no threshold is nu = 0.
+            match law {
+                SensorLaw::Relative => s.nu_max = s.nu_min,
+                SensorLaw::EverySample => (s.nu_min, s.nu_max) = (0.0, 0.0),
+                SensorLaw::Adaptive(..) => {}
+            }
+            s.law = law;
+        }
+        if f32_spec {
+            t.precision = tsf_lang::spec::Precision::F32;
+        }
+        let dir = work_dir(&format!("sensor_{tag}"));
+        let n = sensor_conformance(&cc, &dir, &t, &cmds, f32_spec, &["-Wdouble-promotion"]);
+        let rows = sensor_reference_rows(&t, &cmds, f32_spec);
+        let sent = rows
+            .iter()
+            .zip(&cmds)
+            .filter(|((d, _), c)| *d && matches!(c, Cmd::Sample(_)))
+            .count();
+        println!("{tag}: {n} commands bit-identical, {sent} sent");
+        if law == SensorLaw::EverySample {
+            assert_eq!(sent, SENSOR_SEQUENCES * SENSOR_LEN, "every sample is sent");
+        } else {
+            assert!(
+                sent < SENSOR_SEQUENCES * SENSOR_LEN,
+                "{tag}: some samples are held"
+            );
+        }
+    }
+}
+
+/// The sensor's C atan is the runtime's `math::atan`, bit for bit, on every
+/// branch (tiny, Taylor, each of the 38 + 8 table intervals and their edges,
+/// beyond 2^66, NaN, infinities, signed zeros), and its real-type wrapper is
+/// `atanf` in the float build.
+#[test]
+fn sensor_c_atan_is_the_runtimes() {
+    let cc = c_compiler();
+    let t = xu_tables();
+    let dir = work_dir("sensor_atan");
+    let drv = sensor_setup(&dir, t);
+    let mut rng = Rng(0xa7a2);
+    let mut args: Vec<f64> = vec![
+        0.0,
+        -0.0,
+        f64::NAN,
+        -f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        5e-324,
+        f64::MIN_POSITIVE,
+        f64::MAX,
+        -f64::MAX,
+        7.450580596923828e-09,
+        0.125,
+        2.4375,
+        7.378697629483821e19,
+    ];
+    for k in 0..=80 {
+        args.push(k as f64 / 32.0);
+    }
+    for b in args.clone() {
+        if b.is_finite() && b > 0.0 {
+            args.push(f64::from_bits(b.to_bits() - 1));
+            args.push(f64::from_bits(b.to_bits() + 1));
+        }
+    }
+    for _ in 0..200_000 {
+        args.push(rng.uniform(-3.0, 3.0));
+    }
+    for _ in 0..100_000 {
+        let sign = if rng.next() & 1 == 0 { 1.0 } else { -1.0 };
+        args.push(sign * 10f64.powf(rng.uniform(-12.0, 25.0)));
+    }
+    let in_float = |v: f64| !v.is_finite() || v.abs() <= 1e38;
+    let mut input = String::new();
+    for &v in &args {
+        let _ = writeln!(input, "a {:x}", v.to_bits());
+        if in_float(v) {
+            let _ = writeln!(input, "w {:x}", v.to_bits());
+        }
+    }
+    let input_path = dir.join("atan_args.txt");
+    std::fs::write(&input_path, &input).expect("write args");
+    let real = format!("-D{}_SENSOR_REAL=float", t.name.to_ascii_uppercase());
+    for (float, extra) in [(false, vec![]), (true, vec![real.as_str()])] {
+        for (tag, flags) in sensor_builds(&cc) {
+            let exe = dir.join(format!("atan_{}_{float}", tag.replace('+', "_")));
+            let mut all = flags.clone();
+            all.extend(&extra);
+            build(&cc, std::slice::from_ref(&drv), &exe, &all);
+            let out = run_driver(&exe, &input_path);
+            let mut lines = out.lines();
+            let mut checked = 0usize;
+            for &v in &args {
+                let mut next = || {
+                    let l = lines.next().expect("one line per argument");
+                    u64::from_str_radix(l, 16).expect("bits")
+                };
+                let a = next();
+                assert_eq!(
+                    a,
+                    math::atan(v).to_bits(),
+                    "atan({v:e}) = {:e} in C, {:e} in the runtime",
+                    f64::from_bits(a),
+                    math::atan(v)
+                );
+                if in_float(v) {
+                    let w = next();
+                    let want = if float {
+                        f64::from(math::atanf(v as f32)).to_bits()
+                    } else {
+                        math::atan(v).to_bits()
+                    };
+                    assert_eq!(w, want, "{tag} float={float}: real-type atan({v:e})");
+                }
+                checked += 1;
+            }
+            println!("atan [{tag}, float = {float}]: {checked} arguments bit-identical");
+        }
     }
 }

@@ -24,6 +24,9 @@ use crate::model::TermSpec;
 use std::fmt::Write as _;
 use tsf_lang::spec::{Precision, SetShape};
 
+mod sensor;
+pub use sensor::{c_sensor_file_names, emit_c_sensor};
+
 /// The two generated files.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CFiles {
@@ -109,6 +112,16 @@ fn rows(rows: &[Vec<f64>], indent: &str) -> String {
     items.join(",\n")
 }
 
+/// C expressions of an adaptive trigger's fields (see `Gen::adaptive_update`).
+struct AdaptiveFields {
+    nu: String,
+    mu1: String,
+    mu2: String,
+    mu3: String,
+    nu_min: String,
+    nu_max: Option<String>,
+}
+
 struct Gen<'a> {
     t: &'a Tables,
     /// Lowercase prefix `name_`.
@@ -121,10 +134,19 @@ struct Gen<'a> {
 
 impl<'a> Gen<'a> {
     fn new(t: &'a Tables) -> Self {
+        Self::with_prefix(
+            t,
+            format!("{}_", t.name),
+            format!("{}_", t.name.to_ascii_uppercase()),
+        )
+    }
+
+    /// A generator whose symbols start with `p` and macros with `u`.
+    fn with_prefix(t: &'a Tables, p: String, u: String) -> Self {
         Gen {
             t,
-            p: format!("{}_", t.name),
-            u: format!("{}_", t.name.to_ascii_uppercase()),
+            p,
+            u,
             pd: t.p.max(1),
         }
     }
@@ -144,6 +166,13 @@ impl<'a> Gen<'a> {
             "// {what} of the T-S PDC controller `{}`: {} states, {} inputs, {} premise components, {} rules.",
             t.name, t.n, t.m, t.p, t.r
         );
+        if t.trigger.is_some() {
+            let _ = writeln!(
+                s,
+                "// Controller-side role of the event-triggered loop: {p}step is fed the received x(t_k),\n// the last state transmitted by the sensor module `{p}sensor` (.h/.c); memberships and\n// feedback are evaluated at x(t_k) and the command is held between transmissions.",
+                p = self.p
+            );
+        }
         let _ = writeln!(s, "// States: {}.", t.state_names.join(", "));
         let _ = writeln!(s, "// Inputs: {}.", t.input_names.join(", "));
         let _ = writeln!(s, "// Rules: {}.", t.rule_names.join(", "));
@@ -501,26 +530,13 @@ static {real} {p}sinc({real} v) {{
 "#
                 );
             } else {
-                let _ = write!(
-                    s,
-                    "static {real} {p}{name}({real} v) {{\n    return {u}C({name}((double)v));\n}}\n\n"
-                );
+                s.push_str(&self.libm_wrapper(name));
             }
         }
+        s.push_str(&self.dot_fn());
         let _ = write!(
             s,
-            r#"/* sum_k a[k] b[k], accumulated from 0 in index order. */
-static {real} {p}dot(const {real} *a, const {real} *b, int n) {{
-    {real} acc = {u}C(0);
-    int k;
-    for (k = 0; k < n; k++) {{
-        const {real} t = a[k] * b[k];
-        acc = acc + t;
-    }}
-    return acc;
-}}
-
-/* Maps into [0, 1]; NaN -> 0. */
+            r#"/* Maps into [0, 1]; NaN -> 0. */
 static {real} {p}clamp01({real} v) {{
     if (v >= {u}C(1)) {{
         return {u}C(1);
@@ -599,14 +615,52 @@ static {real} {p}degree(const {p}term_t *t, const {real} z[]) {{
     return {p}clamp01(v);
 }}
 
-/* sqrt(sum v_k^2), no rescaling. */
+"#
+        );
+        s.push_str(&self.norm_fn());
+        s
+    }
+
+    /// `name_f(v)`: libm's `f` evaluated in double, rounded once to the real type.
+    fn libm_wrapper(&self, name: &str) -> String {
+        let (p, u) = (&self.p, &self.u);
+        format!(
+            "static {u}REAL {p}{name}({u}REAL v) {{\n    return {u}C({name}((double)v));\n}}\n\n"
+        )
+    }
+
+    /// `name_dot`: the runtime's dot product (from 0, index order).
+    fn dot_fn(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        format!(
+            r#"/* sum_k a[k] b[k], accumulated from 0 in index order. */
+static {real} {p}dot(const {real} *a, const {real} *b, int n) {{
+    {real} acc = {u}C(0);
+    int k;
+    for (k = 0; k < n; k++) {{
+        const {real} t = a[k] * b[k];
+        acc = acc + t;
+    }}
+    return acc;
+}}
+
+"#
+        )
+    }
+
+    /// `name_norm` (uses `name_sqrt` and `name_dot`).
+    fn norm_fn(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        format!(
+            r#"/* sqrt(sum v_k^2), no rescaling. */
 static {real} {p}norm(const {real} *v, int n) {{
     return {p}sqrt({p}dot(v, v, n));
 }}
 
 "#
-        );
-        s
+        )
     }
 
     /// `name_premises`: `z = L x` or straight-line premise expressions.
@@ -893,6 +947,19 @@ const {real} *{p}strengths(const {p}t *s) {{
     fn triggers(&self) -> String {
         let (p, u) = (&self.p, &self.u);
         let real = format!("{u}REAL");
+        let quad_form = self.quad_form_fn();
+        let decide_e = self.relative_decide_e_fn(&format!("{p}relative_t"), "t->weight");
+        let update = self.adaptive_update(
+            &AdaptiveFields {
+                nu: "t->inner.nu".into(),
+                mu1: "t->mu1".into(),
+                mu2: "t->mu2".into(),
+                mu3: "t->mu3".into(),
+                nu_min: "t->nu_min".into(),
+                nu_max: None,
+            },
+            "        ",
+        );
         format!(
             r#"void {p}periodic_init({p}periodic_t *t, uint32_t every) {{
     t->every = every;
@@ -910,19 +977,7 @@ int {p}periodic_decide({p}periodic_t *t) {{
     return fire;
 }}
 
-/* v'Uv = sum_i v_i (sum_j U_ij v_j). */
-static {real} {p}quad_form(const {real} *w, const {real} v[{u}N]) {{
-    {real} acc = {u}C(0);
-    int i;
-    for (i = 0; i < {u}N; i++) {{
-        const {real} r = {p}dot(&w[i * {u}N], v, {u}N);
-        const {real} t = v[i] * r;
-        acc = acc + t;
-    }}
-    return acc;
-}}
-
-void {p}relative_init({p}relative_t *t, const {real} *weight, {real} nu) {{
+{quad_form}void {p}relative_init({p}relative_t *t, const {real} *weight, {real} nu) {{
     int k;
     for (k = 0; k < {u}N * {u}N; k++) {{
         t->weight[k] = weight[k];
@@ -934,35 +989,7 @@ void {p}relative_init({p}relative_t *t, const {real} *weight, {real} nu) {{
     t->has_last = 0;
 }}
 
-/* Decision (10) with the jump e = x - x_k (zeros on the first call). */
-static int {p}relative_decide_e({p}relative_t *t, const {real} x[{u}N], {real} e[{u}N]) {{
-    int k;
-    if (!t->has_last) {{
-        for (k = 0; k < {u}N; k++) {{
-            t->last[k] = x[k];
-            e[k] = {u}C(0);
-        }}
-        t->has_last = 1;
-        return 1;
-    }}
-    for (k = 0; k < {u}N; k++) {{
-        e[k] = x[k] - t->last[k];
-    }}
-    {{
-        const {real} lhs = {p}quad_form(t->weight, e);
-        const {real} q = {p}quad_form(t->weight, t->last);
-        const {real} rhs = t->nu * q;
-        if (lhs < rhs) {{
-            return 0;
-        }}
-    }}
-    for (k = 0; k < {u}N; k++) {{
-        t->last[k] = x[k];
-    }}
-    return 1;
-}}
-
-int {p}relative_decide({p}relative_t *t, const {real} x[{u}N]) {{
+{decide_e}int {p}relative_decide({p}relative_t *t, const {real} x[{u}N]) {{
     {real} e[{u}N];
     return {p}relative_decide_e(t, x, e);
 }}
@@ -982,17 +1009,7 @@ int {p}adaptive_decide({p}adaptive_t *t, const {real} x[{u}N]) {{
         return 0;
     }}
     if (!first) {{
-        const {real} a = {p}norm(e, {u}N) - t->mu3;
-        const {real} b = t->mu2 * a;
-        const {real} k = t->mu1 * {u}FRAC_2_PI;
-        const {real} g = k * {p}atan(b);
-        const {real} cand = t->inner.nu * ({u}C(1) - g);
-        if (cand >= t->nu_min) {{
-            t->inner.nu = cand > {u}REAL_MAX ? {u}REAL_MAX : cand;
-        }} else {{
-            t->inner.nu = t->nu_min;
-        }}
-    }}
+{update}    }}
     return 1;
 }}
 
@@ -1033,6 +1050,106 @@ int {p}mixed_decide({p}mixed_t *t, const {real} sigma[{u}N]) {{
     return 1;
 }}
 "#
+        )
+    }
+
+    /// `name_quad_form`: `v'Uv = sum_i v_i (sum_j U_ij v_j)`, U row-major
+    /// (tsf-runtime's `quad_form`; uses `name_dot`).
+    fn quad_form_fn(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        format!(
+            r#"/* v'Uv = sum_i v_i (sum_j U_ij v_j). */
+static {real} {p}quad_form(const {real} *w, const {real} v[{u}N]) {{
+    {real} acc = {u}C(0);
+    int i;
+    for (i = 0; i < {u}N; i++) {{
+        const {real} r = {p}dot(&w[i * {u}N], v, {u}N);
+        const {real} t = v[i] * r;
+        acc = acc + t;
+    }}
+    return acc;
+}}
+
+"#
+        )
+    }
+
+    /// `name_relative_decide_e`: tsf-runtime's `RelativeTrigger` decision on
+    /// a state `t` of type `state` with fields `last`, `has_last`, `nu`, and
+    /// the row-major weight `weight` (an expression).
+    fn relative_decide_e_fn(&self, state: &str, weight: &str) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        format!(
+            r#"/* Decision (10) with the jump e = x - x_k (zeros on the first call). */
+static int {p}relative_decide_e({state} *t, const {real} x[{u}N], {real} e[{u}N]) {{
+    int k;
+    if (!t->has_last) {{
+        for (k = 0; k < {u}N; k++) {{
+            t->last[k] = x[k];
+            e[k] = {u}C(0);
+        }}
+        t->has_last = 1;
+        return 1;
+    }}
+    for (k = 0; k < {u}N; k++) {{
+        e[k] = x[k] - t->last[k];
+    }}
+    {{
+        const {real} lhs = {p}quad_form({weight}, e);
+        const {real} q = {p}quad_form({weight}, t->last);
+        const {real} rhs = t->nu * q;
+        if (lhs < rhs) {{
+            return 0;
+        }}
+    }}
+    for (k = 0; k < {u}N; k++) {{
+        t->last[k] = x[k];
+    }}
+    return 1;
+}}
+
+"#
+        )
+    }
+
+    /// Statements of tsf-runtime's `AdaptiveTrigger` threshold update after a
+    /// (non-first) transmission with jump `e`, each line indented by `indent`:
+    /// `g = (mu1 * (2/pi)) * atan(mu2 * (||e|| - mu3))`, `cand = nu * (1 - g)`,
+    /// then the bounds (`nu_max` absent: the real type's largest value).
+    fn adaptive_update(&self, f: &AdaptiveFields, indent: &str) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        let AdaptiveFields {
+            nu,
+            mu1,
+            mu2,
+            mu3,
+            nu_min,
+            nu_max,
+        } = f;
+        let clamp = match nu_max {
+            None => format!("{indent}    {nu} = cand > {u}REAL_MAX ? {u}REAL_MAX : cand;\n"),
+            Some(max) => format!(
+                "{indent}    if (cand > {max}) {{\n\
+                 {indent}        {nu} = {max} >= {nu_min} ? {max} : {nu_min};\n\
+                 {indent}    }} else {{\n\
+                 {indent}        {nu} = cand;\n\
+                 {indent}    }}\n"
+            ),
+        };
+        format!(
+            "{indent}const {real} a = {p}norm(e, {u}N) - {mu3};\n\
+             {indent}const {real} b = {mu2} * a;\n\
+             {indent}const {real} k = {mu1} * {u}FRAC_2_PI;\n\
+             {indent}const {real} g = k * {p}atan(b);\n\
+             {indent}const {real} cand = {nu} * ({u}C(1) - g);\n\
+             {indent}if (cand >= {nu_min}) {{\n\
+             {clamp}\
+             {indent}}} else {{\n\
+             {indent}    {nu} = {nu_min};\n\
+             {indent}}}\n"
         )
     }
 }

@@ -1,7 +1,13 @@
 //! Code generation: a certified design becomes controller source code.
 //!
 //! [`tables`] gathers the plain data (dimensions, premise code, rule terms,
-//! gains); one module per target language renders it. Only these modules know
+//! gains, the sensor-side trigger); one module per target language renders it.
+//!
+//! An event-triggered loop (`trigger aperiodic { .. }`) has two networked
+//! roles, generated separately: the controller module `<name>` (PDC on the
+//! received state x(t_k), saturation) and the sensor module `<name>_sensor`
+//! (decides at each sampling instant whether to transmit x, holds x(t_k) and
+//! the threshold nu(t_k)). Only these modules know
 //! Rust or C syntax. Outputs are deterministic (same spec, same bytes) and
 //! carry a `@generated` marker with the spec's hash, no timestamps, no
 //! absolute paths.
@@ -10,7 +16,7 @@ pub mod c;
 pub mod sym;
 pub mod tables;
 
-pub use tables::{tables, Header, PremiseCode, Tables};
+pub use tables::{tables, Header, PremiseCode, SensorLaw, SensorTables, Tables};
 pub mod rust;
 
 use crate::certify::Certificate;
@@ -43,10 +49,18 @@ pub fn generate(
     let mut out = Vec::new();
     for target in targets {
         match target {
-            Emit::Rust => out.push(GeneratedFile {
-                name: format!("{}.rs", t.name),
-                text: rust::emit_rust(&t)?,
-            }),
+            Emit::Rust => {
+                out.push(GeneratedFile {
+                    name: format!("{}.rs", t.name),
+                    text: rust::emit_rust(&t)?,
+                });
+                if t.trigger.is_some() {
+                    out.push(GeneratedFile {
+                        name: format!("{}.rs", rust::sensor_name(&t)),
+                        text: rust::emit_rust_sensor(&t)?,
+                    });
+                }
+            }
             Emit::C => {
                 let files = c::emit_c(&t);
                 let (h, src) = c::c_file_names(&t);
@@ -58,6 +72,18 @@ pub fn generate(
                     name: src,
                     text: files.source,
                 });
+                if t.trigger.is_some() {
+                    let files = c::emit_c_sensor(&t)?;
+                    let (h, src) = c::c_sensor_file_names(&t);
+                    out.push(GeneratedFile {
+                        name: h,
+                        text: files.header,
+                    });
+                    out.push(GeneratedFile {
+                        name: src,
+                        text: files.source,
+                    });
+                }
             }
         }
     }

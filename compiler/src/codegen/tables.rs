@@ -5,7 +5,7 @@ use super::sym::{premise_entries, Func, Sym};
 use crate::certify::Certificate;
 use crate::model::{TermSpec, TsModel};
 use crate::synth::Design;
-use tsf_lang::spec::Precision;
+use tsf_lang::spec::{Precision, Trigger, Weight};
 
 /// How generated code computes the premise vector z from x.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,6 +66,48 @@ pub struct Tables {
     pub u_max: Vec<f64>,
     /// Floating-point type of generated code.
     pub precision: Precision,
+    /// The sensor-side event trigger (`trigger aperiodic { .. }` only): the
+    /// networked loop is generated as a sensor module (this trigger) and the
+    /// controller module (fed the transmitted state x(t_k)).
+    pub trigger: Option<SensorTables>,
+}
+
+/// The threshold law of a sensor-side trigger.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SensorLaw {
+    /// No threshold in the spec: every sample is transmitted.
+    EverySample,
+    /// Static relative trigger: transmit iff `e'U e >= nu x_k'U x_k`
+    /// (`tsf_runtime::RelativeTrigger`, `nu = nu_min = nu_max`).
+    Relative,
+    /// Adaptive threshold (Xu & Huang 2020) with `(mu1, mu2, mu3)`,
+    /// `nu(t_k)` kept in `[nu_min, nu_max]` (`tsf_runtime::AdaptiveTrigger`
+    /// with `with_max(nu_max)`).
+    Adaptive(f64, f64, f64),
+}
+
+/// What the sensor module of an aperiodic event trigger needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorTables {
+    /// Shortest sampling interval h_min (s).
+    pub h_min: f64,
+    /// Longest sampling interval h_max (s).
+    pub h_max: f64,
+    /// Trigger weight U (N rows of N).
+    pub weight: Vec<Vec<f64>>,
+    /// Lower bound and initial value of the threshold (0 without a threshold).
+    pub nu_min: f64,
+    /// Ceiling of the threshold: the value the loop is certified for
+    /// (`Threshold::ceiling`; 0 without a threshold).
+    pub nu_max: f64,
+    /// Threshold law (with `(mu1, mu2, mu3)` when adaptive).
+    pub law: SensorLaw,
+    /// Where the weight comes from, for the header (`given in the spec` or
+    /// `co-designed by tsfc ...`).
+    pub weight_source: String,
+    /// Certified threshold and L-inf bound of the event-triggered loop, when
+    /// tsfc synthesized (and so certified) the trigger.
+    pub certified: Option<(f64, f64)>,
 }
 
 fn component_names(signals: &[tsf_lang::spec::Signal]) -> Vec<String> {
@@ -165,7 +207,82 @@ pub fn tables(
             .clone()
             .unwrap_or_else(|| vec![f64::INFINITY; model.m]),
         precision: spec.precision,
+        trigger: sensor_tables(model, design)?,
     })
+}
+
+/// The sensor tables of an aperiodic event trigger (`None` for any other
+/// triggering law). A synthesized weight must come from the design: there is
+/// no sensor module with a made-up weight.
+fn sensor_tables(model: &TsModel, design: &Design) -> Result<Option<SensorTables>, String> {
+    let Some(Trigger::Aperiodic {
+        sampling: (h_min, h_max),
+        threshold,
+        weight,
+    }) = model.spec.trigger.as_ref().map(|t| &t.node)
+    else {
+        return Ok(None);
+    };
+    let n = model.n;
+    let (u, weight_source, certified) = match weight {
+        Weight::Given(mat) => (
+            mat.clone(),
+            "given in the spec (tsfc did not synthesize the trigger)".to_string(),
+            None,
+        ),
+        Weight::Synthesize => {
+            let Some(td) = design.trigger.as_ref() else {
+                return Err(
+                    "the trigger weight is `synthesize` but the design has no synthesized trigger weight: no sensor module is generated"
+                        .into(),
+                );
+            };
+            (
+                td.weight.clone(),
+                format!("co-designed by tsfc ({})", td.method),
+                Some((td.plan.nu, td.gamma)),
+            )
+        }
+    };
+    if u.nrows() != n || u.ncols() != n {
+        return Err(format!(
+            "the trigger weight is {}x{}, expected {n}x{n}",
+            u.nrows(),
+            u.ncols()
+        ));
+    }
+    if u.iter().any(|v| !v.is_finite()) {
+        return Err("the trigger weight has a non-finite entry".into());
+    }
+    let (nu_min, nu_max, adaptive) = match threshold {
+        Some(th) => (th.nu, th.ceiling(), th.adaptive),
+        None => (0.0, 0.0, None),
+    };
+    let law = match (threshold, adaptive) {
+        (None, _) => SensorLaw::EverySample,
+        (Some(_), None) => SensorLaw::Relative,
+        (Some(_), Some((a, b, c))) => SensorLaw::Adaptive(a, b, c),
+    };
+    Ok(Some(SensorTables {
+        h_min: *h_min,
+        h_max: *h_max,
+        weight: (0..n).map(|i| u.row(i).iter().copied().collect()).collect(),
+        nu_min,
+        nu_max,
+        law,
+        weight_source,
+        certified,
+    }))
+}
+
+impl SensorTables {
+    /// `(mu1, mu2, mu3)` of the adaptive law, if adaptive.
+    pub fn adaptive(&self) -> Option<(f64, f64, f64)> {
+        match self.law {
+            SensorLaw::Adaptive(a, b, c) => Some((a, b, c)),
+            _ => None,
+        }
+    }
 }
 
 impl Tables {

@@ -8,9 +8,16 @@ pub mod attitude {
     include!(concat!(env!("OUT_DIR"), "/zhang_multiobjective.rs"));
 }
 
-/// Xu & Huang event-triggered attitude controller with saturation (7 rules).
+/// Xu & Huang event-triggered attitude controller with saturation (7 rules):
+/// the controller-side module, fed the states the sensor transmits.
 pub mod event_triggered {
     include!(concat!(env!("OUT_DIR"), "/xu_event_triggered.rs"));
+
+    /// The sensor-side trigger of the same loop: decides at each sampling
+    /// instant whether to transmit the state to the controller.
+    pub mod sensor {
+        include!(concat!(env!("OUT_DIR"), "/xu_event_triggered_sensor.rs"));
+    }
 }
 
 /// The two-rule inverted pendulum (nonlinear premise `sinc(theta)`).
