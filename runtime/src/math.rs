@@ -174,7 +174,8 @@ pub fn sqrt(x: f64) -> f64 {
 }
 
 /// `(atan(j/16)` high, low`)`, j = 0..=39; `hi + lo` = atan(j/16) to ~1e-33.
-const ATAN_J16: [(f64, f64); 40] = [
+/// Public so code generators emit the very constants [`atan`] uses.
+pub const ATAN_J16: [(f64, f64); 40] = [
     (0.0, 0.0),
     (0.06241880999595735, -1.5490756308295046e-18),
     (0.12435499454676144, -3.1253241424539383e-18),
@@ -217,8 +218,8 @@ const ATAN_J16: [(f64, f64); 40] = [
     (1.1814796049617557, 1.511867738554561e-17),
 ];
 
-/// `(pi/2 - atan(j/16))` high, low, j = 0..=7.
-const ATAN_COMP_J16: [(f64, f64); 8] = [
+/// `(pi/2 - atan(j/16))` high, low, j = 0..=7 (public like [`ATAN_J16`]).
+pub const ATAN_COMP_J16: [(f64, f64); 8] = [
     (core::f64::consts::FRAC_PI_2, 6.123233995736766e-17),
     (1.5083775167989393, -6.6075234508751206e-18),
     (1.446441332248135, 9.211323971545052e-17),
@@ -232,7 +233,8 @@ const ATAN_COMP_J16: [(f64, f64); 8] = [
 /// Taylor coefficients of `atan(t)/t - 1 = s*Q(s)`, `s = t^2`:
 /// `Q_k = (-1)^(k+1) / (2k+1)`, k = 1..=11 (`-1/3, 1/5, ..., -1/23`). Used
 /// for `|t| <= 1/8`; the first omitted term is below 2^-72 relative.
-const ATAN_Q: [f64; 11] = [
+/// Public like [`ATAN_J16`].
+pub const ATAN_Q: [f64; 11] = [
     -0.3333333333333333,
     0.2,
     -0.14285714285714285,
