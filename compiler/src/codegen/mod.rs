@@ -62,30 +62,24 @@ pub fn generate(
                 }
             }
             Emit::C => {
-                let files = c::emit_c(&t);
-                let (h, src) = c::c_file_names(&t);
-                out.push(GeneratedFile {
-                    name: h,
-                    text: files.header,
-                });
-                out.push(GeneratedFile {
-                    name: src,
-                    text: files.source,
-                });
+                push_c(&mut out, c::c_file_names(&t), c::emit_c(&t));
                 if t.trigger.is_some() {
-                    let files = c::emit_c_sensor(&t)?;
-                    let (h, src) = c::c_sensor_file_names(&t);
-                    out.push(GeneratedFile {
-                        name: h,
-                        text: files.header,
-                    });
-                    out.push(GeneratedFile {
-                        name: src,
-                        text: files.source,
-                    });
+                    push_c(&mut out, c::c_sensor_file_names(&t), c::emit_c_sensor(&t)?);
                 }
             }
         }
     }
     Ok(out)
+}
+
+/// Appends a C header/source pair named `(header, source)`.
+fn push_c(out: &mut Vec<GeneratedFile>, (h, src): (String, String), files: c::CFiles) {
+    out.push(GeneratedFile {
+        name: h,
+        text: files.header,
+    });
+    out.push(GeneratedFile {
+        name: src,
+        text: files.source,
+    });
 }
