@@ -103,7 +103,7 @@ pub struct SensorTables {
     /// Threshold law (with `(mu1, mu2, mu3)` when adaptive).
     pub law: SensorLaw,
     /// Where the weight comes from, for the header (`given in the spec` or
-    /// `co-designed by tsfc ...`).
+    /// `synthesized by tsfc ...`).
     pub weight_source: String,
     /// Certified threshold and L-inf bound of the event-triggered loop, when
     /// tsfc synthesized (and so certified) the trigger.
@@ -239,7 +239,10 @@ fn sensor_tables(model: &TsModel, design: &Design) -> Result<Option<SensorTables
             };
             (
                 td.weight.clone(),
-                format!("co-designed by tsfc ({})", td.method),
+                format!(
+                    "synthesized by tsfc ({}: for the fixed PDC gains)",
+                    td.method
+                ),
                 Some((td.plan.nu, td.gamma)),
             )
         }

@@ -178,7 +178,7 @@ enum EventKind {
 pub enum WeightSource {
     /// Given in the spec.
     Spec,
-    /// The design's co-designed trigger weight.
+    /// The design's synthesized trigger weight.
     Design,
     /// `weight = synthesize` but the design has none: `P / lambda_max(P)`.
     LyapunovNormalized,
@@ -189,7 +189,7 @@ impl WeightSource {
     pub fn describe(self) -> &'static str {
         match self {
             WeightSource::Spec => "the spec's weight matrix",
-            WeightSource::Design => "the design's co-designed trigger weight",
+            WeightSource::Design => "the design's synthesized trigger weight (two-step: for the fixed PDC gains)",
             WeightSource::LyapunovNormalized => {
                 "weight = synthesize and the design has no trigger weight: the Lyapunov matrix P divided by its largest eigenvalue"
             }
