@@ -147,3 +147,26 @@ pub fn relax(
     }
     Ok(())
 }
+
+/// Every plant/controller pair `Q_ij < 0` (membership mismatch with no bound
+/// used): the sampled-data and event-triggered families, whose controller
+/// memberships are evaluated at x(t_k).
+pub fn every_pair(
+    problem: &mut Problem,
+    model: &TsModel,
+    fam: &Family<'_>,
+    eps: f64,
+    reductions: &mut Vec<String>,
+    nonstrict: &mut Vec<String>,
+) -> Result<(), LmiError> {
+    relax(
+        problem,
+        model,
+        fam,
+        Relaxation::MembershipMismatch { kappa: 0.0 },
+        eps,
+        false,
+        reductions,
+        nonstrict,
+    )
+}

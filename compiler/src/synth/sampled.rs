@@ -15,9 +15,10 @@
 //! the latter by a Schur complement (one more block row and column:
 //! [Xi, sqrt(h) R2' L; *, -e^{-phi h_max} Y]).
 //!
-//! The same layout serves the primal form (constant gains, variables Q_k) and
-//! the congruent form of Theorem 2 (variables Q-hat, F-hat_j): the caller
-//! supplies the products "Q_k times a model matrix" as expressions.
+//! The layout serves the congruent form of Theorem 2 (variables Q-hat, F-hat_j;
+//! the caller supplies the products "Q_k times a model matrix" as expressions).
+//! The two-step trigger design (`trigger.rs`) has constant gains and substitutes
+//! x' instead (smaller LMIs, no Q_k).
 
 use tsf_lmi::{Expr, LmiError};
 

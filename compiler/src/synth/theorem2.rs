@@ -20,12 +20,12 @@
 //! unknowns in P_ijr, G_ijr, K_ijr, beyond what Clarabel solves here.
 
 use super::lmis::{region_block, var_row};
-use super::relaxation::{relax, Family};
+use super::relaxation::{every_pair, Family};
 use super::sampled::{lambda, Block12, Terms, Vertex};
 use super::{Settings, SynthError};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
-use tsf_lang::spec::{Relaxation, Trigger, TriggerSynthesis};
+use tsf_lang::spec::{Trigger, TriggerSynthesis};
 use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
 
 /// The numbers of one Theorem 2 problem.
@@ -209,13 +209,11 @@ pub fn build(model: &TsModel, p: &Theorem2Plan, eps: f64) -> Result<(Problem, Va
                 name: format!("(38) r={rr} h={h}"),
                 q: Box::new(move |i, j| lambda(terms(i, j)?, vertex)),
             };
-            relax(
+            every_pair(
                 &mut problem,
                 model,
                 &fam,
-                Relaxation::MembershipMismatch { kappa: 0.0 },
                 eps,
-                false,
                 &mut reductions,
                 &mut nonstrict,
             )?;

@@ -8,21 +8,23 @@
 //!
 //!   V = x' P x + (s + h - t) int_s^t e^{-phi (t - a)} x'(a)' Y x'(a) da,
 //!
-//! descriptor slacks Q_1..Q_3, free matrices L_1, L_2, a diagonal sector
-//! multiplier T > 0 and the trigger weight W = Upsilon > 0 such that, while the
+//! free matrices L_1, L_2, a diagonal sector multiplier T > 0 and the trigger
+//! weight W = Upsilon > 0 such that, while the
 //! event condition e' W e <= nu x(t_k)' W x(t_k) holds between transmissions,
 //! V' + phi V - xi tau' tau < 0 on E(P, 1 + xi tau_bar^2 / phi) (which lies in
 //! the linear region of the sector condition), and ||y||_inf < gamma ||tau||_inf.
-//! Every term is linear in the unknowns because F_j and G_j are constants.
-//! nu enters as nu W: the largest nu is found by bisection.
+//! Every term is linear in the unknowns because F_j and G_j are constants, so
+//! x' is substituted (no descriptor slacks). One SDP at the certified threshold
+//! (the adaptive ceiling); the largest certified nu is bisected only to explain
+//! an infeasible threshold.
 
 use super::lmis::{nonstrict_psd, region_block};
-use super::relaxation::{relax, Family};
+use super::relaxation::{every_pair, Family};
 use super::{Design, Runner, SynthError, TriggerDesign};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use std::time::{Duration, Instant};
-use tsf_lang::spec::{Relaxation, Trigger, TriggerSynthesis, Weight};
+use tsf_lang::spec::{Trigger, TriggerSynthesis, Weight};
 use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
 
 /// Data of the trigger problem (everything but nu is fixed by step 1 and the spec).
@@ -201,13 +203,11 @@ fn build_inner(
                 name: format!("trigger r={rr} h={h}"),
                 q: Box::new(move |i, j| lambda(model, plan, &vars, (i, j), h, rr)),
             };
-            relax(
+            every_pair(
                 &mut problem,
                 model,
                 &fam,
-                Relaxation::MembershipMismatch { kappa: 0.0 },
                 eps,
-                false,
                 &mut reductions,
                 &mut nonstrict,
             )?;
