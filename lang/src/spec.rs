@@ -21,6 +21,20 @@ pub struct Signal {
     pub span: Span,
 }
 
+impl Signal {
+    /// Names of its components in order: `w[0]`, `w[1]`, .. for a vector,
+    /// the name itself for a scalar.
+    pub fn component_names(&self) -> impl Iterator<Item = String> + '_ {
+        (0..self.len).map(move |k| {
+            if self.is_vector {
+                format!("{}[{k}]", self.name)
+            } else {
+                self.name.clone()
+            }
+        })
+    }
+}
+
 /// A performance output `y = C x + E u + G w`, linear by construction.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Output {

@@ -111,18 +111,7 @@ pub struct SensorTables {
 }
 
 fn component_names(signals: &[tsf_lang::spec::Signal]) -> Vec<String> {
-    signals
-        .iter()
-        .flat_map(|s| {
-            (0..s.len).map(move |k| {
-                if s.is_vector {
-                    format!("{}[{k}]", s.name)
-                } else {
-                    s.name.clone()
-                }
-            })
-        })
-        .collect()
+    signals.iter().flat_map(|s| s.component_names()).collect()
 }
 
 /// Builds the tables of a certified design. Errors say what cannot be generated.

@@ -90,15 +90,7 @@ impl<'a> Plant<'a> {
             Truth::Dynamics(d) => d
                 .extra_states
                 .iter()
-                .flat_map(|s| {
-                    (0..s.len).map(move |k| {
-                        if s.is_vector {
-                            format!("{}[{k}]", s.name)
-                        } else {
-                            s.name.clone()
-                        }
-                    })
-                })
+                .flat_map(|s| s.component_names())
                 .collect(),
             Truth::Model { .. } => Vec::new(),
         }

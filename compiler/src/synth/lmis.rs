@@ -6,7 +6,7 @@
 //! He(A_i X + B_i M_j); strict LMIs carry an explicit margin `eps`.
 
 use super::plan::{Bound, LinfPlan, Plan};
-use super::relaxation::{relax, Family};
+use super::relaxation::{Family, Relaxer};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use tsf_lang::spec::{InitialSet, Relaxation};
@@ -287,9 +287,8 @@ fn build_inner(
         linf_gamma,
         linf_xi,
     };
-    let mut reductions = Vec::new();
-    let mut nonstrict = Vec::new();
     let pair_reduce = reduce && common_b(model);
+    let mut relaxer = Relaxer::new(model, relaxation, eps, pair_reduce);
 
     problem.psd("X > 0", Expr::var(x), eps)?;
 
@@ -315,16 +314,7 @@ fn build_inner(
                 )
             }),
         };
-        relax(
-            &mut problem,
-            model,
-            &fam,
-            relaxation,
-            eps,
-            pair_reduce,
-            &mut reductions,
-            &mut nonstrict,
-        )?;
+        relaxer.impose(&mut problem, &fam)?;
     }
 
     if let Some(h) = &plan.hinf {
@@ -353,16 +343,7 @@ fn build_inner(
                 ])
             }),
         };
-        relax(
-            &mut problem,
-            model,
-            &fam,
-            relaxation,
-            eps,
-            pair_reduce,
-            &mut reductions,
-            &mut nonstrict,
-        )?;
+        relaxer.impose(&mut problem, &fam)?;
         if let Some(g) = vars.hinf_g {
             problem.add_scalar("g >= 0", Expr::var(g), Relation::Ge, 0.0)?;
             if h.bound == Bound::Minimize {
@@ -398,16 +379,7 @@ fn build_inner(
                 )
             }),
         };
-        relax(
-            &mut problem,
-            model,
-            &fam,
-            relaxation,
-            eps,
-            pair_reduce,
-            &mut reductions,
-            &mut nonstrict,
-        )?;
+        relaxer.impose(&mut problem, &fam)?;
         // Output peak: [phi X, 0, (C X + E M_j)'; *, (gamma - xi) I, G'; *, *, gamma I] > 0 for every j.
         let gi = |k| scalar_times_identity(vars.linf_gamma, gamma_fixed, k);
         for j in 0..r {
@@ -437,7 +409,7 @@ fn build_inner(
     if let Some(u) = &plan.input_norm {
         initial_set(
             &mut problem,
-            &mut nonstrict,
+            &mut relaxer.nonstrict,
             eps,
             &vars,
             &u.initial,
@@ -454,7 +426,7 @@ fn build_inner(
             ])?;
             nonstrict_psd(
                 &mut problem,
-                &mut nonstrict,
+                &mut relaxer.nonstrict,
                 &format!("input norm [{}]", j + 1),
                 e,
                 eps,
@@ -470,7 +442,7 @@ fn build_inner(
         if plan.input_norm.is_none() {
             initial_set(
                 &mut problem,
-                &mut nonstrict,
+                &mut relaxer.nonstrict,
                 eps,
                 &vars,
                 &o.initial,
@@ -487,7 +459,7 @@ fn build_inner(
             vec![Some(Expr::var(x)), Some(cx.transpose())],
             vec![None, Some(scalar_times_identity(vars.output_s, fixed, p)?)],
         ])?;
-        nonstrict_psd(&mut problem, &mut nonstrict, "output norm", e, eps)?;
+        nonstrict_psd(&mut problem, &mut relaxer.nonstrict, "output norm", e, eps)?;
         if let (Some(s), Bound::Minimize) = (vars.output_s, o.bound) {
             problem.minimize(Expr::var(s))?;
         }
@@ -500,7 +472,7 @@ fn build_inner(
         if let Some(init) = &sat.contain {
             initial_set(
                 &mut problem,
-                &mut nonstrict,
+                &mut relaxer.nonstrict,
                 eps,
                 &vars,
                 init,
@@ -529,7 +501,7 @@ fn build_inner(
                 let e = region_block(Expr::var(x), row, rhs)?;
                 nonstrict_psd(
                     &mut problem,
-                    &mut nonstrict,
+                    &mut relaxer.nonstrict,
                     &format!("linear region [{},{}]", j + 1, k + 1),
                     e,
                     eps,
@@ -540,7 +512,7 @@ fn build_inner(
     Ok(Built {
         problem,
         vars,
-        reductions,
-        nonstrict,
+        reductions: relaxer.reductions,
+        nonstrict: relaxer.nonstrict,
     })
 }

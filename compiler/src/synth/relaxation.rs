@@ -15,11 +15,65 @@ pub struct Family<'a> {
     pub q: Box<dyn Fn(usize, usize) -> Result<Expr, LmiError> + 'a>,
 }
 
-/// Adds the relaxed conditions of `fam` to `problem`. With `pair_reduce`
-/// (every rule shares B) the pair conditions are left out: they equal sums of
-/// vertex conditions (Q_ij + Q_ji = Q_ii + Q_jj) and so are implied.
+/// Imposes objective families under one relaxation and collects what the
+/// certificate and report need: the reductions applied and the names of
+/// constraints that are non-strict in the theory.
+#[derive(Debug)]
+pub struct Relaxer<'m> {
+    model: &'m TsModel,
+    relaxation: Relaxation,
+    eps: f64,
+    pair_reduce: bool,
+    /// Reductions applied, one sentence each.
+    pub reductions: Vec<String>,
+    /// Constraints non-strict in the theory.
+    pub nonstrict: Vec<String>,
+}
+
+impl<'m> Relaxer<'m> {
+    /// `relaxation` with margin `eps`. With `pair_reduce` (every rule shares B)
+    /// the pair conditions are left out: they equal sums of vertex conditions
+    /// (Q_ij + Q_ji = Q_ii + Q_jj) and so are implied.
+    pub fn new(model: &'m TsModel, relaxation: Relaxation, eps: f64, pair_reduce: bool) -> Self {
+        Relaxer {
+            model,
+            relaxation,
+            eps,
+            pair_reduce,
+            reductions: Vec::new(),
+            nonstrict: Vec::new(),
+        }
+    }
+
+    /// Every plant/controller pair `Q_ij < 0` (membership mismatch with no
+    /// bound used): the sampled-data and event-triggered families, whose
+    /// controller memberships are evaluated at x(t_k).
+    pub fn every_pair(model: &'m TsModel, eps: f64) -> Self {
+        Relaxer::new(
+            model,
+            Relaxation::MembershipMismatch { kappa: 0.0 },
+            eps,
+            false,
+        )
+    }
+
+    /// Adds the relaxed conditions of `fam` to `problem`.
+    pub fn impose(&mut self, problem: &mut Problem, fam: &Family<'_>) -> Result<(), LmiError> {
+        relax(
+            problem,
+            self.model,
+            fam,
+            self.relaxation,
+            self.eps,
+            self.pair_reduce,
+            &mut self.reductions,
+            &mut self.nonstrict,
+        )
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
-pub fn relax(
+fn relax(
     problem: &mut Problem,
     model: &TsModel,
     fam: &Family<'_>,
@@ -146,27 +200,4 @@ pub fn relax(
         ));
     }
     Ok(())
-}
-
-/// Every plant/controller pair `Q_ij < 0` (membership mismatch with no bound
-/// used): the sampled-data and event-triggered families, whose controller
-/// memberships are evaluated at x(t_k).
-pub fn every_pair(
-    problem: &mut Problem,
-    model: &TsModel,
-    fam: &Family<'_>,
-    eps: f64,
-    reductions: &mut Vec<String>,
-    nonstrict: &mut Vec<String>,
-) -> Result<(), LmiError> {
-    relax(
-        problem,
-        model,
-        fam,
-        Relaxation::MembershipMismatch { kappa: 0.0 },
-        eps,
-        false,
-        reductions,
-        nonstrict,
-    )
 }

@@ -20,7 +20,7 @@
 //! unknowns in P_ijr, G_ijr, K_ijr, beyond what Clarabel solves here.
 
 use super::lmis::{region_block, var_row};
-use super::relaxation::{every_pair, Family};
+use super::relaxation::{Family, Relaxer};
 use super::sampled::{lambda, Block12, Terms, Vertex};
 use super::{Settings, SynthError};
 use crate::model::TsModel;
@@ -193,8 +193,7 @@ pub fn build(model: &TsModel, p: &Theorem2Plan, eps: f64) -> Result<(Problem, Va
             xi: Expr::constant(&(DMatrix::identity(q, q) * p.xi))?,
         })
     };
-    let mut reductions = Vec::new();
-    let mut nonstrict = Vec::new();
+    let mut relaxer = Relaxer::every_pair(model, eps);
     for h in [p.sampling.0, p.sampling.1] {
         for rr in [1u8, 2] {
             let vertex = Vertex {
@@ -209,14 +208,7 @@ pub fn build(model: &TsModel, p: &Theorem2Plan, eps: f64) -> Result<(Problem, Va
                 name: format!("(38) r={rr} h={h}"),
                 q: Box::new(move |i, j| lambda(terms(i, j)?, vertex)),
             };
-            every_pair(
-                &mut problem,
-                model,
-                &fam,
-                eps,
-                &mut reductions,
-                &mut nonstrict,
-            )?;
+            relaxer.impose(&mut problem, &fam)?;
         }
     }
     // (40).

@@ -19,7 +19,7 @@
 //! an infeasible threshold.
 
 use super::lmis::{nonstrict_psd, region_block};
-use super::relaxation::{every_pair, Family};
+use super::relaxation::{Family, Relaxer};
 use super::{Design, Runner, SynthError, TriggerDesign};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -185,8 +185,7 @@ fn build_inner(
     let t = problem.diagonal("T", m)?;
     let gamma = problem.scalar("gamma_tr")?;
     let xi = problem.scalar("xi_tr")?;
-    let mut nonstrict = Vec::new();
-    let mut reductions = Vec::new();
+    let mut relaxer = Relaxer::every_pair(model, eps);
     problem.psd("trigger P > 0", Expr::var(p), eps)?;
     problem.psd("trigger Y > 0", Expr::var(y), eps)?;
     problem.psd("trigger Upsilon > 0", Expr::var(w), eps)?;
@@ -195,7 +194,7 @@ fn build_inner(
     let (h_min, h_max) = plan.sampling;
     let hs: &[f64] = if reduce { &[h_max] } else { &[h_min, h_max] };
     if reduce {
-        reductions.push(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r));
+        relaxer.reductions.push(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r));
     }
     for &h in hs {
         for rr in [1u8, 2] {
@@ -203,14 +202,7 @@ fn build_inner(
                 name: format!("trigger r={rr} h={h}"),
                 q: Box::new(move |i, j| lambda(model, plan, &vars, (i, j), h, rr)),
             };
-            every_pair(
-                &mut problem,
-                model,
-                &fam,
-                eps,
-                &mut reductions,
-                &mut nonstrict,
-            )?;
+            relaxer.impose(&mut problem, &fam)?;
         }
     }
     // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi.
@@ -223,7 +215,7 @@ fn build_inner(
             let e = region_block(Expr::var(p), row, rhs)?;
             nonstrict_psd(
                 &mut problem,
-                &mut nonstrict,
+                &mut relaxer.nonstrict,
                 &format!("trigger linear region [{},{}]", j + 1, s + 1),
                 e,
                 eps,
@@ -264,8 +256,8 @@ fn build_inner(
     Ok(TriggerBuilt {
         problem,
         vars: TriggerVars { p, w, gamma, xi },
-        reductions,
-        nonstrict,
+        reductions: relaxer.reductions,
+        nonstrict: relaxer.nonstrict,
     })
 }
 
