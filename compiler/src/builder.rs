@@ -14,25 +14,16 @@
 //! `<controller>_sensor.rs` (and `.h`/`.c` with C): include it in its own
 //! module, next to the controller it feeds.
 
-use crate::codegen::{generate, GeneratedFile};
-use crate::compile::{compile, Status};
-use crate::frontend;
-use crate::report::{sha256_hex, write_atomic, SpecInfo};
+use crate::codegen::GeneratedFile;
+use crate::error::Error;
+use crate::pipeline::{self, SpecName};
+use crate::report::write_atomic;
 use crate::synth::Settings;
 use std::path::{Path, PathBuf};
 use tsf_lang::spec::Emit;
 
 /// Why a build failed; `Display` gives the full message (diagnostics included).
-#[derive(Debug)]
-pub struct BuildError(pub String);
-
-impl std::fmt::Display for BuildError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for BuildError {}
+pub type BuildError = Error;
 
 /// Configures and runs spec compilation from a build script.
 #[derive(Debug, Clone)]
@@ -100,7 +91,7 @@ impl Builder {
         let out = match &self.out_dir {
             Some(d) => d.clone(),
             None => PathBuf::from(std::env::var_os("OUT_DIR").ok_or_else(|| {
-                BuildError("OUT_DIR is not set: call from a build script or set `out_dir`".into())
+                Error::usage("OUT_DIR is not set: call from a build script or set `out_dir`")
             })?),
         };
         let mut targets = Vec::new();
@@ -116,52 +107,16 @@ impl Builder {
             for f in self.compile_one(spec, &targets)? {
                 let path = out.join(&f.name);
                 write_atomic(&path, f.text.as_bytes())
-                    .map_err(|e| BuildError(format!("cannot write {}: {e}", path.display())))?;
+                    .map_err(|e| Error::usage(format!("cannot write {}: {e}", path.display())))?;
                 written.push(path);
             }
         }
         Ok(written)
     }
 
-    fn compile_one(&self, spec: &Path, targets: &[Emit]) -> Result<Vec<GeneratedFile>, BuildError> {
-        let source = frontend::read_source(spec).map_err(|e| BuildError(e.message))?;
-        let checked = frontend::check(&source);
-        let Some(model) = checked.model else {
-            return Err(BuildError(tsf_lang::diag::render(
-                &source.name,
-                &source.text,
-                &checked.diagnostics,
-                false,
-            )));
-        };
-        // Header paths name the spec by file name only: OUT_DIR builds must not
-        // depend on where the workspace lives.
-        let shown = spec
-            .file_name()
-            .map_or_else(|| source.name.clone(), |n| n.to_string_lossy().into_owned());
-        let sha = sha256_hex(&source.bytes);
-        let info = SpecInfo {
-            path: shown.clone(),
-            sha256: sha.clone(),
-        };
-        let compiled = compile(
-            &model,
-            info,
-            &self.settings,
-            (checked.parse_time, checked.model_time),
-        );
-        match (&compiled.status, &compiled.outcome) {
-            (Status::Certified, Ok((design, cert))) => {
-                generate(&model, design, cert, &shown, &sha, targets).map_err(BuildError)
-            }
-            _ => Err(BuildError(format!(
-                "{}: not certified ({})",
-                spec.display(),
-                compiled.report.diagnosis.as_ref().map_or_else(
-                    || compiled.report.status.to_string(),
-                    |d| format!("{}; {}", d.message, d.achievable.join("; "))
-                )
-            ))),
-        }
+    fn compile_one(&self, spec: &Path, targets: &[Emit]) -> Result<Vec<GeneratedFile>, Error> {
+        pipeline::read(spec, SpecName::FileName)?
+            .compile(&self.settings)?
+            .generate(targets)
     }
 }

@@ -4,7 +4,7 @@
 //! only if every strict LMI holds beyond its floating-point error bound.
 
 use crate::model::TsModel;
-use crate::synth::{build, Design};
+use crate::synth::{build, Design, Reduction};
 use serde::Serialize;
 use tsf_lmi::ConstraintKind;
 
@@ -39,21 +39,30 @@ pub struct Certificate {
     pub lmis: Vec<LmiMargin>,
 }
 
-/// Margins of every constraint of `problem` at the named `values` (variables
-/// the solved, reduced problem did not have are zero, e.g. a relaxation slack
-/// proven unnecessary).
+/// Margins of every constraint of the full `problem` at the solved values.
+/// The reductions applied to the solved problem are inverted first (they
+/// restore the variables it did not have); a variable still without a value
+/// is an error, never silently zero.
 fn margins_of(
     problem: &tsf_lmi::Problem,
     nonstrict: &[String],
-    named: &[(String, nalgebra::DMatrix<f64>)],
+    solved: &[(String, nalgebra::DMatrix<f64>)],
+    reductions: &[Reduction],
 ) -> Result<Vec<LmiMargin>, String> {
+    let mut named = solved.to_vec();
+    for r in reductions {
+        r.invert(&mut named);
+    }
     let mut values = problem.assignment();
     for (name, v) in problem.vars() {
-        if let Some((_, value)) = named.iter().find(|(n, _)| n == name) {
-            values
-                .set(v, value.clone())
-                .map_err(|e| format!("internal error: {e}"))?;
-        }
+        let Some((_, value)) = named.iter().find(|(n, _)| n == name) else {
+            return Err(format!(
+                "internal error: variable `{name}` of the certified problem has no value (a reduction was not inverted)"
+            ));
+        };
+        values
+            .set(v, value.clone())
+            .map_err(|e| format!("internal error: {e}"))?;
     }
     let margins = problem
         .margins(&values)
@@ -92,16 +101,28 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, String> 
         model.spec.relaxation.node,
         design.eps,
         false,
+    )
+    .map_err(|e| e.to_string())?;
+    let mut lmis = margins_of(
+        &built.problem,
+        &built.nonstrict,
+        &design.values,
+        &design.reductions,
     )?;
-    let mut lmis = margins_of(&built.problem, &built.nonstrict, &design.values)?;
     if let Some(t) = &design.trigger {
         // The gains checked are the design's (the ones emitted), not a copy.
         let plan = crate::synth::TriggerPlan {
             gains: design.gains.clone(),
             ..t.plan.clone()
         };
-        let tb = crate::synth::trigger::build(model, &plan, design.eps, false)?;
-        lmis.extend(margins_of(&tb.problem, &tb.nonstrict, &t.values)?);
+        let tb = crate::synth::trigger::build(model, &plan, design.eps, false)
+            .map_err(|e| e.to_string())?;
+        lmis.extend(margins_of(
+            &tb.problem,
+            &tb.nonstrict,
+            &t.values,
+            &t.reductions,
+        )?);
     }
     let min_margin = lmis
         .iter()

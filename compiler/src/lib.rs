@@ -11,11 +11,14 @@ pub mod builder;
 pub mod certify;
 pub mod codegen;
 pub mod compile;
+pub mod error;
 pub mod frontend;
 pub mod model;
+pub mod pipeline;
 pub mod report;
 pub mod sim;
 pub mod summary;
 pub mod synth;
 
 pub use builder::Builder;
+pub use error::{Error, ErrorKind};

@@ -5,13 +5,14 @@ use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use tsf_lang::diag;
+use tsf_lang::spec::Emit;
 use tsfc::frontend;
+use tsfc::pipeline::{self, SpecName};
 
 /// Exit codes: 0 ok, 1 spec error, 2 usage or I/O error, 3 infeasible or refused.
 mod exit {
     pub const SPEC: u8 = 1;
     pub const IO: u8 = 2;
-    pub const INFEASIBLE: u8 = 3;
 }
 
 #[derive(Parser)]
@@ -108,34 +109,28 @@ fn compile(
     emit: Option<Vec<Target>>,
 ) -> ExitCode {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
-    let source = match frontend::read_source(path) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: {}", e.message);
-            return ExitCode::from(exit::IO);
+    let fail = |e: tsfc::Error| {
+        eprint!("{}", e.message);
+        if !e.message.ends_with('\n') {
+            eprintln!();
         }
+        ExitCode::from(e.exit_code())
     };
-    let checked = frontend::check(&source);
-    eprint!(
-        "{}",
-        diag::render(&source.name, &source.text, &checked.diagnostics, color)
-    );
-    let Some(model) = checked.model else {
+    let front = match pipeline::read(path, SpecName::AsGiven) {
+        Ok(f) => f,
+        Err(e) => return fail(tsfc::Error::usage(format!("error: {}", e.message))),
+    };
+    eprint!("{}", front.render(color));
+    if front.checked.model.is_none() {
         return ExitCode::from(exit::SPEC);
+    }
+    let run = match front.compile(&tsfc::synth::Settings::default()) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
     };
-    let spec = tsfc::report::SpecInfo {
-        path: source.name.clone(),
-        sha256: tsfc::report::sha256_hex(&source.bytes),
-    };
-    let compiled = tsfc::compile::compile(
-        &model,
-        spec,
-        &tsfc::synth::Settings::default(),
-        (checked.parse_time, checked.model_time),
-    );
     let report_path = report_path
-        .unwrap_or_else(|| out.join(format!("{}.report.json", model.spec.controller.node)));
-    let json = match serde_json::to_string_pretty(&compiled.report) {
+        .unwrap_or_else(|| out.join(format!("{}.report.json", run.model.spec.controller.node)));
+    let json = match serde_json::to_string_pretty(&run.compiled.report) {
         Ok(j) => j + "\n",
         Err(e) => {
             eprintln!("error: cannot serialize the report: {e}");
@@ -148,51 +143,38 @@ fn compile(
     }
     eprint!(
         "{}",
-        tsfc::summary::summary(&model, &compiled, &report_path)
+        tsfc::summary::summary(&run.model, &run.compiled, &report_path)
     );
-    if let Ok((design, cert)) = &compiled.outcome {
-        if cert.ok {
-            let targets: Vec<tsf_lang::spec::Emit> = match emit {
-                Some(t) => t
-                    .iter()
-                    .map(|t| {
-                        if *t == Target::Rust {
-                            tsf_lang::spec::Emit::Rust
-                        } else {
-                            tsf_lang::spec::Emit::C
-                        }
-                    })
-                    .collect(),
-                None => model.spec.emit.clone(),
-            };
-            let files = match tsfc::codegen::generate(
-                &model,
-                design,
-                cert,
-                &source.name,
-                &tsfc::report::sha256_hex(&source.bytes),
-                &targets,
-            ) {
-                Ok(f) => f,
-                Err(e) => {
-                    eprintln!("error: code generation failed: {e}");
-                    return ExitCode::from(exit::INFEASIBLE);
-                }
-            };
-            for f in files {
-                let path = out.join(&f.name);
-                if let Err(e) = tsfc::report::write_atomic(&path, f.text.as_bytes()) {
-                    eprintln!("error: cannot write `{}`: {e}", path.display());
-                    return ExitCode::from(exit::IO);
-                }
-                eprintln!("  wrote                {}", path.display());
+    if run.certified().is_ok() {
+        let targets: Vec<Emit> = match emit {
+            Some(t) => t
+                .iter()
+                .map(|t| match t {
+                    Target::Rust => Emit::Rust,
+                    Target::C => Emit::C,
+                })
+                .collect(),
+            None => run.model.spec.emit.clone(),
+        };
+        let files = match run.generate(&targets) {
+            Ok(f) => f,
+            Err(e) => {
+                return fail(tsfc::Error {
+                    message: format!("error: {}", e.message),
+                    ..e
+                })
             }
+        };
+        for f in files {
+            let path = out.join(&f.name);
+            if let Err(e) = tsfc::report::write_atomic(&path, f.text.as_bytes()) {
+                eprintln!("error: cannot write `{}`: {e}", path.display());
+                return ExitCode::from(exit::IO);
+            }
+            eprintln!("  wrote                {}", path.display());
         }
     }
-    match compiled.status {
-        tsfc::compile::Status::Certified => ExitCode::SUCCESS,
-        _ => ExitCode::from(exit::INFEASIBLE),
-    }
+    ExitCode::from(run.exit_code())
 }
 
 fn simulate(

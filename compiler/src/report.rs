@@ -174,7 +174,7 @@ pub struct Report {
 fn objectives(model: &TsModel, design: &Design) -> BTreeMap<String, serde_json::Value> {
     let a = &design.achieved;
     let mut o = BTreeMap::new();
-    if a.linf_gamma.is_some() {
+    if a.get(crate::synth::Quantity::LinfGamma).is_some() {
         if let Some(g) = model.spec.linf_paper {
             o.insert("linf_gamma_paper".into(), serde_json::json!(g));
         }
@@ -185,18 +185,9 @@ fn objectives(model: &TsModel, design: &Design) -> BTreeMap<String, serde_json::
             serde_json::json!(t.gamma),
         );
     }
-    let mut put = |k: &str, v: Option<f64>| {
-        if let Some(v) = v {
-            o.insert(k.to_string(), serde_json::json!(v));
-        }
-    };
-    put("hinf_gamma", a.hinf_gamma);
-    put("linf_gamma", a.linf_gamma);
-    put("linf_phi", a.linf_phi);
-    put("linf_xi", a.linf_xi);
-    put("decay_rate", a.decay_rate);
-    put("input_norm_bound", a.input_norm_bound);
-    put("output_norm_bound", a.output_norm_bound);
+    for (q, v) in a.iter() {
+        o.insert(q.key().to_string(), serde_json::json!(v));
+    }
     if let Some((lo, hi)) = a.decay_bracket {
         o.insert(
             "decay_rate_bracket".into(),
@@ -315,17 +306,23 @@ pub fn report(
         certificate: cert,
         reductions: design
             .map(|d| {
-                let mut r = d.reductions.clone();
-                if let Some(t) = &d.trigger {
-                    r.extend(t.reductions.iter().cloned());
-                }
-                r
+                let trigger = d.trigger.iter().flat_map(|t| &t.reductions);
+                d.reductions
+                    .iter()
+                    .chain(trigger)
+                    .map(|r| r.to_string())
+                    .collect()
             })
             .unwrap_or_default(),
         notes: design.map(|d| d.notes.clone()).unwrap_or_default(),
         diagnosis,
         region_of_attraction: design
-            .filter(|d| certified && d.plan.saturation.is_some())
+            .filter(|d| {
+                certified
+                    && d.plan
+                        .get::<crate::synth::objectives::Saturation>()
+                        .is_some()
+            })
             .map(|d| {
                 let p = d.trigger.as_ref().map_or(&d.p, |t| &t.p);
                 let level = model.spec.simulate.as_ref().map(|sim| {

@@ -226,6 +226,63 @@ pub enum Objective {
 /// An objective with its span.
 pub type SpannedObjective = Spanned<Objective>;
 
+/// The family of an objective: the one name that the checker, synthesis,
+/// report and generated headers share (no raw strings across crates).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum ObjectiveKind {
+    /// Closed-loop stability (a common quadratic Lyapunov function).
+    Stability,
+    /// Decay rate alpha.
+    DecayRate,
+    /// H-inf gain.
+    Hinf,
+    /// Peak-to-peak (L-inf) gain.
+    Linf,
+    /// Bound on ||u(t)||.
+    InputNorm,
+    /// Bound on ||y(t)||.
+    OutputNorm,
+    /// Saturation region (generalized sector condition).
+    SaturationRegion,
+}
+
+impl ObjectiveKind {
+    /// The keyword of the language (`decay_rate`, `hinf`, ...), also the key
+    /// used in reports.
+    pub fn keyword(self) -> &'static str {
+        match self {
+            ObjectiveKind::Stability => "stability",
+            ObjectiveKind::DecayRate => "decay_rate",
+            ObjectiveKind::Hinf => "hinf",
+            ObjectiveKind::Linf => "linf",
+            ObjectiveKind::InputNorm => "input_norm",
+            ObjectiveKind::OutputNorm => "output_norm",
+            ObjectiveKind::SaturationRegion => "saturation_region",
+        }
+    }
+}
+
+impl std::fmt::Display for ObjectiveKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.keyword())
+    }
+}
+
+impl Objective {
+    /// The family of this objective.
+    pub fn kind(&self) -> ObjectiveKind {
+        match self {
+            Objective::Stability => ObjectiveKind::Stability,
+            Objective::DecayRate(_) => ObjectiveKind::DecayRate,
+            Objective::Hinf { .. } => ObjectiveKind::Hinf,
+            Objective::Linf { .. } => ObjectiveKind::Linf,
+            Objective::InputNorm { .. } => ObjectiveKind::InputNorm,
+            Objective::OutputNorm { .. } => ObjectiveKind::OutputNorm,
+            Objective::SaturationRegion { .. } => ObjectiveKind::SaturationRegion,
+        }
+    }
+}
+
 /// The double-sum relaxation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Relaxation {

@@ -8,7 +8,7 @@ mod common;
 use tsfc::compile::{compile, Status};
 use tsfc::model::TsModel;
 use tsfc::report::SpecInfo;
-use tsfc::synth::{self, Settings, SynthError};
+use tsfc::synth::{self, Quantity, Settings, SynthError};
 
 use common::{model_of, shipped};
 
@@ -55,7 +55,7 @@ fn lti_hinf_matches_the_riccati_closed_form() {
     // hinf(w1 -> z) takes only the first disturbance channel: subsystem 1.
     let model = model_of("lti.tsf", &spec);
     let d = synth::synthesize(&model, &Settings::default()).expect("feasible");
-    let gamma = d.achieved.hinf_gamma.expect("gamma");
+    let gamma = d.achieved.get(Quantity::HinfGamma).expect("gamma");
     let exact = d1 / (a1 * a1 / (c1 * c1) + b1 * b1).sqrt();
     assert!(
         (gamma - exact).abs() / exact < 1e-4,
@@ -68,7 +68,7 @@ fn lti_hinf_matches_the_riccati_closed_form() {
         .replace("hinf(w1 -> z)", "hinf(w -> z)");
     let model2 = model_of("lti2.tsf", &spec2);
     let d2s = synth::synthesize(&model2, &Settings::default()).expect("feasible");
-    let gamma2 = d2s.achieved.hinf_gamma.expect("gamma");
+    let gamma2 = d2s.achieved.get(Quantity::HinfGamma).expect("gamma");
     let exact2 = exact.max(d2 / (a2 * a2 / (c2 * c2) + b2 * b2).sqrt());
     assert!(
         (gamma2 - exact2).abs() / exact2 < 1e-4,
@@ -180,11 +180,11 @@ fn zhang2013_compiles_to_a_certified_design() {
             .count()
             >= 40
     );
-    let gamma = design.achieved.hinf_gamma.expect("gamma");
+    let gamma = design.achieved.get(Quantity::HinfGamma).expect("gamma");
     let summary = format!(
         "hinf_gamma: {gamma:.4}\ndecay_rate: {}\ninput_norm_bound: {}\nconditions: {}\nstrict: {}\nmin_margin_at_least_eps: {}\n",
-        design.achieved.decay_rate.unwrap_or(f64::NAN),
-        design.achieved.input_norm_bound.unwrap_or(f64::NAN),
+        design.achieved.get(Quantity::DecayRate).unwrap_or(f64::NAN),
+        design.achieved.get(Quantity::InputNormBound).unwrap_or(f64::NAN),
         cert.lmis.len(),
         cert.lmis.iter().filter(|l| l.strict).count(),
         cert.min_margin >= 0.9 * design.eps
@@ -228,7 +228,7 @@ fn pendulum_closed_loops_are_hurwitz_with_the_decay_rate() {
     let c = compile(&model, info(), &Settings::default(), Default::default());
     assert_eq!(c.status, Status::Certified);
     let (design, _) = c.outcome.as_ref().expect("design");
-    let alpha = design.achieved.decay_rate.expect("decay");
+    let alpha = design.achieved.get(Quantity::DecayRate).expect("decay");
     assert!(worst_vertex_real_part(&model, &design.gains) <= -alpha + 1e-9);
 }
 
@@ -268,8 +268,8 @@ fn linf_bound_with_saturation_searches_xi_below_the_bound() {
     let c = compile(&model, info(), &Settings::default(), Default::default());
     assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
     let (design, _) = c.outcome.as_ref().expect("certified");
-    let gamma = design.achieved.linf_gamma.expect("gamma");
-    let xi = design.achieved.linf_xi.expect("xi");
+    let gamma = design.achieved.get(Quantity::LinfGamma).expect("gamma");
+    let xi = design.achieved.get(Quantity::LinfXi).expect("xi");
     assert!(
         gamma <= 0.5 && xi <= gamma && xi > 0.256,
         "gamma {gamma}, xi {xi}"

@@ -16,9 +16,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tsf_lang::spec::{InitialSet, Objective, Relaxation, Target};
 use tsfc::compile::Status;
-use tsfc::frontend::{self, Source};
 use tsfc::model::TsModel;
-use tsfc::report::{rows, Report, SpecInfo, Timings};
+use tsfc::pipeline::{read, SpecName};
+use tsfc::report::{rows, Report, Timings};
 
 /// Seconds per pipeline stage (the report's `timings_s`).
 #[derive(Serialize, Debug, Clone, Copy, Default)]
@@ -140,7 +140,13 @@ fn main() -> ExitCode {
 
 fn run(cli: &Cli) -> Result<(), String> {
     if let Some(spec) = &cli.dump_model {
-        let model = load(spec)?.1;
+        let front = read(spec, SpecName::AsGiven).map_err(|e| e.message)?;
+        let Some(model) = front.checked.model else {
+            return Err(format!(
+                "`{}` has spec errors; run `tsfc check` on it",
+                spec.display()
+            ));
+        };
         let json = serde_json::to_string_pretty(&dump_model(&model)?)
             .map_err(|e| format!("cannot serialize the model: {e}"))?;
         println!("{json}");
@@ -233,32 +239,12 @@ fn scaling_run(
         .collect()
 }
 
-/// Reads and checks a spec; errors if it has spec errors.
-fn load(
-    path: &Path,
-) -> Result<(Source, TsModel, (std::time::Duration, std::time::Duration)), String> {
-    let source = frontend::read_source(path).map_err(|e| e.message)?;
-    let checked = frontend::check(&source);
-    let front = (checked.parse_time, checked.model_time);
-    let errors = checked.diagnostics.iter().filter(|d| d.is_error()).count();
-    match checked.model {
-        Some(model) if errors == 0 => Ok((source, model, front)),
-        _ => Err(format!(
-            "`{}` has {errors} spec error(s); run `tsfc check` on it",
-            path.display()
-        )),
-    }
-}
-
 /// One full pipeline run: read, check, compile.
 fn pipeline(path: &Path, settings: &Settings) -> Result<(Report, Status), String> {
-    let (source, model, front) = load(path)?;
-    let info = SpecInfo {
-        path: source.name.clone(),
-        sha256: tsfc::report::sha256_hex(&source.bytes),
-    };
-    let compiled = tsfc::compile::compile(&model, info, settings, front);
-    Ok((compiled.report, compiled.status))
+    let run = read(path, SpecName::AsGiven)
+        .and_then(|f| f.compile(settings))
+        .map_err(|e| e.message)?;
+    Ok((run.compiled.report, run.compiled.status))
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

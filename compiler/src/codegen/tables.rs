@@ -149,19 +149,11 @@ pub fn tables(
         Some(l) => PremiseCode::Linear(l),
         None => PremiseCode::Exprs(entries),
     };
-    let a = &design.achieved;
-    let mut objectives = Vec::new();
-    for (k, v) in [
-        ("hinf_gamma", a.hinf_gamma),
-        ("linf_gamma", a.linf_gamma),
-        ("decay_rate", a.decay_rate),
-        ("input_norm_bound", a.input_norm_bound),
-        ("output_norm_bound", a.output_norm_bound),
-    ] {
-        if let Some(v) = v {
-            objectives.push((k.to_string(), format!("{v:.6e}")));
-        }
-    }
+    let objectives = design
+        .achieved
+        .bounds()
+        .map(|(q, v)| (q.key().to_string(), format!("{v:.6e}")))
+        .collect();
     Ok(Tables {
         name: spec.controller.node.clone(),
         header: Header {

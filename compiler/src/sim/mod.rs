@@ -29,70 +29,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use tsf_lang::spec::{Integrator, Trigger};
 
-/// What kind of failure a [`SimError`] is (decides the exit code).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ErrorKind {
-    /// The spec is invalid or cannot be simulated (exit 1).
-    Spec,
-    /// Bad command-line values or an I/O failure (exit 2).
-    Usage,
-    /// The design is not certified (exit 3).
-    NotCertified,
-}
-
-/// A simulation failure with a message for the user.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SimError {
-    /// Kind.
-    pub kind: ErrorKind,
-    /// What went wrong.
-    pub message: String,
-}
-
-impl SimError {
-    /// A spec error.
-    pub fn spec(message: impl Into<String>) -> Self {
-        SimError {
-            kind: ErrorKind::Spec,
-            message: message.into(),
-        }
-    }
-
-    /// Something the simulator does not support (reported as a spec error).
-    pub fn unsupported(message: impl Into<String>) -> Self {
-        Self::spec(message)
-    }
-
-    /// A numeric failure of the integration (reported as a spec error).
-    pub fn numeric(message: impl Into<String>) -> Self {
-        Self::spec(message)
-    }
-
-    /// A usage or I/O error.
-    pub fn usage(message: impl Into<String>) -> Self {
-        SimError {
-            kind: ErrorKind::Usage,
-            message: message.into(),
-        }
-    }
-
-    /// The process exit code: 1 spec, 2 usage/IO, 3 not certified.
-    pub fn exit_code(&self) -> u8 {
-        match self.kind {
-            ErrorKind::Spec => 1,
-            ErrorKind::Usage => 2,
-            ErrorKind::NotCertified => 3,
-        }
-    }
-}
-
-impl std::fmt::Display for SimError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.message)
-    }
-}
-
-impl std::error::Error for SimError {}
+/// A simulation failure: the pipeline's error (its kind decides the exit code).
+pub type SimError = crate::error::Error;
+pub use crate::error::ErrorKind;
 
 /// Overrides of the spec's scenario.
 #[derive(Debug, Clone)]
@@ -146,47 +85,11 @@ pub struct Prepared {
 /// Reads, checks and compiles the spec at `path`; the design must be certified.
 /// Spec diagnostics are rendered into the error message.
 pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
-    let source = crate::frontend::read_source(path).map_err(|e| SimError::usage(e.message))?;
-    let checked = crate::frontend::check(&source);
-    let Some(model) = checked.model else {
-        return Err(SimError::spec(tsf_lang::diag::render(
-            &source.name,
-            &source.text,
-            &checked.diagnostics,
-            false,
-        )));
-    };
-    let sha = crate::report::sha256_hex(&source.bytes);
-    let info = crate::report::SpecInfo {
-        path: source.name.clone(),
-        sha256: sha.clone(),
-    };
-    let compiled = crate::compile::compile(
-        &model,
-        info,
-        &crate::synth::Settings::default(),
-        (checked.parse_time, checked.model_time),
-    );
-    let (design, cert) = match compiled.outcome {
-        Ok((d, c)) if c.ok => (d, c),
-        Ok((_, c)) => {
-            return Err(SimError {
-                kind: ErrorKind::NotCertified,
-                message: format!(
-                    "the design is not certified (worst condition `{}`)",
-                    c.worst
-                ),
-            })
-        }
-        Err(e) => {
-            return Err(SimError {
-                kind: ErrorKind::NotCertified,
-                message: format!("no certified design: {e:?}"),
-            })
-        }
-    };
-    let tables = crate::codegen::tables(&model, &design, &cert, &source.name, &sha)
-        .map_err(SimError::spec)?;
+    let run = crate::pipeline::read(path, crate::pipeline::SpecName::AsGiven)?
+        .compile(&crate::synth::Settings::default())?;
+    let tables = run.tables()?;
+    let design = run.certified()?.0.clone();
+    let model = run.model;
     // The synthesized trigger weight Upsilon (two-step method); without one,
     // `weight = synthesize` falls back to P / lambda_max(P) (see
     // `trigger::trigger_weight`).

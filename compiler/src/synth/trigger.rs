@@ -18,9 +18,12 @@
 //! (the adaptive ceiling); the largest certified nu is bisected only to explain
 //! an infeasible threshold.
 
-use super::lmis::{nonstrict_psd, region_block};
-use super::relaxation::{Family, Relaxer};
-use super::{Design, Runner, SynthError, TriggerDesign};
+use super::blocks::{nonstrict_psd, region_block};
+use super::objectives::{Linf, Saturation};
+use super::reduction::Reduction;
+use super::relaxations::{Family, Relaxer};
+use super::search::Runner;
+use super::{BuildError, Design, Quantity, SynthError, TriggerDesign};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use std::time::{Duration, Instant};
@@ -75,7 +78,7 @@ pub struct TriggerBuilt {
     /// Its main variables.
     pub vars: TriggerVars,
     /// Reductions applied.
-    pub reductions: Vec<String>,
+    pub reductions: Vec<Reduction>,
     /// Constraints non-strict in the theory.
     pub nonstrict: Vec<String>,
 }
@@ -164,9 +167,8 @@ pub fn build(
     plan: &TriggerPlan,
     eps: f64,
     reduce: bool,
-) -> Result<TriggerBuilt, String> {
-    build_inner(model, plan, eps, reduce)
-        .map_err(|e| format!("internal LMI construction error: {e}"))
+) -> Result<TriggerBuilt, BuildError> {
+    Ok(build_inner(model, plan, eps, reduce)?)
 }
 
 fn build_inner(
@@ -194,7 +196,7 @@ fn build_inner(
     let (h_min, h_max) = plan.sampling;
     let hs: &[f64] = if reduce { &[h_max] } else { &[h_min, h_max] };
     if reduce {
-        relaxer.reductions.push(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r));
+        relaxer.reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r)));
     }
     for &h in hs {
         for rr in [1u8, 2] {
@@ -283,7 +285,8 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     else {
         return Err(unsupported("needs an aperiodic trigger"));
     };
-    let (Some(linf), Some(sat)) = (&design.plan.linf, &design.plan.saturation) else {
+    let (Some(linf), Some(sat)) = (design.plan.get::<Linf>(), design.plan.get::<Saturation>())
+    else {
         return Err(unsupported(
             "needs an L-inf objective and `objective saturation region` (the shipped method is Xu & Huang's setting)",
         ));
@@ -305,7 +308,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     let sector = (0..model.r())
         .map(|j| value(&format!("Z{}", j + 1)).map(|z| z * &design.p))
         .collect::<Result<Vec<_>, _>>()?;
-    let xi1 = design.achieved.linf_xi.unwrap_or(0.0);
+    let xi1 = design.achieved.get(Quantity::LinfXi).unwrap_or(0.0);
     Ok(TriggerPlan {
         sampling: *sampling,
         nu: 0.0,
@@ -333,11 +336,10 @@ impl Runner<'_> {
     /// One trigger SDP at threshold `nu`: the design, or None when not solved.
     fn trigger_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<TriggerDesign>, SynthError> {
         let t0 = Instant::now();
-        let built =
-            build(self.model, plan, self.settings.eps, true).map_err(SynthError::Unsupported)?;
+        let built = build(self.model, plan, self.settings.eps, true)?;
         self.log.build_time += t0.elapsed();
         let sol = built.problem.solve(&self.settings.solver).map_err(|e| {
-            SynthError::Unsupported(format!("solver refused the trigger problem: {e}"))
+            SynthError::Internal(format!("solver refused the trigger problem: {e}"))
         })?;
         self.log.solves += 1;
         self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
@@ -346,12 +348,12 @@ impl Runner<'_> {
         }
         let values = sol
             .assignment()
-            .map_err(|e| SynthError::Unsupported(format!("{e}")))?;
+            .map_err(|e| SynthError::Internal(format!("{e}")))?;
         let get = |v: Var| {
             values
                 .value(v)
                 .cloned()
-                .map_err(|e| SynthError::Unsupported(format!("{e}")))
+                .map_err(|e| SynthError::Internal(format!("{e}")))
         };
         let all = built
             .problem

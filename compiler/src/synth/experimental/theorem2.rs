@@ -19,10 +19,11 @@
 //! blocks of size 30-36, (39) alone is a 420 x 420 LMI per r with ~1e5 slack
 //! unknowns in P_ijr, G_ijr, K_ijr, beyond what Clarabel solves here.
 
-use super::lmis::{region_block, var_row};
-use super::relaxation::{Family, Relaxer};
-use super::sampled::{lambda, Block12, Terms, Vertex};
-use super::{Settings, SynthError};
+use super::super::blocks::{region_block, var_row};
+use super::super::objectives::{Linf, Saturation};
+use super::super::relaxations::{Family, Relaxer};
+use super::super::sampled::{lambda, Block12, Terms, Vertex};
+use super::super::{Settings, SynthError};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use tsf_lang::spec::{Trigger, TriggerSynthesis};
@@ -100,11 +101,11 @@ pub fn plan_of(model: &TsModel) -> Result<Option<Theorem2Plan>, SynthError> {
     else {
         return Err(unsupported("needs an aperiodic trigger"));
     };
-    let (plan, _) = super::plan::initial_plan(&model.spec, 0.1);
-    let Some(linf) = plan.linf else {
+    let (plan, _) = super::super::plan::initial_plan(&model.spec, 0.1);
+    let Some(linf) = plan.get::<Linf>().cloned() else {
         return Err(unsupported("needs an L-inf objective"));
     };
-    let Some(sat) = plan.saturation else {
+    let Some(sat) = plan.get::<Saturation>().cloned() else {
         return Err(unsupported("needs `objective saturation region`"));
     };
     let Some(xi) = xi.or(linf.xi) else {
@@ -258,11 +259,11 @@ pub fn solve(
     settings: &Settings,
 ) -> Result<Theorem2Outcome, SynthError> {
     let (problem, gamma) = build(model, plan, settings.eps)
-        .map_err(|e| SynthError::Unsupported(format!("internal LMI construction error: {e}")))?;
+        .map_err(|e| SynthError::Internal(format!("internal LMI construction error: {e}")))?;
     let stats = problem.stats();
     let sol = problem
         .solve(&settings.solver)
-        .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))?;
+        .map_err(|e| SynthError::Internal(format!("solver refused the problem: {e}")))?;
     let verdict = |s: SolveStatus| s == SolveStatus::Solved || s.is_primal_infeasible();
     let gamma_iterate = sol
         .assignment_any_status()
@@ -277,16 +278,15 @@ pub fn solve(
         } else {
             2.0 * plan.xi
         };
-        let (mut fixed, gv) = build(model, plan, settings.eps).map_err(|e| {
-            SynthError::Unsupported(format!("internal LMI construction error: {e}"))
-        })?;
+        let (mut fixed, gv) = build(model, plan, settings.eps)
+            .map_err(|e| SynthError::Internal(format!("internal LMI construction error: {e}")))?;
         let pin = fixed
             .add_scalar("gamma fixed", Expr::var(gv), Relation::Eq, g)
             .and_then(|_| fixed.minimize(Expr::zeros(1, 1)));
-        pin.map_err(|e| SynthError::Unsupported(format!("internal LMI construction error: {e}")))?;
+        pin.map_err(|e| SynthError::Internal(format!("internal LMI construction error: {e}")))?;
         let status = fixed
             .solve(&settings.solver)
-            .map_err(|e| SynthError::Unsupported(format!("solver refused the problem: {e}")))?
+            .map_err(|e| SynthError::Internal(format!("solver refused the problem: {e}")))?
             .status;
         fixed_gamma = Some((g, status));
     }

@@ -1,0 +1,152 @@
+//! The one pipeline driver: read → check → model → synthesize → certify →
+//! report → code. The CLI, the build-script [`crate::Builder`], the simulator
+//! and the benches all go through it.
+
+use crate::certify::Certificate;
+use crate::codegen::Tables;
+use crate::codegen::{self, GeneratedFile};
+use crate::compile::{compile as compile_model, Compiled, Status};
+use crate::error::Error;
+use crate::frontend::{self, Checked, Source};
+use crate::model::TsModel;
+use crate::report::{sha256_hex, SpecInfo};
+use crate::synth::{Design, Settings};
+use std::path::Path;
+use tsf_lang::spec::Emit;
+
+/// How reports and generated headers name the spec.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpecName {
+    /// The path as the user typed it (the CLI).
+    AsGiven,
+    /// The file name only (build scripts: outputs must not depend on where
+    /// the workspace lives).
+    FileName,
+}
+
+/// A spec read and checked.
+#[derive(Debug)]
+pub struct Front {
+    /// The source.
+    pub source: Source,
+    /// Its diagnostics and, if valid, its model.
+    pub checked: Checked,
+    name: String,
+}
+
+/// Reads and checks a spec file (an unreadable file is a usage error).
+pub fn read(path: &Path, name: SpecName) -> Result<Front, Error> {
+    let source = frontend::read_source(path).map_err(|e| Error::usage(e.message))?;
+    let checked = frontend::check(&source);
+    let name = match name {
+        SpecName::AsGiven => source.name.clone(),
+        SpecName::FileName => path
+            .file_name()
+            .map_or_else(|| source.name.clone(), |n| n.to_string_lossy().into_owned()),
+    };
+    Ok(Front {
+        source,
+        checked,
+        name,
+    })
+}
+
+impl Front {
+    /// The diagnostics, rendered for a terminal.
+    pub fn render(&self, color: bool) -> String {
+        tsf_lang::diag::render(
+            &self.source.name,
+            &self.source.text,
+            &self.checked.diagnostics,
+            color,
+        )
+    }
+
+    /// Synthesizes, certifies and reports (a spec with errors is a spec error
+    /// carrying its rendered diagnostics).
+    pub fn compile(self, settings: &Settings) -> Result<Run, Error> {
+        let rendered = self.render(false);
+        let Front {
+            source,
+            checked,
+            name,
+        } = self;
+        let front_times = (checked.parse_time, checked.model_time);
+        let Some(model) = checked.model else {
+            return Err(Error::spec(rendered));
+        };
+        let sha256 = sha256_hex(&source.bytes);
+        let info = SpecInfo {
+            path: name.clone(),
+            sha256: sha256.clone(),
+        };
+        let compiled = compile_model(&model, info, settings, front_times);
+        Ok(Run {
+            source,
+            model,
+            name,
+            sha256,
+            compiled,
+        })
+    }
+}
+
+/// A compiled spec: model, verdict, design and report.
+#[derive(Debug)]
+pub struct Run {
+    /// The source.
+    pub source: Source,
+    /// The checked model.
+    pub model: TsModel,
+    /// How outputs name the spec.
+    pub name: String,
+    /// SHA-256 of the spec's bytes.
+    pub sha256: String,
+    /// Verdict, design, certificate and report.
+    pub compiled: Compiled,
+}
+
+impl Run {
+    /// The certified design, or why there is none.
+    pub fn certified(&self) -> Result<(&Design, &Certificate), Error> {
+        match (&self.compiled.status, &self.compiled.outcome) {
+            (Status::Certified, Ok((d, c))) => Ok((d, c)),
+            _ => Err(Error::not_certified(format!(
+                "{}: not certified ({})",
+                self.name,
+                self.compiled.report.diagnosis.as_ref().map_or_else(
+                    || self.compiled.report.status.to_string(),
+                    |d| {
+                        if d.achievable.is_empty() {
+                            d.message.clone()
+                        } else {
+                            format!("{}; {}", d.message, d.achievable.join("; "))
+                        }
+                    }
+                )
+            ))),
+        }
+    }
+
+    /// The certified design's tables (what generated code and the simulator use).
+    pub fn tables(&self) -> Result<Tables, Error> {
+        let (design, cert) = self.certified()?;
+        codegen::tables(&self.model, design, cert, &self.name, &self.sha256)
+            .map_err(|e| Error::not_certified(format!("{}: {e}", self.name)))
+    }
+
+    /// The generated files of the certified design for `targets`.
+    pub fn generate(&self, targets: &[Emit]) -> Result<Vec<GeneratedFile>, Error> {
+        let (design, cert) = self.certified()?;
+        codegen::generate(&self.model, design, cert, &self.name, &self.sha256, targets)
+            .map_err(|e| Error::not_certified(format!("code generation failed: {e}")))
+    }
+
+    /// The exit code of the compile: 0 certified, 3 otherwise.
+    pub fn exit_code(&self) -> u8 {
+        match self.compiled.status {
+            Status::Certified => 0,
+            _ => 3,
+        }
+    }
+}

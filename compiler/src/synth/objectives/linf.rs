@@ -1,0 +1,140 @@
+//! Peak-to-peak (L-inf) gain for a fixed phi > 0:
+//! [[Upsilon_ij + phi X, (sector), D_i], [*, (-2S), 0], [*, *, -xi I]] < 0 and
+//! [[phi X, 0, (C X + E M_j)'], [*, (gamma - xi) I, G'], [*, *, gamma I]] > 0
+//! give ||y||_inf < gamma ||w||_inf (Xu & Huang, *Event-triggered L-inf
+//! control for T-S fuzzy systems with actuator saturation*, 2020, and
+//! Abedor, Nagpal & Poolla, 1996).
+
+use super::super::achieved::{Achieved, Quantity};
+use super::super::blocks::{scalar_times_identity, Channel};
+use super::super::build::{BuildError, Ctx, Lmis};
+use super::super::plan::Bound;
+use super::super::reduction::Values;
+use super::super::relaxations::Family;
+use super::{bound_value, scalar, Objective};
+use crate::model::TsModel;
+use tsf_lang::spec::ObjectiveKind;
+use tsf_lmi::{Expr, Relation};
+
+/// The variable gamma when it is not fixed.
+const GAMMA: &str = "gamma";
+/// The variable xi when the spec leaves it free.
+const XI: &str = "xi";
+
+/// Peak-to-peak gain.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Linf {
+    /// Disturbance index.
+    pub from: usize,
+    /// Output index.
+    pub to: usize,
+    /// gamma (fixed) or minimized.
+    pub target: Bound,
+    /// phi > 0 (a line search moves it unless the spec fixes it).
+    pub phi: f64,
+    /// Whether the spec fixes phi.
+    pub phi_fixed: bool,
+    /// xi fixed by the spec (or by the xi search), or a variable.
+    pub xi: Option<f64>,
+}
+
+impl Linf {
+    /// The factor by which a disturbance bounded by `tau` enlarges the level
+    /// set V <= 1 that the state can reach: 1 + xi tau^2 / phi (Xu & Huang
+    /// (19)/(40)); `None` when xi is a variable.
+    pub fn level_factor(&self, tau: f64) -> Option<f64> {
+        self.xi.map(|xi| 1.0 + xi * tau * tau / self.phi)
+    }
+}
+
+impl Objective for Linf {
+    fn kind(&self) -> ObjectiveKind {
+        ObjectiveKind::Linf
+    }
+
+    fn target(&self) -> Option<Bound> {
+        Some(self.target)
+    }
+
+    fn set_target(&mut self, target: Bound) {
+        self.target = target;
+    }
+
+    fn headline(&self) -> Option<Quantity> {
+        Some(Quantity::LinfGamma)
+    }
+
+    fn implies_stability(&self) -> bool {
+        true
+    }
+
+    fn declare(&self, _model: &TsModel, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
+        if !matches!(self.target, Bound::Fixed(_)) {
+            lmis.scalar(GAMMA)?;
+        }
+        if self.xi.is_none() {
+            lmis.scalar(XI)?;
+        }
+        Ok(())
+    }
+
+    fn impose(&self, ctx: &Ctx<'_>, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
+        let (model, n) = (ctx.model, ctx.model.n);
+        let ch = Channel::new(model, self.from, self.to);
+        let (q, p) = (ch.q(), ch.c.nrows());
+        let (gamma, xi) = (lmis.var(GAMMA), lmis.var(XI));
+        let xi_fixed = self.xi.unwrap_or(0.0);
+        let gamma_fixed = match self.target {
+            Bound::Fixed(g) => g,
+            _ => 0.0,
+        };
+        let phi = self.phi;
+        let fam = Family {
+            name: "linf".into(),
+            q: Box::new(|i, j| {
+                let w = (
+                    Expr::constant(&ch.d[i])?,
+                    scalar_times_identity(xi, xi_fixed, q)?.scale(-1.0)?,
+                );
+                ctx.with_sector(i, j, ctx.upsilon(i, j, phi)?, Some(w))
+            }),
+        };
+        lmis.impose(&fam)?;
+        // Output peak, for every controller rule j.
+        let gi = |k| scalar_times_identity(gamma, gamma_fixed, k);
+        for j in 0..model.r() {
+            let e = Expr::sym_blocks(vec![
+                vec![
+                    Some(Expr::var(ctx.x).scale(phi)?),
+                    None,
+                    Some(ch.output_map(ctx.x, ctx.m[j], n)?.transpose()),
+                ],
+                vec![
+                    None,
+                    Some(gi(q)?.sub(scalar_times_identity(xi, xi_fixed, q)?)?),
+                    Some(Expr::constant(&ch.g.transpose())?),
+                ],
+                vec![None, None, Some(gi(p)?)],
+            ])?;
+            lmis.strict(&format!("linf peak [{}]", j + 1), e)?;
+        }
+        if let Some(xi) = xi {
+            let eps = lmis.eps;
+            lmis.problem
+                .add_scalar("xi > 0", Expr::var(xi), Relation::Ge, eps)?;
+        }
+        if let (Some(g), Bound::Minimize) = (gamma, self.target) {
+            lmis.problem.minimize(Expr::var(g))?;
+        }
+        Ok(())
+    }
+
+    fn achieved(&self, values: &Values, out: &mut Achieved) {
+        let gamma = bound_value(self.target, || scalar(values, GAMMA).unwrap_or(f64::NAN));
+        out.set(Quantity::LinfGamma, gamma);
+        out.set(Quantity::LinfPhi, self.phi);
+        if let Some(xi) = self.xi.or_else(|| scalar(values, XI)) {
+            out.set(Quantity::LinfXi, xi);
+        }
+    }
+}

@@ -1,0 +1,81 @@
+//! Actuator saturation by the generalized sector condition (Tarbouriech,
+//! Garcia, Gomes da Silva & Queinnec, *Stability and Stabilization of Linear
+//! Systems with Saturating Actuators*, 2011): S = T^{-1} diagonal and
+//! Z_j = G_j X add the dead-zone column to the decay and L-inf blocks; the
+//! region E(P, 1) lies where |(F_j - G_j)_k x| <= u_bar_k, so it is a
+//! certified region of attraction.
+
+use super::super::blocks::{region_block, var_row};
+use super::super::build::{BuildError, Ctx, Lmis, Sector};
+use super::{Linf, Objective};
+use crate::model::TsModel;
+use nalgebra::DMatrix;
+use tsf_lang::spec::{InitialSet, ObjectiveKind};
+use tsf_lmi::Expr;
+
+/// Actuator saturation: levels and the disturbance bound that shrinks them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Saturation {
+    /// u_bar_s per channel.
+    pub levels: Vec<f64>,
+    /// Bound on ||w(t)||, if declared.
+    pub disturbance_bound: Option<f64>,
+    /// Initial states the region E(P, 1) must contain.
+    pub contain: Option<InitialSet>,
+}
+
+impl Objective for Saturation {
+    fn kind(&self) -> ObjectiveKind {
+        ObjectiveKind::SaturationRegion
+    }
+
+    fn declare(&self, model: &TsModel, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
+        let (m, n) = (model.m, model.n);
+        let s = lmis.problem.diagonal("S", m)?;
+        let z = (0..model.r())
+            .map(|j| lmis.problem.full(&format!("Z{}", j + 1), m, n))
+            .collect::<Result<Vec<_>, _>>()?;
+        lmis.sector = Some(Sector { s, z });
+        Ok(())
+    }
+
+    fn impose(&self, ctx: &Ctx<'_>, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
+        let (m, n) = (ctx.model.m, ctx.model.n);
+        let Some(sector) = &ctx.sector else {
+            return Err(BuildError::Unsupported(
+                "internal error: saturation variables were not declared".into(),
+            ));
+        };
+        if ctx
+            .plan
+            .objectives()
+            .any(|o| o.kind() == ObjectiveKind::Hinf)
+        {
+            return Err(BuildError::Unsupported("the saturation region is supported with stability, decay rate and L-inf objectives, not with H-inf".into()));
+        }
+        lmis.strict("S > 0", Expr::var(sector.s))?;
+        if let Some(init) = &self.contain {
+            lmis.contain(ctx.x, init, "region of attraction")?;
+        }
+        // With a disturbance bounded by tau, V stays below 1 + xi tau^2 / phi
+        // only if the linear region holds on the larger level set: shrink the
+        // levels by that factor.
+        let shrink = match (ctx.plan.get::<Linf>(), self.disturbance_bound) {
+            (Some(l), Some(tau)) => l.level_factor(tau).ok_or_else(|| {
+                BuildError::Unsupported("the saturation region with a bounded disturbance needs a fixed xi: write `objective linf(...) ... with xi = ...`".into())
+            })?,
+            _ => 1.0,
+        };
+        for (j, (&mj, &zj)) in ctx.m.iter().zip(&sector.z).enumerate() {
+            for (k, level) in self.levels.iter().enumerate() {
+                let row = var_row(mj, k, m, n)?.sub(var_row(zj, k, m, n)?)?;
+                let rhs = Expr::constant(&DMatrix::from_element(1, 1, level * level / shrink))?;
+                lmis.nonstrict(
+                    &format!("linear region [{},{}]", j + 1, k + 1),
+                    region_block(Expr::var(ctx.x), row, rhs)?,
+                )?;
+            }
+        }
+        Ok(())
+    }
+}

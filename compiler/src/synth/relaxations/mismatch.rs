@@ -1,0 +1,21 @@
+//! Plant and controller memberships that differ (the controller's are
+//! evaluated at sampling instants): every Q_ij < 0 on its own. The mismatch
+//! bound kappa is carried for the report; it does not relax the conditions
+//! yet (Arino & Sala's kappa-bounded relaxation is a separate relaxation).
+
+use super::{DoubleSum, Family, Sink};
+use tsf_lmi::LmiError;
+
+/// Every plant/controller rule pair.
+pub struct Mismatch;
+
+impl DoubleSum for Mismatch {
+    fn impose(&self, sink: &mut Sink<'_, '_>, fam: &Family<'_>) -> Result<(), LmiError> {
+        for i in 0..sink.r() {
+            for j in 0..sink.r() {
+                sink.negative(&fam.name("Q", i, j), fam.q(i, j)?)?;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,294 @@
+//! The searches around single SDPs: one attempt per plan, the decay-rate
+//! bisection, the xi bisection and the L-inf line search over phi.
+
+use super::achieved::Achieved;
+use super::build::build;
+use super::objectives::Linf;
+use super::plan::{Bound, Goal, Plan};
+use super::{Design, Settings, SolverLog, SynthError};
+use crate::model::TsModel;
+use std::time::{Duration, Instant};
+use tsf_lmi::SolveStatus;
+
+/// With `linf <= g`, the largest xi tried is g (1 - XI_CAP_REL).
+const XI_CAP_REL: f64 = 1e-6;
+
+/// (largest feasible, smallest infeasible) value found by a bisection.
+pub(super) type Bracket = (f64, f64);
+
+/// Outcome of one SDP.
+pub(super) enum Attempt {
+    Solved(Box<Design>),
+    Infeasible,
+    Trouble(SolveStatus),
+}
+
+/// Runs SDPs for one model and keeps the solver log.
+pub(super) struct Runner<'a> {
+    pub model: &'a TsModel,
+    pub settings: &'a Settings,
+    pub log: SolverLog,
+    /// Accept `AlmostSolved` iterates (only while diagnosing).
+    pub accept_almost: bool,
+}
+
+impl Runner<'_> {
+    /// Builds and solves `plan` once.
+    pub fn attempt(&mut self, plan: &Plan) -> Result<Attempt, SynthError> {
+        let relaxation = self.model.spec.relaxation.node;
+        let t0 = Instant::now();
+        let built = build(self.model, plan, relaxation, self.settings.eps, true)?;
+        self.log.build_time += t0.elapsed();
+        let sol = built
+            .problem
+            .solve(&self.settings.solver)
+            .map_err(|e| SynthError::Internal(format!("solver refused the problem: {e}")))?;
+        self.log.solves += 1;
+        self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
+        let approximate = sol.status == SolveStatus::AlmostSolved && self.accept_almost;
+        match sol.status {
+            SolveStatus::Solved => {}
+            _ if approximate => {}
+            s if s.is_primal_infeasible() => return Ok(Attempt::Infeasible),
+            s => return Ok(Attempt::Trouble(s)),
+        }
+        self.log.status = Some(sol.status);
+        self.log.iterations = sol.iterations;
+        self.log.stats = Some(built.problem.stats());
+        let iterate = sol.assignment_any_status();
+        let values_of = |v| {
+            iterate
+                .value(v)
+                .cloned()
+                .map_err(|e| SynthError::Internal(format!("{e}")))
+        };
+        let x = values_of(built.x)?;
+        let Some(chol) = x.clone().cholesky() else {
+            return Ok(Attempt::Trouble(SolveStatus::NumericalError));
+        };
+        let p = chol.inverse();
+        let gains = built
+            .m
+            .iter()
+            .map(|&mv| values_of(mv).map(|m| chol.solve(&m.transpose()).transpose()))
+            .collect::<Result<Vec<_>, _>>()?;
+        let values = built
+            .problem
+            .vars()
+            .map(|(name, v)| values_of(v).map(|m| (name.to_string(), m)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut achieved = Achieved::default();
+        for o in plan.objectives() {
+            o.achieved(&values, &mut achieved);
+        }
+        Ok(Attempt::Solved(Box::new(Design {
+            plan: plan.clone(),
+            gains,
+            x,
+            p,
+            values,
+            achieved,
+            eps: self.settings.eps,
+            reductions: built.reductions,
+            notes: Vec::new(),
+            log: SolverLog::default(),
+            certify_time: Duration::ZERO,
+            approximate,
+            trigger: None,
+        })))
+    }
+
+    /// Largest decay rate for which `plan` is feasible: (design, bracket).
+    fn max_decay(&mut self, plan: &Plan) -> Result<Option<(Design, Bracket)>, SynthError> {
+        let mut best = match self.attempt(&plan.with_decay(0.0))? {
+            Attempt::Solved(d) => *d,
+            Attempt::Infeasible => return Ok(None),
+            Attempt::Trouble(s) => {
+                return Err(SynthError::Solver {
+                    status: s,
+                    message: "the solver failed at decay rate 0".into(),
+                    achievable: Vec::new(),
+                })
+            }
+        };
+        let (mut lo, mut hi) = (0.0, 0.5);
+        // Grow the bracket until infeasible.
+        while let Attempt::Solved(d) = self.attempt(&plan.with_decay(hi))? {
+            best = *d;
+            lo = hi;
+            hi *= 2.0;
+            if hi > 1e6 {
+                return Ok(Some((best, (lo, f64::INFINITY))));
+            }
+        }
+        while hi - lo > self.settings.bisection_rel_tol * hi.max(1e-9) {
+            let mid = 0.5 * (lo + hi);
+            match self.attempt(&plan.with_decay(mid))? {
+                Attempt::Solved(d) => {
+                    best = *d;
+                    lo = mid;
+                }
+                // Near the supremum the solver may stall instead of proving
+                // infeasibility: both count as "not achieved".
+                Attempt::Infeasible | Attempt::Trouble(_) => hi = mid,
+            }
+        }
+        Ok(Some((best, (lo, hi))))
+    }
+
+    /// Smallest fixed xi for which `plan` is feasible (L-inf with saturation and
+    /// a bounded disturbance, where xi enters the linear-region level):
+    /// (design, (largest infeasible, smallest feasible)).
+    fn min_xi(&mut self, plan: &Plan) -> Result<Option<(Design, Bracket)>, SynthError> {
+        let with = |xi: f64| {
+            let mut p = plan.clone();
+            if let Some(l) = p.get_mut::<Linf>() {
+                l.xi = Some(xi);
+            }
+            p
+        };
+        // gamma >= xi ((gamma - xi) I > 0): with a fixed bound gamma <= g the
+        // search must stay below g, else the growing bracket can jump over the
+        // feasible window [xi_min, g).
+        let cap = match plan.get::<Linf>().map(|l| l.target) {
+            Some(Bound::Fixed(g)) => g * (1.0 - XI_CAP_REL),
+            _ => 1e8,
+        };
+        let (mut lo, mut hi) = (0.0, 1e-3f64.min(cap));
+        let mut best = None;
+        loop {
+            if let Attempt::Solved(d) = self.attempt(&with(hi))? {
+                best = Some(*d);
+                break;
+            }
+            if hi >= cap {
+                break;
+            }
+            lo = hi;
+            hi = (hi * 4.0).min(cap);
+        }
+        let Some(mut best) = best else {
+            return Ok(None);
+        };
+        while hi - lo > self.settings.bisection_rel_tol * hi {
+            let mid = 0.5 * (lo + hi);
+            match self.attempt(&with(mid))? {
+                Attempt::Solved(d) => {
+                    best = *d;
+                    hi = mid;
+                }
+                Attempt::Infeasible | Attempt::Trouble(_) => lo = mid,
+            }
+        }
+        Ok(Some((best, (lo, hi))))
+    }
+
+    /// Solves `plan` as the goal says (no diagnosis).
+    pub fn run(&mut self, plan: &Plan, goal: Goal) -> Result<Option<Design>, SynthError> {
+        if goal == Goal::MaxDecay {
+            return Ok(self.max_decay(plan)?.map(|(mut d, bracket)| {
+                d.achieved.decay_bracket = Some(bracket);
+                d.notes.push(format!(
+                    "decay rate maximized by bisection: feasible at {:.6}, not at {:.6}",
+                    bracket.0, bracket.1
+                ));
+                d
+            }));
+        }
+        let linf = plan.get::<Linf>();
+        let phi_free = linf.is_some_and(|l| !l.phi_fixed);
+        let disturbed_saturation = plan
+            .get::<super::objectives::Saturation>()
+            .is_some_and(|s| s.disturbance_bound.is_some());
+        if linf.is_some_and(|l| l.xi.is_none()) && disturbed_saturation {
+            if phi_free {
+                return Err(SynthError::Unsupported("L-inf with saturation and a bounded disturbance needs a fixed phi (`with phi = ...`): the linear-region level depends on xi / phi".into()));
+            }
+            return Ok(self.min_xi(plan)?.map(|(mut d, (lo, hi))| {
+                d.notes.push(format!("xi minimized by bisection (the linear-region level depends on it): feasible at {hi:.6}, not at {lo:.6}"));
+                d
+            }));
+        }
+        if phi_free {
+            return self.linf_line_search(plan);
+        }
+        match self.attempt(plan)? {
+            Attempt::Solved(d) => Ok(Some(*d)),
+            Attempt::Infeasible => Ok(None),
+            Attempt::Trouble(s) => Err(SynthError::Solver {
+                status: s,
+                message: "the solver stopped without a verdict".into(),
+                achievable: Vec::new(),
+            }),
+        }
+    }
+
+    /// Line search over phi (log grid, then golden section) for the smallest L-inf gamma.
+    fn linf_line_search(&mut self, plan: &Plan) -> Result<Option<Design>, SynthError> {
+        let eval = |runner: &mut Self, phi: f64| -> Result<Option<Design>, SynthError> {
+            let mut p = plan.clone();
+            if let Some(l) = p.get_mut::<Linf>() {
+                l.phi = phi;
+            }
+            Ok(match runner.attempt(&p)? {
+                Attempt::Solved(d) => Some(*d),
+                _ => None,
+            })
+        };
+        let key = |d: &Design| {
+            d.achieved
+                .get(super::achieved::Quantity::LinfGamma)
+                .unwrap_or(f64::INFINITY)
+        };
+        let grid: Vec<f64> = (0..13).map(|k| 10f64.powf(-4.0 + 0.4 * k as f64)).collect();
+        let mut results: Vec<(f64, Option<Design>)> = Vec::new();
+        for &phi in &grid {
+            let d = eval(self, phi)?;
+            results.push((phi, d));
+        }
+        let best_k = results
+            .iter()
+            .enumerate()
+            .filter_map(|(k, (_, d))| d.as_ref().map(|d| (k, key(d))))
+            .min_by(|x, y| x.1.total_cmp(&y.1))
+            .map(|(k, _)| k);
+        let Some(best_k) = best_k else {
+            return Ok(None);
+        };
+        let (mut a, mut b) = (
+            grid[best_k.saturating_sub(1)].ln(),
+            grid[(best_k + 1).min(grid.len() - 1)].ln(),
+        );
+        let mut best = results.swap_remove(best_k).1;
+        let gr = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..12 {
+            let c = b - gr * (b - a);
+            let d = a + gr * (b - a);
+            let fc = eval(self, c.exp())?;
+            let fd = eval(self, d.exp())?;
+            let (kc, kd) = (
+                fc.as_ref().map_or(f64::INFINITY, key),
+                fd.as_ref().map_or(f64::INFINITY, key),
+            );
+            for cand in [fc, fd].into_iter().flatten() {
+                if best.as_ref().is_none_or(|bd| key(&cand) < key(bd)) {
+                    best = Some(cand);
+                }
+            }
+            if kc < kd {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        Ok(best.map(|mut d| {
+            d.notes.push(format!(
+                "L-inf phi chosen by line search over [1e-4, 1e1]: phi = {:.6}",
+                d.achieved
+                    .get(super::achieved::Quantity::LinfPhi)
+                    .unwrap_or(f64::NAN)
+            ));
+            d
+        }))
+    }
+}
