@@ -4,7 +4,7 @@
 //! only if every strict LMI holds beyond its floating-point error bound.
 
 use crate::model::TsModel;
-use crate::synth::{build, Design, Reduction};
+use crate::synth::{build, Design, Reduction, SynthError};
 use serde::Serialize;
 use tsf_lmi::ConstraintKind;
 
@@ -48,7 +48,7 @@ fn margins_of(
     nonstrict: &[String],
     solved: &[(String, nalgebra::DMatrix<f64>)],
     reductions: &[Reduction],
-) -> Result<Vec<LmiMargin>, String> {
+) -> Result<Vec<LmiMargin>, SynthError> {
     let mut named = solved.to_vec();
     for r in reductions {
         r.invert(&mut named);
@@ -56,17 +56,17 @@ fn margins_of(
     let mut values = problem.assignment();
     for (name, v) in problem.vars() {
         let Some((_, value)) = named.iter().find(|(n, _)| n == name) else {
-            return Err(format!(
+            return Err(SynthError::Internal(format!(
                 "internal error: variable `{name}` of the certified problem has no value (a reduction was not inverted)"
-            ));
+            )));
         };
         values
             .set(v, value.clone())
-            .map_err(|e| format!("internal error: {e}"))?;
+            .map_err(|e| SynthError::Internal(format!("internal error: {e}")))?;
     }
     let margins = problem
         .margins(&values)
-        .map_err(|e| format!("internal error: {e}"))?;
+        .map_err(|e| SynthError::Internal(format!("internal error: {e}")))?;
     Ok(margins
         .into_iter()
         .map(|m| {
@@ -94,15 +94,14 @@ fn margins_of(
 }
 
 /// Checks `design` against the full set of conditions of its plan.
-pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, String> {
+pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthError> {
     let built = build(
         model,
         &design.plan,
         model.spec.relaxation.node,
         design.eps,
         false,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let mut lmis = margins_of(
         &built.problem,
         &built.nonstrict,
@@ -115,8 +114,7 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, String> 
             gains: design.gains.clone(),
             ..t.plan.clone()
         };
-        let tb = crate::synth::trigger::build(model, &plan, design.eps, false)
-            .map_err(|e| e.to_string())?;
+        let tb = crate::synth::trigger::build(model, &plan, design.eps, false)?;
         lmis.extend(margins_of(
             &tb.problem,
             &tb.nonstrict,

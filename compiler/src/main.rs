@@ -194,14 +194,18 @@ fn simulate(
         let outcome = tsfc::sim::simulate(&prepared, &opts)?;
         let m = &outcome.metrics;
         eprintln!(
-            "simulated `{}`: {} samples, {} transmissions, final ||x|| = {:.3e} ({}converged, tol {:.3e}), max |u| = {:?}, {:.2} s",
+            "simulated `{}`: {} samples, {} transmissions, final ||x|| = {:.3e} ({}converged, tol {:.3e}), max |u| = [{}], {:.2} s",
             outcome.name,
             m.samples,
             m.transmissions,
             m.final_state_norm,
             if m.converged { "" } else { "not " },
             m.convergence_tolerance,
-            m.max_abs_u,
+            m.max_abs_u
+                .iter()
+                .map(|u| format!("{u:.3e}"))
+                .collect::<Vec<_>>()
+                .join(", "),
             m.wall_time_s
         );
         tsfc::sim::write_outputs(&outcome, out)

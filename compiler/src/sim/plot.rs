@@ -158,8 +158,8 @@ fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     fig: Figure,
     o: &Outcome,
-) -> Result<(), String> {
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("plot: {e:?}");
+) -> Result<(), SimError> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| SimError::usage(format!("plot: {e}"));
     root.fill(&WHITE).map_err(err)?;
     let (t0, t1) = o.metrics.time_s;
     let ps = panels(fig, o);
@@ -199,7 +199,7 @@ fn draw<DB: DrawingBackend>(
     root.present().map_err(err)
 }
 
-fn svg(fig: Figure, o: &Outcome) -> Result<Vec<u8>, String> {
+fn svg(fig: Figure, o: &Outcome) -> Result<Vec<u8>, SimError> {
     let mut s = String::new();
     {
         let root = SVGBackend::with_string(&mut s, SIZE).into_drawing_area();
@@ -208,7 +208,7 @@ fn svg(fig: Figure, o: &Outcome) -> Result<Vec<u8>, String> {
     Ok(s.into_bytes())
 }
 
-fn png(fig: Figure, o: &Outcome) -> Result<Vec<u8>, String> {
+fn png(fig: Figure, o: &Outcome) -> Result<Vec<u8>, SimError> {
     let (w, h) = SIZE;
     let mut rgb = vec![0u8; (w * h * 3) as usize];
     {
@@ -220,8 +220,11 @@ fn png(fig: Figure, o: &Outcome) -> Result<Vec<u8>, String> {
         let mut enc = png::Encoder::new(&mut out, w, h);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header().map_err(|e| format!("png: {e}"))?;
-        wr.write_image_data(&rgb).map_err(|e| format!("png: {e}"))?;
+        let mut wr = enc
+            .write_header()
+            .map_err(|e| SimError::usage(format!("png: {e}")))?;
+        wr.write_image_data(&rgb)
+            .map_err(|e| SimError::usage(format!("png: {e}")))?;
     }
     Ok(out)
 }
@@ -234,14 +237,8 @@ pub fn plots(o: &Outcome) -> Result<Vec<(String, Vec<u8>)>, SimError> {
         (Figure::Inputs, "inputs"),
         (Figure::Events, "events"),
     ] {
-        files.push((
-            format!("{}.{tag}.svg", o.name),
-            svg(fig, o).map_err(SimError::usage)?,
-        ));
-        files.push((
-            format!("{}.{tag}.png", o.name),
-            png(fig, o).map_err(SimError::usage)?,
-        ));
+        files.push((format!("{}.{tag}.svg", o.name), svg(fig, o)?));
+        files.push((format!("{}.{tag}.png", o.name), png(fig, o)?));
     }
     Ok(files)
 }
