@@ -1,9 +1,10 @@
 //! Explains an infeasible plan: which fixed bounds conflict, and the best
 //! value of each one when the others are kept.
 
+use super::design::SynthError;
+use super::plan::Goal;
 use super::plan::Plan;
 use super::search::Runner;
-use super::SynthError;
 
 /// The diagnosis of `plan`, which was found infeasible (or gave no verdict).
 pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
@@ -37,10 +38,10 @@ pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
                     .achieved
                     .decay_bracket
                     .map(|b| b.0)
-                    .filter(|_| search == super::Goal::MaxDecay)
+                    .filter(|_| search == Goal::MaxDecay)
                     .or_else(|| headline.and_then(|q| d.achieved.get(q)));
                 match best {
-                    Some(b) if search == super::Goal::MaxDecay => format!("infeasible with {bound}; the largest feasible decay rate with the other objectives is {b:.6}{approx}"),
+                    Some(b) if search == Goal::MaxDecay => format!("infeasible with {bound}; the largest feasible decay rate with the other objectives is {b:.6}{approx}"),
                     Some(b) => format!("infeasible with {bound}; the smallest feasible bound with the other objectives is {b:.6}{approx}"),
                     None => format!("{kind}: no value found"),
                 }

@@ -2,30 +2,10 @@
 //! number, except at most one quantity the SDP minimizes (or the decay rate a
 //! bisection maximizes).
 
-use super::objectives::{self, Decay, Objective};
+pub use super::objective::{Bound, Goal, Objective};
+use super::objective::{BuildError, PlanView};
+use super::objectives::{self, Decay};
 use tsf_lang::spec::{ObjectiveKind, Spec};
-
-/// A bound that is fixed, or minimized by the SDP.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Bound {
-    /// The SDP minimizes it (a decay rate: the bisection maximizes it).
-    Minimize,
-    /// A free variable: the objective's constraints stay, its value is not minimized.
-    Free,
-    /// Fixed value.
-    Fixed(f64),
-}
-
-/// What the spec asks to optimize, if anything.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Goal {
-    /// Feasibility only.
-    Feasibility,
-    /// Maximize the decay rate (bisection).
-    MaxDecay,
-    /// Minimize inside the SDP (hinf, linf, input/output norm).
-    InSdp,
-}
 
 /// The objectives of one SDP, with numbers.
 #[derive(Debug, Clone, Default)]
@@ -132,4 +112,22 @@ pub fn initial_plan(spec: &Spec, default_phi: f64) -> (Plan, Goal) {
     );
     let goal = plan.goal();
     (plan, goal)
+}
+
+impl PlanView for Plan {
+    fn level_factor(&self, tau: f64) -> Result<f64, BuildError> {
+        let mut f = 1.0f64;
+        for o in self.objectives() {
+            if let Some(k) = o.level_factor(tau) {
+                f = f.max(k?);
+            }
+        }
+        Ok(f)
+    }
+
+    fn without_sector(&self) -> Option<ObjectiveKind> {
+        self.objectives()
+            .find(|o| !o.supports_sector())
+            .map(|o| o.kind())
+    }
 }

@@ -3,9 +3,9 @@
 
 use super::achieved::Achieved;
 use super::build::build;
+use super::design::{Design, Settings, SolverLog, SynthError};
 use super::objectives::Linf;
 use super::plan::{Bound, Goal, Plan};
-use super::{Design, Settings, SolverLog, SynthError};
 use crate::model::TsModel;
 use std::time::{Duration, Instant};
 use tsf_lmi::SolveStatus;

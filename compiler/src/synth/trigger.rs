@@ -18,44 +18,21 @@
 //! (the adaptive ceiling); the largest certified nu is bisected only to explain
 //! an infeasible threshold.
 
+use super::achieved::Quantity;
 use super::blocks::{nonstrict_psd, region_block};
+pub use super::design::TriggerPlan;
+use super::design::{Design, SynthError, TriggerDesign};
+use super::objective::BuildError;
 use super::objectives::{Linf, Saturation};
 use super::reduction::Reduction;
-use super::relaxations::{Family, Relaxer};
+use super::relaxation::Family;
+use super::relaxations::Relaxer;
 use super::search::Runner;
-use super::{BuildError, Design, Quantity, SynthError, TriggerDesign};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use std::time::{Duration, Instant};
 use tsf_lang::spec::{Trigger, TriggerSynthesis, Weight};
 use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
-
-/// Data of the trigger problem (everything but nu is fixed by step 1 and the spec).
-#[derive(Debug, Clone, PartialEq)]
-pub struct TriggerPlan {
-    /// Sampling intervals [h_min, h_max].
-    pub sampling: (f64, f64),
-    /// Threshold nu (bisected).
-    pub nu: f64,
-    /// phi of V' + phi V - xi tau' tau < 0.
-    pub phi: f64,
-    /// Upper bound on xi; the region level is 1 + xi_max tau_bar^2 / phi.
-    pub xi_max: f64,
-    /// Bound tau_bar on ||tau(t)||.
-    pub tau_bar: f64,
-    /// Saturation levels u_bar_s.
-    pub levels: Vec<f64>,
-    /// PDC gains F_j (m x n), fixed.
-    pub gains: Vec<DMatrix<f64>>,
-    /// Sector gains G_j (m x n), fixed.
-    pub sector: Vec<DMatrix<f64>>,
-    /// Disturbance columns D_i of the L-inf channel, per rule.
-    pub d: Vec<DMatrix<f64>>,
-    /// Output map y = C x + G_y tau.
-    pub c: DMatrix<f64>,
-    /// Disturbance feedthrough G_y.
-    pub g: DMatrix<f64>,
-}
 
 /// The variables of the trigger problem.
 #[derive(Debug, Clone)]

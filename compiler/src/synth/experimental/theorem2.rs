@@ -19,12 +19,13 @@
 //! blocks of size 30-36, (39) alone is a 420 x 420 LMI per r with ~1e5 slack
 //! unknowns in P_ijr, G_ijr, K_ijr, beyond what Clarabel solves here.
 
-use super::super::blocks::{region_block, var_row};
-use super::super::objectives::{Linf, Saturation};
-use super::super::relaxations::{Family, Relaxer};
-use super::super::sampled::{lambda, Block12, Terms, Vertex};
-use super::super::{Settings, SynthError};
 use crate::model::TsModel;
+use crate::synth::blocks::{region_block, var_row};
+use crate::synth::design::{Settings, SynthError};
+use crate::synth::objectives::{Linf, Saturation};
+use crate::synth::relaxation::Family;
+use crate::synth::relaxations::Relaxer;
+use crate::synth::sampled::{lambda, Block12, Terms, Vertex};
 use nalgebra::DMatrix;
 use tsf_lang::spec::{Trigger, TriggerSynthesis};
 use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};

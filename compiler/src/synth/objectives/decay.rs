@@ -1,12 +1,10 @@
 //! Stability and decay rate: He(A_i X + B_i M_j) + 2 alpha X < 0, so that
 //! V = x' P x decreases at least as e^{-2 alpha t}.
 
-use super::super::achieved::{Achieved, Quantity};
-use super::super::build::{BuildError, Ctx, Lmis};
-use super::super::plan::{Bound, Goal};
-use super::super::reduction::Values;
-use super::super::relaxations::Family;
-use super::Objective;
+use crate::synth::achieved::{Achieved, Quantity};
+use crate::synth::objective::{Bound, BuildError, Ctx, Goal, Lmis, Objective};
+use crate::synth::reduction::Values;
+use crate::synth::relaxation::Family;
 use tsf_lang::spec::{ObjectiveKind, Target};
 
 /// Decay rate alpha (0: plain stability).

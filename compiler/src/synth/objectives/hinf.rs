@@ -1,14 +1,12 @@
 //! H-inf gain (bounded-real lemma): ||y||_2 < gamma ||w||_2 with the block
 //! [[Upsilon_ij, D_i, (C X + E M_j)'], [*, -gamma^2 I, G'], [*, *, -I]] < 0.
 
-use super::super::achieved::{Achieved, Quantity};
-use super::super::blocks::{scalar_times_identity, Channel};
-use super::super::build::{BuildError, Ctx, Lmis};
-use super::super::plan::Bound;
-use super::super::reduction::Values;
-use super::super::relaxations::Family;
-use super::{bound_value, scalar, Objective};
 use crate::model::TsModel;
+use crate::synth::achieved::{Achieved, Quantity};
+use crate::synth::blocks::{scalar_times_identity, Channel};
+use crate::synth::objective::{bound_value, scalar, Bound, BuildError, Ctx, Lmis, Objective};
+use crate::synth::reduction::Values;
+use crate::synth::relaxation::Family;
 use tsf_lang::spec::ObjectiveKind;
 use tsf_lmi::{Expr, Relation};
 
@@ -45,6 +43,10 @@ impl Objective for Hinf {
 
     fn implies_stability(&self) -> bool {
         true
+    }
+
+    fn supports_sector(&self) -> bool {
+        false
     }
 
     fn declare(&self, _model: &TsModel, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {

@@ -1,13 +1,11 @@
 //! Input-norm bound: ||u(t)|| <= mu for every x0 in the initial set, from
 //! [X, M_j'; M_j, mu^2 I] >= 0 and the initial set inside E(P, 1).
 
-use super::super::achieved::{Achieved, Quantity};
-use super::super::blocks::scalar_times_identity;
-use super::super::build::{BuildError, Ctx, Lmis};
-use super::super::plan::Bound;
-use super::super::reduction::Values;
-use super::{bound_value, scalar, Objective};
 use crate::model::TsModel;
+use crate::synth::achieved::{Achieved, Quantity};
+use crate::synth::blocks::scalar_times_identity;
+use crate::synth::objective::{bound_value, scalar, Bound, BuildError, Ctx, Lmis, Objective};
+use crate::synth::reduction::Values;
 use tsf_lang::spec::{InitialSet, ObjectiveKind};
 use tsf_lmi::Expr;
 

@@ -5,14 +5,12 @@
 //! control for T-S fuzzy systems with actuator saturation*, 2020, and
 //! Abedor, Nagpal & Poolla, 1996).
 
-use super::super::achieved::{Achieved, Quantity};
-use super::super::blocks::{scalar_times_identity, Channel};
-use super::super::build::{BuildError, Ctx, Lmis};
-use super::super::plan::Bound;
-use super::super::reduction::Values;
-use super::super::relaxations::Family;
-use super::{bound_value, scalar, Objective};
 use crate::model::TsModel;
+use crate::synth::achieved::{Achieved, Quantity};
+use crate::synth::blocks::{scalar_times_identity, Channel};
+use crate::synth::objective::{bound_value, scalar, Bound, BuildError, Ctx, Lmis, Objective};
+use crate::synth::reduction::Values;
+use crate::synth::relaxation::Family;
 use tsf_lang::spec::ObjectiveKind;
 use tsf_lmi::{Expr, Relation};
 
@@ -66,6 +64,15 @@ impl Objective for Linf {
 
     fn implies_stability(&self) -> bool {
         true
+    }
+
+    /// V stays below 1 + xi tau^2 / phi under ||w|| <= tau (Xu & Huang
+    /// (19)/(40)): a fixed xi is needed to know that level.
+    fn level_factor(&self, tau: f64) -> Option<Result<f64, BuildError>> {
+        Some(match self.xi {
+            Some(xi) => Ok(1.0 + xi * tau * tau / self.phi),
+            None => Err(BuildError::Unsupported("the saturation region with a bounded disturbance needs a fixed xi: write `objective linf(...) ... with xi = ...`".into())),
+        })
     }
 
     fn declare(&self, _model: &TsModel, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {

@@ -1,13 +1,11 @@
 //! Output-norm bound: ||y(t)|| <= lambda for every x0 in the initial set, from
 //! [X, X C'; C X, lambda^2 I] >= 0 and the initial set inside E(P, 1).
 
-use super::super::achieved::{Achieved, Quantity};
-use super::super::blocks::scalar_times_identity;
-use super::super::build::{BuildError, Ctx, Lmis};
-use super::super::plan::Bound;
-use super::super::reduction::Values;
-use super::{bound_value, scalar, Objective};
 use crate::model::TsModel;
+use crate::synth::achieved::{Achieved, Quantity};
+use crate::synth::blocks::scalar_times_identity;
+use crate::synth::objective::{bound_value, scalar, Bound, BuildError, Ctx, Lmis, Objective};
+use crate::synth::reduction::Values;
 use nalgebra::DMatrix;
 use tsf_lang::spec::{InitialSet, ObjectiveKind};
 use tsf_lmi::Expr;

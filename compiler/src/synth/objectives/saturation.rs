@@ -5,10 +5,9 @@
 //! region E(P, 1) lies where |(F_j - G_j)_k x| <= u_bar_k, so it is a
 //! certified region of attraction.
 
-use super::super::blocks::{region_block, var_row};
-use super::super::build::{BuildError, Ctx, Lmis, Sector};
-use super::{Linf, Objective};
 use crate::model::TsModel;
+use crate::synth::blocks::{region_block, var_row};
+use crate::synth::objective::{BuildError, Ctx, Lmis, Objective, Sector};
 use nalgebra::DMatrix;
 use tsf_lang::spec::{InitialSet, ObjectiveKind};
 use tsf_lmi::Expr;
@@ -46,12 +45,8 @@ impl Objective for Saturation {
                 "internal error: saturation variables were not declared".into(),
             ));
         };
-        if ctx
-            .plan
-            .objectives()
-            .any(|o| o.kind() == ObjectiveKind::Hinf)
-        {
-            return Err(BuildError::Unsupported("the saturation region is supported with stability, decay rate and L-inf objectives, not with H-inf".into()));
+        if let Some(kind) = ctx.plan.without_sector() {
+            return Err(BuildError::Unsupported(format!("the saturation region is supported with stability, decay rate and L-inf objectives, not with {kind}")));
         }
         lmis.strict("S > 0", Expr::var(sector.s))?;
         if let Some(init) = &self.contain {
@@ -60,11 +55,9 @@ impl Objective for Saturation {
         // With a disturbance bounded by tau, V stays below 1 + xi tau^2 / phi
         // only if the linear region holds on the larger level set: shrink the
         // levels by that factor.
-        let shrink = match (ctx.plan.get::<Linf>(), self.disturbance_bound) {
-            (Some(l), Some(tau)) => l.level_factor(tau).ok_or_else(|| {
-                BuildError::Unsupported("the saturation region with a bounded disturbance needs a fixed xi: write `objective linf(...) ... with xi = ...`".into())
-            })?,
-            _ => 1.0,
+        let shrink = match self.disturbance_bound {
+            Some(tau) => ctx.plan.level_factor(tau)?,
+            None => 1.0,
         };
         for (j, (&mj, &zj)) in ctx.m.iter().zip(&sector.z).enumerate() {
             for (k, level) in self.levels.iter().enumerate() {

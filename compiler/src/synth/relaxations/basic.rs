@@ -1,7 +1,7 @@
 //! Tanaka & Wang's basic relaxation (*Fuzzy Control Systems Design and
 //! Analysis*, 2001): Q_ii < 0 and Q_ij + Q_ji < 0 for i < j.
 
-use super::{DoubleSum, Family, Sink};
+use crate::synth::relaxation::{DoubleSum, Family, Sink};
 use tsf_lmi::LmiError;
 
 /// The basic relaxation.

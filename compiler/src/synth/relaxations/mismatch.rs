@@ -3,7 +3,7 @@
 //! bound kappa is carried for the report; it does not relax the conditions
 //! yet (Arino & Sala's kappa-bounded relaxation is a separate relaxation).
 
-use super::{DoubleSum, Family, Sink};
+use crate::synth::relaxation::{DoubleSum, Family, Sink};
 use tsf_lmi::LmiError;
 
 /// Every plant/controller rule pair.

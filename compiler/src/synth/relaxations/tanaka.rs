@@ -3,9 +3,9 @@
 //! control*, 1996): a slack Y >= 0 with Q_ii + (s - 1) Y < 0 and
 //! (Q_ij + Q_ji)/2 - Y <= 0.
 
-use super::super::blocks::nonstrict_psd;
-use super::super::reduction::Reduction;
-use super::{DoubleSum, Family, Sink};
+use crate::synth::blocks::nonstrict_psd;
+use crate::synth::reduction::Reduction;
+use crate::synth::relaxation::{DoubleSum, Family, Sink};
 use tsf_lmi::{Expr, LmiError};
 
 /// The relaxation with `s` simultaneously firing rules.

@@ -2,7 +2,7 @@
 //! matrix inequality techniques in fuzzy control system design*, 2001):
 //! Q_ii < 0 and 2/(r-1) Q_ii + Q_ij + Q_ji < 0 for i != j.
 
-use super::{DoubleSum, Family, Sink};
+use crate::synth::relaxation::{DoubleSum, Family, Sink};
 use tsf_lmi::LmiError;
 
 /// Tuan's relaxation.

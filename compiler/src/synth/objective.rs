@@ -1,0 +1,321 @@
+//! The objective-family seam: the [`Objective`] trait every family in
+//! [`super::objectives`] implements, and what a family sees while it builds
+//! its conditions: the read-only [`Ctx`] (model, shared variables, a view of
+//! the other objectives) and the growing problem [`Lmis`].
+
+use super::achieved::{Achieved, Quantity};
+use super::blocks::{initial_set_block, nonstrict_psd};
+use super::reduction::Values;
+use super::relaxation::Family;
+use super::relaxations::Relaxer;
+use crate::model::TsModel;
+use nalgebra::DMatrix;
+use std::any::Any;
+use tsf_lang::spec::{InitialSet, ObjectiveKind, Target};
+use tsf_lmi::{Expr, LmiError, Problem, Var};
+
+/// A bound that is fixed, or minimized by the SDP.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Bound {
+    /// The SDP minimizes it (a decay rate: the bisection maximizes it).
+    Minimize,
+    /// A free variable: the objective's constraints stay, its value is not minimized.
+    Free,
+    /// Fixed value.
+    Fixed(f64),
+}
+
+/// What the spec asks to optimize, if anything.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Goal {
+    /// Feasibility only.
+    Feasibility,
+    /// Maximize the decay rate (bisection).
+    MaxDecay,
+    /// Minimize inside the SDP (hinf, linf, input/output norm).
+    InSdp,
+}
+
+/// What a family needs to know of the other objectives of its plan.
+pub trait PlanView {
+    /// The factor by which a disturbance bounded by `tau` enlarges the level
+    /// set the state can reach (1 when no objective bounds it that way).
+    fn level_factor(&self, tau: f64) -> Result<f64, BuildError>;
+    /// An objective whose conditions cannot carry the sector (dead-zone) column.
+    fn without_sector(&self) -> Option<ObjectiveKind>;
+}
+
+/// Cloning and downcasting, implemented for every `Clone` objective.
+pub trait ObjectiveBase {
+    /// A boxed copy.
+    fn clone_box(&self) -> Box<dyn Objective>;
+    /// For typed access ([`super::Plan::get`]).
+    fn as_any(&self) -> &dyn Any;
+    /// For typed access ([`super::Plan::get_mut`]).
+    fn as_any_mut(&mut self) -> &mut dyn Any;
+}
+
+impl<T: Objective + Clone + 'static> ObjectiveBase for T {
+    fn clone_box(&self) -> Box<dyn Objective> {
+        Box::new(self.clone())
+    }
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
+
+/// One objective family with its numbers.
+pub trait Objective: ObjectiveBase + std::fmt::Debug + Send + Sync {
+    /// The family.
+    fn kind(&self) -> ObjectiveKind;
+
+    /// Its bound: minimized (maximized for a decay rate), free or fixed.
+    fn target(&self) -> Option<Bound> {
+        None
+    }
+
+    /// Changes its bound (diagnosis optimizes one bound with the others kept).
+    fn set_target(&mut self, _target: Bound) {}
+
+    /// The fixed value that can conflict with other objectives, if any.
+    fn fixed(&self) -> Option<f64> {
+        match self.target() {
+            Some(Bound::Fixed(v)) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// How the driver optimizes it when its target is [`Bound::Minimize`].
+    fn search(&self) -> Goal {
+        Goal::InSdp
+    }
+
+    /// The bound in the spec's words (`hinf <= 0.5`).
+    fn describe_bound(&self, v: f64) -> String {
+        format!("{} <= {v}", self.kind())
+    }
+
+    /// The achieved quantity that answers "how good can this be".
+    fn headline(&self) -> Option<Quantity> {
+        None
+    }
+
+    /// Whether its conditions contain the Lyapunov decrease (then plain
+    /// stability need not be imposed).
+    fn implies_stability(&self) -> bool {
+        false
+    }
+
+    /// The factor by which a disturbance bounded by `tau` enlarges the level
+    /// set its conditions keep the state in (`None`: it does not bound it).
+    fn level_factor(&self, _tau: f64) -> Option<Result<f64, BuildError>> {
+        None
+    }
+
+    /// Whether its conditions can carry the sector column of saturation.
+    fn supports_sector(&self) -> bool {
+        true
+    }
+
+    /// Declares its variables.
+    fn declare(&self, _model: &TsModel, _lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
+        Ok(())
+    }
+
+    /// Imposes its conditions.
+    fn impose(&self, ctx: &Ctx<'_>, lmis: &mut Lmis<'_>) -> Result<(), BuildError>;
+
+    /// Reads what it achieved from the solved variables.
+    fn achieved(&self, _values: &Values, _out: &mut Achieved) {}
+}
+
+impl Clone for Box<dyn Objective> {
+    fn clone(&self) -> Self {
+        self.clone_box()
+    }
+}
+
+/// A bound of the spec as a plan bound.
+pub fn bound(t: Target) -> Bound {
+    match t {
+        Target::Optimize => Bound::Minimize,
+        Target::Fixed(v) => Bound::Fixed(v),
+    }
+}
+
+/// The value of a scalar variable, by name.
+pub fn scalar(values: &Values, name: &str) -> Option<f64> {
+    values
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, v)| v[(0, 0)])
+}
+
+/// The value of a bound: the fixed number, or `read()` of the solved variable.
+pub fn bound_value(target: Bound, read: impl FnOnce() -> f64) -> f64 {
+    match target {
+        Bound::Fixed(v) => v,
+        _ => read(),
+    }
+}
+
+/// Why a problem could not be built.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BuildError {
+    /// The objectives of the plan cannot be combined (the checker should
+    /// have said so with a span; this is the last line of defence).
+    Unsupported(String),
+    /// An LMI expression was malformed: a bug in tsfc.
+    Lmi(LmiError),
+}
+
+impl From<LmiError> for BuildError {
+    fn from(e: LmiError) -> Self {
+        BuildError::Lmi(e)
+    }
+}
+
+impl std::fmt::Display for BuildError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BuildError::Unsupported(m) => f.write_str(m),
+            BuildError::Lmi(e) => write!(f, "internal LMI construction error: {e}"),
+        }
+    }
+}
+
+/// S = T^{-1} (diagonal, m x m) and Z_j = G_j X (m x n) of the generalized
+/// sector condition for actuator saturation.
+#[derive(Debug, Clone)]
+pub struct Sector {
+    /// S.
+    pub s: Var,
+    /// Z_j, one per rule.
+    pub z: Vec<Var>,
+}
+
+/// Read-only context of the conditions: model, plan and the shared variables.
+pub struct Ctx<'a> {
+    /// The model.
+    pub model: &'a TsModel,
+    /// The other objectives of the plan.
+    pub plan: &'a dyn PlanView,
+    /// X = P^{-1}.
+    pub x: Var,
+    /// M_j = F_j X.
+    pub m: Vec<Var>,
+    /// The sector variables, if the saturation objective declared them.
+    pub sector: Option<Sector>,
+}
+
+impl Ctx<'_> {
+    /// Upsilon_ij = He(A_i X + B_i M_j) (+ shift * X).
+    pub fn upsilon(&self, i: usize, j: usize, shift: f64) -> Result<Expr, LmiError> {
+        let n = self.model.n;
+        let (a, b) = (&self.model.rules[i].a, &self.model.rules[i].b);
+        let ax = Expr::product(a, self.x, &DMatrix::identity(n, n))?;
+        let bm = Expr::product(b, self.m[j], &DMatrix::identity(n, n))?;
+        let he = ax.add(bm)?.he()?;
+        if shift == 0.0 {
+            Ok(he)
+        } else {
+            he.add(Expr::var(self.x).scale(shift)?)
+        }
+    }
+
+    /// Adds the dead-zone signal psi of the generalized sector condition to a
+    /// block: [[U, -B_i S + Z_j', (W)], [*, -2S, 0], [*, *, (-xi I)]], or
+    /// returns `[[U, W], [*, -xi I]]` / `U` unchanged without saturation.
+    pub fn with_sector(
+        &self,
+        i: usize,
+        j: usize,
+        ups: Expr,
+        w: Option<(Expr, Expr)>,
+    ) -> Result<Expr, LmiError> {
+        let Some(sector) = &self.sector else {
+            return match w {
+                Some((d, xi)) => {
+                    Expr::sym_blocks(vec![vec![Some(ups), Some(d)], vec![None, Some(xi)]])
+                }
+                None => Ok(ups),
+            };
+        };
+        let m = self.model.m;
+        let b = &self.model.rules[i].b;
+        let cross = Expr::product(b, sector.s, &DMatrix::identity(m, m))?
+            .scale(-1.0)?
+            .add(Expr::var(sector.z[j]).transpose())?;
+        let psi = Expr::var(sector.s).scale(-2.0)?;
+        match w {
+            Some((d, xi)) => Expr::sym_blocks(vec![
+                vec![Some(ups), Some(cross), Some(d)],
+                vec![None, Some(psi), None],
+                vec![None, None, Some(xi)],
+            ]),
+            None => Expr::sym_blocks(vec![vec![Some(ups), Some(cross)], vec![None, Some(psi)]]),
+        }
+    }
+}
+
+/// The growing problem: constraints, relaxation and bookkeeping.
+pub struct Lmis<'m> {
+    /// The LMI problem.
+    pub problem: Problem,
+    /// Margin of strict LMIs.
+    pub eps: f64,
+    /// Sector variables (declared by the saturation objective).
+    pub sector: Option<Sector>,
+    pub(super) relaxer: Relaxer<'m>,
+    pub(super) named: Vec<(String, Var)>,
+    pub(super) initial_sets: Vec<InitialSet>,
+}
+
+impl Lmis<'_> {
+    /// Declares a scalar variable owned by an objective.
+    pub fn scalar(&mut self, name: &str) -> Result<Var, LmiError> {
+        let v = self.problem.scalar(name)?;
+        self.named.push((name.to_string(), v));
+        Ok(v)
+    }
+
+    /// A variable declared by [`Lmis::scalar`], by name.
+    pub fn var(&self, name: &str) -> Option<Var> {
+        self.named.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+    }
+
+    /// `e > 0`, strict (solved as `e >= eps I`).
+    pub fn strict(&mut self, name: &str, e: Expr) -> Result<(), LmiError> {
+        self.problem.psd(name, e, self.eps)?;
+        Ok(())
+    }
+
+    /// `e >= 0`, non-strict in the theory (solved with the margin too).
+    pub fn nonstrict(&mut self, name: &str, e: Expr) -> Result<(), LmiError> {
+        nonstrict_psd(
+            &mut self.problem,
+            &mut self.relaxer.nonstrict,
+            name,
+            e,
+            self.eps,
+        )
+    }
+
+    /// Imposes `sum_ij h_i h_j Q_ij < 0` under the spec's relaxation.
+    pub fn impose(&mut self, fam: &Family<'_>) -> Result<(), LmiError> {
+        self.relaxer.impose(&mut self.problem, fam)
+    }
+
+    /// Puts `init` inside E(P, 1) (once per distinct initial set).
+    pub fn contain(&mut self, x: Var, init: &InitialSet, what: &str) -> Result<(), LmiError> {
+        if self.initial_sets.contains(init) {
+            return Ok(());
+        }
+        self.initial_sets.push(init.clone());
+        let (name, e) = initial_set_block(x, init)?;
+        self.nonstrict(&format!("{what}: {name}"), e)
+    }
+}
