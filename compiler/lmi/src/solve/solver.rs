@@ -12,7 +12,7 @@ use super::settings::SolveSettings;
 /// the result back to the problem's variables and objective sense, so an
 /// implementation only ever sees the solver-neutral program.
 pub trait ConeSolver {
-    /// Short name for reports (e.g. `"clarabel"`).
+    /// Short name for reports (e.g. the solver crate's name).
     fn name(&self) -> &'static str;
 
     /// Solves the program. `Err` only when the solver refuses the data or
