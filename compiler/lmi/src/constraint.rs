@@ -1,7 +1,7 @@
 //! Constraints: named LMIs with recorded margins and named scalar relations.
 
+use crate::cone::ConeBlock;
 use crate::expr::Expr;
-use crate::lower::Lowered;
 
 /// Direction of a linear matrix inequality.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -69,11 +69,11 @@ impl ConstraintId {
 }
 
 /// A constraint as stored by the problem: the expression is kept for evaluation,
-/// its lowered rows for assembly.
+/// its lowered rows for assembly into the cone program.
 #[derive(Clone, Debug)]
 pub(crate) struct Constraint {
     pub(crate) name: String,
     pub(crate) expr: Expr,
     pub(crate) kind: ConstraintKind,
-    pub(crate) lowered: Lowered,
+    pub(crate) lowered: ConeBlock,
 }

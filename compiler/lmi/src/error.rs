@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use crate::solve::SolveStatus;
+use crate::status::SolveStatus;
 
 /// Everything that can go wrong when building, lowering, solving or evaluating a problem.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,12 +1,15 @@
-//! tsf-lmi: a small modelling layer for linear matrix inequalities, lowered to
-//! Clarabel's PSD cones. It knows nothing about fuzzy systems, and it is the
-//! only crate of tsfc that knows Clarabel exists.
+//! tsf-lmi: a small modelling layer for linear matrix inequalities. It knows
+//! nothing about fuzzy systems. Problems lower to a solver-neutral
+//! [`ConeProgram`] (zero, non-negative and PSD cones); only the `solve` module
+//! knows a solver, Clarabel, behind the [`ConeSolver`] seam, and it is the
+//! only code of tsfc that knows Clarabel exists.
 //!
 //! Flow: create variables on a [`Problem`], build affine [`Expr`]essions
 //! (`L V R` terms, `he`, block matrices), add named constraints
 //! (`E ⪰ margin I`, `E ⪯ -margin I`, scalar relations), set an objective,
 //! [`Problem::solve`], then rebuild every constraint from the returned values
-//! with [`Problem::margins`] to certify it.
+//! with [`Problem::margins`] to certify it. [`Problem::cone_program`] shows the
+//! lowered data; [`Problem::solve_with`] runs any other [`ConeSolver`] on it.
 //!
 //! Conventions:
 //! - LMIs must be symmetric coefficient by coefficient (checked when the
@@ -18,7 +21,7 @@
 //!   other statuses must be handled (or explicitly overridden) by the caller.
 //! - Output is deterministic: no hash-ordered iteration reaches the solver.
 //!
-//! Cost: Clarabel factors the full KKT system with QDLDL, so one iteration
+//! Cost: Clarabel factors the full KKT system with a sparse LDL, so one iteration
 //! costs roughly `Σ_cones svec(n)·(svec(n) + unknowns)²` flops and depends on
 //! the fill AMD finds; a T-S H-inf problem with 22 LMIs of size 10 and 94
 //! unknowns takes ~0.3 s, 37 LMIs of size 12 and 165 unknowns ~6 s.
@@ -46,21 +49,28 @@
 use tsf_lapack as _;
 
 mod assignment;
+mod cone;
 mod constraint;
 mod error;
 mod expr;
 mod lower;
 mod margin;
+mod objective;
 mod problem;
 mod solve;
+mod stats;
+mod status;
 mod var;
 
 pub use assignment::Assignment;
+pub use cone::{Cone, ConeProgram, CscMatrix};
 pub use constraint::{ConstraintId, ConstraintKind, LmiSense, Relation};
 pub use error::{LmiError, Result};
 pub use expr::{BlockGrid, Expr};
-pub use lower::ProblemStats;
 pub use margin::Margin;
-pub use problem::{ObjectiveSense, Problem};
-pub use solve::{LinearSolver, Solution, SolveSettings, SolveStatus};
+pub use objective::ObjectiveSense;
+pub use problem::Problem;
+pub use solve::{ClarabelSolver, ConeSolution, ConeSolver, LinearSolver, Solution, SolveSettings};
+pub use stats::ProblemStats;
+pub use status::SolveStatus;
 pub use var::{Var, VarKind};

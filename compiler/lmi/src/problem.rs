@@ -3,24 +3,15 @@
 use std::collections::HashSet;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use crate::cone::{ConeBlock, ConeProgram};
 use crate::constraint::{Constraint, ConstraintId, ConstraintKind, LmiSense, Relation};
 use crate::error::{check_finite, check_shape, LmiError, Result};
 use crate::expr::Expr;
-use crate::lower::{lower_linear_form, lower_lmi, lower_scalar, LinearForm};
+use crate::lower::{assemble, lower_linear_form, lower_lmi, lower_scalar};
+use crate::objective::{Objective, ObjectiveSense};
 use crate::var::{Var, VarKind};
 
 static NEXT_PROBLEM_ID: AtomicU64 = AtomicU64::new(1);
-
-/// Whether the objective is minimised, maximised or absent.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ObjectiveSense {
-    /// Pure feasibility problem (zero objective).
-    Feasibility,
-    /// Minimise the objective.
-    Minimize,
-    /// Maximise the objective.
-    Maximize,
-}
 
 /// An LMI problem under construction: create variables, add named constraints,
 /// set an objective, then [`Problem::solve`].
@@ -30,8 +21,7 @@ pub struct Problem {
     pub(crate) vars: Vec<(String, Var)>,
     pub(crate) unknowns: usize,
     pub(crate) constraints: Vec<Constraint>,
-    pub(crate) sense: ObjectiveSense,
-    pub(crate) objective: LinearForm,
+    pub(crate) objective: Objective,
     var_names: HashSet<String>,
     constraint_names: HashSet<String>,
 }
@@ -50,8 +40,7 @@ impl Problem {
             vars: Vec::new(),
             unknowns: 0,
             constraints: Vec::new(),
-            sense: ObjectiveSense::Feasibility,
-            objective: LinearForm::default(),
+            objective: Objective::default(),
             var_names: HashSet::new(),
             constraint_names: HashSet::new(),
         }
@@ -174,13 +163,25 @@ impl Problem {
 
     /// Drops the objective: the problem becomes a pure feasibility problem.
     pub fn feasibility(&mut self) {
-        self.sense = ObjectiveSense::Feasibility;
-        self.objective = LinearForm::default();
+        self.objective = Objective::default();
     }
 
     /// The objective's sense.
     pub fn objective_sense(&self) -> ObjectiveSense {
-        self.sense
+        self.objective.sense
+    }
+
+    /// The problem lowered to the solver-neutral [`ConeProgram`]: what
+    /// [`Problem::solve`] hands to the solver. Unknowns are numbered as in
+    /// [`crate::Assignment::unknowns`]; a maximisation is stated as the
+    /// minimisation of the negated objective, and the objective's constant is
+    /// left out.
+    pub fn cone_program(&self) -> ConeProgram {
+        assemble(
+            self.unknowns,
+            self.constraints.iter().map(|c| &c.lowered),
+            self.objective.cost(self.unknowns),
+        )
     }
 
     /// Variables with their names, in creation order.
@@ -242,8 +243,10 @@ impl Problem {
     fn set_objective(&mut self, sense: ObjectiveSense, expr: Expr) -> Result<()> {
         check_shape(|| "objective".into(), (1, 1), expr.shape())?;
         self.check_expr(&expr)?;
-        self.objective = lower_linear_form(&expr);
-        self.sense = sense;
+        self.objective = Objective {
+            sense,
+            form: lower_linear_form(&expr),
+        };
         Ok(())
     }
 
@@ -252,7 +255,7 @@ impl Problem {
         name: &str,
         expr: Expr,
         kind: ConstraintKind,
-        lowered: crate::lower::Lowered,
+        lowered: ConeBlock,
     ) -> Result<ConstraintId> {
         claim_name(&mut self.constraint_names, name, "constraint")?;
         self.constraints.push(Constraint {

@@ -1,0 +1,104 @@
+//! The Clarabel implementation of [`ConeSolver`]: the only code of the crate
+//! that knows Clarabel's types.
+
+use clarabel::algebra::CscMatrix as ClarabelCsc;
+use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+
+use crate::cone::{Cone, ConeProgram, CscMatrix};
+use crate::error::{LmiError, Result};
+use crate::status::SolveStatus;
+
+use super::settings::{LinearSolver, SolveSettings};
+use super::solver::{ConeSolution, ConeSolver};
+
+/// Clarabel's interior-point solver (the default of [`crate::Problem::solve`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ClarabelSolver;
+
+impl ConeSolver for ClarabelSolver {
+    fn name(&self) -> &'static str {
+        "clarabel"
+    }
+
+    fn solve(&self, program: &ConeProgram, settings: &SolveSettings) -> Result<ConeSolution> {
+        let cones: Vec<SupportedConeT<f64>> = program.cones.iter().map(|&c| cone(c)).collect();
+        let mut solver = DefaultSolver::new(
+            &csc(&program.p),
+            &program.q,
+            &csc(&program.a),
+            &program.b,
+            &cones,
+            clarabel_settings(settings),
+        )
+        .map_err(|e| LmiError::Solver(e.to_string()))?;
+        solver.solve();
+        let raw = &solver.solution;
+        Ok(ConeSolution {
+            status: status(raw.status),
+            iterations: raw.iterations,
+            solve_time: raw.solve_time,
+            objective: raw.obj_val,
+            dual_objective: raw.obj_val_dual,
+            primal_residual: raw.r_prim,
+            dual_residual: raw.r_dual,
+            x: raw.x.clone(),
+        })
+    }
+}
+
+/// The same matrix in Clarabel's type.
+fn csc(m: &CscMatrix) -> ClarabelCsc<f64> {
+    ClarabelCsc::new(
+        m.nrows,
+        m.ncols,
+        m.colptr.clone(),
+        m.rowval.clone(),
+        m.nzval.clone(),
+    )
+}
+
+/// The same cone in Clarabel's type (both pack PSD cones the same way).
+fn cone(c: Cone) -> SupportedConeT<f64> {
+    match c {
+        Cone::Zero(n) => SupportedConeT::ZeroConeT(n),
+        Cone::Nonnegative(n) => SupportedConeT::NonnegativeConeT(n),
+        Cone::PsdTriangle(n) => SupportedConeT::PSDTriangleConeT(n),
+    }
+}
+
+fn clarabel_settings(s: &SolveSettings) -> DefaultSettings<f64> {
+    DefaultSettings {
+        max_iter: s.max_iter,
+        time_limit: s.time_limit.unwrap_or(f64::INFINITY),
+        verbose: s.verbose,
+        tol_gap_abs: s.tol_gap_abs,
+        tol_gap_rel: s.tol_gap_rel,
+        tol_feas: s.tol_feas,
+        tol_infeas_abs: s.tol_infeas_abs,
+        tol_infeas_rel: s.tol_infeas_rel,
+        chordal_decomposition_enable: s.chordal_decomposition,
+        equilibrate_enable: s.equilibrate,
+        direct_solve_method: match s.linear_solver {
+            LinearSolver::Faer => "faer".to_string(),
+            LinearSolver::Qdldl => "qdldl".to_string(),
+        },
+        ..DefaultSettings::default()
+    }
+}
+
+fn status(s: SolverStatus) -> SolveStatus {
+    match s {
+        SolverStatus::Unsolved => SolveStatus::Unsolved,
+        SolverStatus::Solved => SolveStatus::Solved,
+        SolverStatus::AlmostSolved => SolveStatus::AlmostSolved,
+        SolverStatus::PrimalInfeasible => SolveStatus::PrimalInfeasible,
+        SolverStatus::DualInfeasible => SolveStatus::DualInfeasible,
+        SolverStatus::AlmostPrimalInfeasible => SolveStatus::AlmostPrimalInfeasible,
+        SolverStatus::AlmostDualInfeasible => SolveStatus::AlmostDualInfeasible,
+        SolverStatus::MaxIterations => SolveStatus::MaxIterations,
+        SolverStatus::MaxTime => SolveStatus::MaxTime,
+        SolverStatus::NumericalError => SolveStatus::NumericalError,
+        SolverStatus::InsufficientProgress => SolveStatus::InsufficientProgress,
+        SolverStatus::CallbackTerminated => SolveStatus::CallbackTerminated,
+    }
+}

@@ -1,0 +1,42 @@
+//! The seam between the LMI layer and a conic solver.
+
+use crate::cone::ConeProgram;
+use crate::error::Result;
+use crate::status::SolveStatus;
+
+use super::settings::SolveSettings;
+
+/// A conic solver: takes a [`ConeProgram`] and returns its raw result.
+///
+/// [`crate::Problem::solve_with`] lowers a problem, calls the solver and maps
+/// the result back to the problem's variables and objective sense, so an
+/// implementation only ever sees the solver-neutral program.
+pub trait ConeSolver {
+    /// Short name for reports (e.g. the solver crate's name).
+    fn name(&self) -> &'static str;
+
+    /// Solves the program. `Err` only when the solver refuses the data or
+    /// settings; every termination status is returned in the [`ConeSolution`].
+    fn solve(&self, program: &ConeProgram, settings: &SolveSettings) -> Result<ConeSolution>;
+}
+
+/// What a [`ConeSolver`] returns, in the cone program's own terms.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConeSolution {
+    /// Termination status.
+    pub status: SolveStatus,
+    /// Interior-point iterations.
+    pub iterations: u32,
+    /// Solver time in seconds, as the solver reports it.
+    pub solve_time: f64,
+    /// Primal objective `½ xᵀ P x + qᵀ x` of the cone program.
+    pub objective: f64,
+    /// Dual objective of the cone program.
+    pub dual_objective: f64,
+    /// Primal residual.
+    pub primal_residual: f64,
+    /// Dual residual.
+    pub dual_residual: f64,
+    /// The last primal iterate, one value per unknown.
+    pub x: Vec<f64>,
+}
