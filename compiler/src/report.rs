@@ -243,7 +243,7 @@ pub fn report(
             None,
             None,
             Some(Diagnosis {
-                message: format!("{message} (solver status: {status:?})"),
+                message: format!("{message} (solver status: {status})"),
                 achievable: achievable.clone(),
             }),
         ),

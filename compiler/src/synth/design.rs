@@ -161,7 +161,7 @@ impl std::fmt::Display for SynthError {
                 message,
                 achievable,
             } => {
-                write!(f, "{message} (solver status: {status:?})")?;
+                write!(f, "{message} (solver status: {status})")?;
                 for a in achievable {
                     write!(f, "\n  {a}")?;
                 }

@@ -69,7 +69,7 @@ pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthE
             Err(SynthError::Solver {
                 status,
                 message: format!(
-                    "the solver stopped ({status:?}) without proving the objectives feasible or infeasible; they are most likely infeasible or nearly so{}",
+                    "the solver stopped ({status}) without proving the objectives feasible or infeasible; they are most likely infeasible or nearly so{}",
                     if plan.fixed_bounds().is_empty() { String::new() } else { format!(" ({})", plan.fixed_bounds().iter().map(|(n, v)| format!("{n} {v}")).collect::<Vec<_>>().join(", ")) }
                 ),
                 achievable,
