@@ -1,0 +1,99 @@
+//! The objective families behind one trait: the problem a plan gives does not
+//! depend on the order the spec lists its objectives, and the certificate
+//! checks the unreduced conditions only through the reductions' inversion.
+
+mod common;
+use common::shipped;
+use tsf_lang::spec::Spec;
+use tsfc::model::TsModel;
+use tsfc::synth::objectives::Linf;
+use tsfc::synth::{self, plan, Reduction, Settings};
+
+/// (variable names, constraint names) of the problem built for `model`'s plan.
+fn layout(model: &TsModel, reduce: bool) -> (Vec<String>, Vec<String>) {
+    let (mut plan, _) = plan::initial_plan(&model.spec, 0.1);
+    // As the xi search does when the spec leaves xi free.
+    if let Some(l) = plan.get_mut::<Linf>() {
+        l.xi.get_or_insert(0.3);
+    }
+    let built = synth::build(model, &plan, model.spec.relaxation.node, 1e-7, reduce)
+        .expect("the shipped spec builds");
+    let vars = built.problem.vars().map(|(n, _)| n.to_string()).collect();
+    let cons = built
+        .problem
+        .constraints()
+        .map(|id| {
+            built
+                .problem
+                .constraint_info(id)
+                .expect("constraint of this problem")
+                .0
+                .to_string()
+        })
+        .collect();
+    (vars, cons)
+}
+
+fn reversed_objectives(model: &TsModel) -> TsModel {
+    let mut m = model.clone();
+    let spec: &mut Spec = &mut m.spec;
+    spec.objectives.reverse();
+    m
+}
+
+#[test]
+fn the_problem_does_not_depend_on_the_order_of_objectives() {
+    for name in ["zhang2013_multiobjective.tsf", "xu2020_event_triggered.tsf"] {
+        let model = shipped(name);
+        assert!(
+            model.spec.objectives.len() >= 2,
+            "{name}: needs several objectives"
+        );
+        let (v1, c1) = layout(&model, true);
+        let (v2, c2) = layout(&reversed_objectives(&model), true);
+        assert_eq!(v1, v2, "{name}: variable order");
+        assert_eq!(c1, c2, "{name}: constraint order");
+        // Every family contributed: the variables of each objective are there.
+        assert_eq!(v1.first().map(String::as_str), Some("X"), "{name}");
+    }
+}
+
+#[test]
+fn zhang_layout_has_every_family_once() {
+    let model = shipped("zhang2013_multiobjective.tsf");
+    let (vars, cons) = layout(&model, false);
+    // hinf minimized: g; input norm fixed (<= 5): no mu2; Tanaka: one slack per family.
+    assert!(vars.contains(&"g".to_string()));
+    assert!(!vars.contains(&"mu2".to_string()));
+    assert!(vars.contains(&"Y_decay".to_string()));
+    assert!(vars.contains(&"Y_hinf".to_string()));
+    let count = |prefix: &str| cons.iter().filter(|c| c.starts_with(prefix)).count();
+    let r = model.r();
+    assert_eq!(count("decay Q+(s-1)Y"), r);
+    assert_eq!(count("hinf Q+(s-1)Y"), r);
+    assert_eq!(count("input norm ["), r);
+    assert_eq!(count("input norm: x0 in E(P,1)"), 1);
+    // Decay is imposed, so plain stability is not.
+    assert_eq!(count("stability"), 0);
+}
+
+#[test]
+fn the_certificate_inverts_reductions_and_refuses_without_them() {
+    let model = shipped("zhang2013_multiobjective.tsf");
+    let design = synth::synthesize(&model, &Settings::default()).expect("certifiable");
+    assert!(
+        design
+            .reductions
+            .iter()
+            .any(|r| matches!(r, Reduction::TanakaSlackZero { .. })),
+        "every Zhang rule shares B: Tanaka's slack is reduced away"
+    );
+    let cert = tsfc::certify::certify(&model, &design).expect("certify");
+    assert!(cert.ok, "worst: {}", cert.worst);
+    // The Tanaka pair conditions are in the certificate although they were not solved.
+    assert!(cert.lmis.iter().any(|l| l.name.contains("(Q+Q')/2-Y")));
+    let mut stripped = design.clone();
+    stripped.reductions.clear();
+    let err = tsfc::certify::certify(&model, &stripped).expect_err("a slack has no value");
+    assert!(err.to_string().contains("Y_"), "{err}");
+}
