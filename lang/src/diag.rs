@@ -100,7 +100,7 @@ impl Diagnostic {
         name: &str,
         candidates: impl IntoIterator<Item = &'a str>,
     ) -> Self {
-        match crate::eval::suggest(name, candidates) {
+        match crate::suggest::suggest(name, candidates) {
             Some(c) => self.with_help(format!("did you mean `{c}`?")),
             None => self,
         }

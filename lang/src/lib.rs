@@ -15,6 +15,7 @@ pub mod parser;
 pub mod span;
 pub mod spec;
 pub mod split;
+mod suggest;
 
 pub use diag::{Diagnostic, Severity};
 pub use span::Span;

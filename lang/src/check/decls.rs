@@ -6,10 +6,10 @@ use super::env::walk_names;
 use super::{Checker, Kind};
 use crate::ast::{Expr, Item, ItemKind, VarDecl};
 use crate::diag::Diagnostic;
-use crate::eval::suggest;
 use crate::eval::{FnDef, BUILTINS};
 use crate::span::{Span, Spanned};
 use crate::spec::Signal;
+use crate::suggest::suggest;
 
 /// The language versions this checker reads.
 const SUPPORTED_VERSION: f64 = 1.0;

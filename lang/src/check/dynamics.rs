@@ -4,10 +4,10 @@
 use super::{Checker, Kind};
 use crate::ast::{DynStmt, Expr};
 use crate::diag::Diagnostic;
-use crate::eval::suggest;
 use crate::eval::{Mat, Mode};
 use crate::span::{Span, Spanned};
 use crate::spec::{Dynamics, Signal};
+use crate::suggest::suggest;
 
 impl Checker<'_> {
     /// The block's extra states, constants and derivatives (ordered as the states).

@@ -5,8 +5,8 @@ use super::objectives::ObjectiveItem;
 use super::Checker;
 use crate::ast::{ExprKind, Goal, Ident};
 use crate::diag::Diagnostic;
-use crate::eval::suggest;
 use crate::spec::{InitialSet, Output, Target};
+use crate::suggest::suggest;
 
 impl Checker<'_> {
     /// The goal: `word_ok` (optimize) or `bound_kind value` (a positive bound).

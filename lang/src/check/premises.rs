@@ -5,9 +5,9 @@
 use super::{Checker, Kind};
 use crate::ast::{Expr, ExprKind, Ident, Item, ItemKind, SetDef, SetRef};
 use crate::diag::Diagnostic;
-use crate::eval::suggest;
 use crate::eval::Mode;
 use crate::spec::{FuzzySet, Premise, SetShape};
+use crate::suggest::suggest;
 
 impl Checker<'_> {
     /// The premises declared by `items`, then the implicit ones of `rules`.

@@ -4,10 +4,10 @@
 use super::{Checker, Dims};
 use crate::ast::{Clause, Ident, Item, ItemKind, NamedArg, SetRef};
 use crate::diag::Diagnostic;
-use crate::eval::suggest;
 use crate::eval::Mat;
 use crate::span::Span;
 use crate::spec::{ClauseSet, Premise, RuleClause, RuleSpec};
+use crate::suggest::suggest;
 
 impl Checker<'_> {
     /// The rules, each with a unique name and premise; "no rules" if there are none.
