@@ -456,14 +456,6 @@ fn elementwise(v: &Mat, f: fn(f64) -> f64) -> Mat {
     v.map(f)
 }
 
-fn sinc(v: f64) -> f64 {
-    if v.abs() < 1e-8 {
-        1.0 - v * v / 6.0
-    } else {
-        v.sin() / v
-    }
-}
-
 fn dim_arg(v: &Mat, s: Span) -> Result<usize, Diagnostic> {
     let x = if is_scalar(v) { v[(0, 0)] } else { f64::NAN };
     if x.fract() == 0.0 && (0.0..=10_000.0).contains(&x) {
@@ -600,7 +592,8 @@ fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) ->
                         0.0
                     }
                 },
-                _ => sinc,
+                // The runtime's sinc, so that model and generated code agree.
+                _ => tsf_runtime::math::sinc,
             };
             Ok(elementwise(&a[0], f))
         }
