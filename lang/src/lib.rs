@@ -10,6 +10,7 @@
 pub mod ast;
 pub mod check;
 pub mod diag;
+mod display;
 pub mod eval;
 pub mod parser;
 pub mod span;

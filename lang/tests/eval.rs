@@ -77,7 +77,11 @@ fn sinc_is_the_runtime_sinc() {
     // Both branches (|v| < 2^-13 and sin(v)/v), bit for bit.
     for v in [0.0, 1e-9, -1e-5, 1.2e-4, 0.3, -1.0, 2.5, 100.0] {
         let got = eval(&format!("sinc({v:e})")).unwrap()[0];
-        assert_eq!(got.to_bits(), tsf_runtime::math::sinc(v).to_bits(), "sinc({v})");
+        assert_eq!(
+            got.to_bits(),
+            tsf_runtime::math::sinc(v).to_bits(),
+            "sinc({v})"
+        );
     }
 }
 

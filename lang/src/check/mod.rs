@@ -286,7 +286,7 @@ fn unknown_choice(
 
 /// Small specs for the unit tests of every checker module.
 #[cfg(test)]
-mod testing {
+pub(crate) mod testing {
     use crate::diag::Diagnostic;
     use crate::spec::Spec;
 
