@@ -18,6 +18,7 @@ pub mod spec;
 pub mod split;
 mod suggest;
 
+pub use check::GENERATABLE_FUNCTIONS;
 pub use diag::{Diagnostic, Severity};
 pub use span::Span;
 pub use spec::Spec;

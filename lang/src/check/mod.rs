@@ -4,13 +4,17 @@
 //! One module per item kind: [`decls`] (version, controller, functions,
 //! constants, signals), [`model`] (outputs and the matrices A, B, D),
 //! [`premises`], [`rules`], [`objectives`], [`relaxation`], [`trigger`],
-//! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`].
+//! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`]; premises
+//! must be [`generatable`], and [`combinations`] rejects valid items the
+//! compiler cannot do together.
 //! Environments and constant evaluation are shared by all of them
 //! ([`env`], [`values`]).
 
+mod combinations;
 mod decls;
 mod dynamics;
 mod env;
+mod generatable;
 mod model;
 mod objective_parts;
 mod objectives;
@@ -21,6 +25,8 @@ mod simulate;
 mod targets;
 mod trigger;
 mod values;
+
+pub use generatable::GENERATABLE_FUNCTIONS;
 
 use crate::ast::*;
 use crate::diag::Diagnostic;
@@ -155,6 +161,12 @@ impl<'a> Checker<'a> {
         let objectives = self.objectives(&draft.objective_items, dims.n, &draft.outputs);
         let relaxation =
             self.settle_relaxation(draft.relaxation.take(), &rules, draft.rule_items.len());
+        self.combinations(
+            &objectives,
+            &draft,
+            saturation.as_deref(),
+            disturbance_bound,
+        );
         let controller = controller?;
         Some(Spec {
             controller,

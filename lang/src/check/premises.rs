@@ -67,6 +67,7 @@ impl Checker<'_> {
             );
             return;
         }
+        self.check_generatable(&bound, names);
         let range = match range {
             Some((lo, hi)) => self.premise_range(lo, hi),
             None => None,
