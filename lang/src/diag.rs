@@ -133,7 +133,7 @@ fn clamp(span: Span, source: &str) -> Span {
 }
 
 /// 1-based line and column (in characters) of byte offset `at`.
-pub fn line_col(source: &str, at: usize) -> (usize, usize) {
+fn line_col(source: &str, at: usize) -> (usize, usize) {
     let at = clamp(Span::new(at, at), source).start;
     let before = &source[..at];
     let line = before.matches('\n').count() + 1;

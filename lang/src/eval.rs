@@ -51,7 +51,7 @@ pub struct Env<'a> {
 }
 
 /// Names of the built-in functions.
-pub const BUILTINS: &[&str] = &[
+pub(crate) const BUILTINS: &[&str] = &[
     "eye",
     "zeros",
     "ones",

@@ -1,30 +1,21 @@
 //! Expression evaluation: precedence, matrices, built-ins, errors.
 
 use tsf_lang::check_source;
-use tsf_lang::parser::parse_file;
 
-/// Parses `expr` as the value of a constant and evaluates it with no other names.
+/// A valid spec to which the expression is appended as a constant.
+const SPEC: &str = "tsf 1; controller c; state x1; input u; A = -1; B = 1;\n\
+    premise x1 range -1 .. 1 { all = trap(-1, -1, 1, 1); }\n\
+    rule R: x1 is all => A = -2;\n";
+
+/// Evaluates `expr` as the value of a constant (which sees no signals).
 fn eval(expr: &str) -> Result<Vec<f64>, String> {
-    let src = format!("const v = {expr};");
-    let (file, d) = parse_file(&src);
-    if let Some(e) = d.first() {
+    let (spec, diags) = check_source(&format!("{SPEC}const v = {expr};"));
+    if let Some(e) = diags.iter().find(|d| d.is_error()) {
         return Err(e.message.clone());
     }
-    let Some(tsf_lang::ast::ItemKind::Const(_, e)) = file.items.first().map(|i| &i.kind) else {
-        return Err("not a constant".into());
-    };
-    let consts = std::collections::HashMap::new();
-    let fns = std::collections::HashMap::new();
-    let env = tsf_lang::eval::Env {
-        consts: &consts,
-        fns: &fns,
-        locals: vec![],
-        unavailable: vec![],
-        mode: tsf_lang::eval::Mode::Exact,
-    };
-    env.eval(e)
-        .map(|m| m.iter().copied().collect())
-        .map_err(|d| d.message)
+    let spec = spec.ok_or("no spec")?;
+    let v = spec.consts.get("v").ok_or("no value")?;
+    Ok(v.iter().copied().collect())
 }
 
 #[test]
