@@ -100,7 +100,7 @@ impl Diagnostic {
         name: &str,
         candidates: impl IntoIterator<Item = &'a str>,
     ) -> Self {
-        match crate::eval::suggest(name, candidates) {
+        match crate::suggest::suggest(name, candidates) {
             Some(c) => self.with_help(format!("did you mean `{c}`?")),
             None => self,
         }
@@ -133,7 +133,7 @@ fn clamp(span: Span, source: &str) -> Span {
 }
 
 /// 1-based line and column (in characters) of byte offset `at`.
-pub fn line_col(source: &str, at: usize) -> (usize, usize) {
+fn line_col(source: &str, at: usize) -> (usize, usize) {
     let at = clamp(Span::new(at, at), source).start;
     let before = &source[..at];
     let line = before.matches('\n').count() + 1;

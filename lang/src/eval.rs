@@ -10,6 +10,7 @@
 use crate::ast::{Arg, BinOp, Expr, ExprKind, IndexArg};
 use crate::diag::Diagnostic;
 use crate::span::Span;
+use crate::suggest::suggest;
 use nalgebra::DMatrix;
 use std::collections::HashMap;
 
@@ -50,7 +51,7 @@ pub struct Env<'a> {
 }
 
 /// Names of the built-in functions.
-pub const BUILTINS: &[&str] = &[
+pub(crate) const BUILTINS: &[&str] = &[
     "eye",
     "zeros",
     "ones",
@@ -100,32 +101,6 @@ fn is_scalar(m: &Mat) -> bool {
 
 fn scalar(v: f64) -> Mat {
     DMatrix::from_element(1, 1, v)
-}
-
-/// Levenshtein distance, for "did you mean" hints.
-pub fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut cur = vec![i + 1];
-        for (j, cb) in b.iter().enumerate() {
-            let sub = prev[j] + usize::from(ca != *cb);
-            cur.push(sub.min(prev[j + 1] + 1).min(cur[j] + 1));
-        }
-        prev = cur;
-    }
-    prev[b.len()]
-}
-
-/// The closest candidate to `name`, if close enough to be a likely typo.
-pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
-    candidates
-        .into_iter()
-        .filter(|c| *c != name)
-        .map(|c| (edit_distance(name, c), c))
-        .filter(|(d, c)| *d <= 2.max(c.len() / 3) && *d < c.len().max(name.len()))
-        .min_by_key(|(d, _)| *d)
-        .map(|(_, c)| c)
 }
 
 impl Env<'_> {
@@ -481,14 +456,6 @@ fn elementwise(v: &Mat, f: fn(f64) -> f64) -> Mat {
     v.map(f)
 }
 
-fn sinc(v: f64) -> f64 {
-    if v.abs() < 1e-8 {
-        1.0 - v * v / 6.0
-    } else {
-        v.sin() / v
-    }
-}
-
 fn dim_arg(v: &Mat, s: Span) -> Result<usize, Diagnostic> {
     let x = if is_scalar(v) { v[(0, 0)] } else { f64::NAN };
     if x.fract() == 0.0 && (0.0..=10_000.0).contains(&x) {
@@ -625,7 +592,8 @@ fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mode: Mode) ->
                         0.0
                     }
                 },
-                _ => sinc,
+                // The runtime's sinc, so that model and generated code agree.
+                _ => tsf_runtime::math::sinc,
             };
             Ok(elementwise(&a[0], f))
         }

@@ -8,14 +8,17 @@
 #![allow(clippy::result_large_err)] // diagnostics travel on the cold error path; boxing them buys nothing
 
 pub mod ast;
-pub mod check;
+mod check;
 pub mod diag;
+mod display;
 pub mod eval;
-pub mod parser;
+mod parser;
 pub mod span;
 pub mod spec;
-pub mod split;
+mod split;
+mod suggest;
 
+pub use check::GENERATABLE_FUNCTIONS;
 pub use diag::{Diagnostic, Severity};
 pub use span::Span;
 pub use spec::Spec;

@@ -1,30 +1,21 @@
 //! Expression evaluation: precedence, matrices, built-ins, errors.
 
 use tsf_lang::check_source;
-use tsf_lang::parser::parse_file;
 
-/// Parses `expr` as the value of a constant and evaluates it with no other names.
+/// A valid spec to which the expression is appended as a constant.
+const SPEC: &str = "tsf 1; controller c; state x1; input u; A = -1; B = 1;\n\
+    premise x1 range -1 .. 1 { all = trap(-1, -1, 1, 1); }\n\
+    rule R: x1 is all => A = -2;\n";
+
+/// Evaluates `expr` as the value of a constant (which sees no signals).
 fn eval(expr: &str) -> Result<Vec<f64>, String> {
-    let src = format!("const v = {expr};");
-    let (file, d) = parse_file(&src);
-    if let Some(e) = d.first() {
+    let (spec, diags) = check_source(&format!("{SPEC}const v = {expr};"));
+    if let Some(e) = diags.iter().find(|d| d.is_error()) {
         return Err(e.message.clone());
     }
-    let Some(tsf_lang::ast::ItemKind::Const(_, e)) = file.items.first().map(|i| &i.kind) else {
-        return Err("not a constant".into());
-    };
-    let consts = std::collections::HashMap::new();
-    let fns = std::collections::HashMap::new();
-    let env = tsf_lang::eval::Env {
-        consts: &consts,
-        fns: &fns,
-        locals: vec![],
-        unavailable: vec![],
-        mode: tsf_lang::eval::Mode::Exact,
-    };
-    env.eval(e)
-        .map(|m| m.iter().copied().collect())
-        .map_err(|d| d.message)
+    let spec = spec.ok_or("no spec")?;
+    let v = spec.consts.get("v").ok_or("no value")?;
+    Ok(v.iter().copied().collect())
 }
 
 #[test]
@@ -70,6 +61,19 @@ fn builtins_agree_with_closed_forms() {
     assert_eq!(eval("mean([1, 2, 3, 6])").unwrap(), vec![3.0]);
     assert_eq!(eval("zeros(2)").unwrap().len(), 2);
     assert_eq!(eval("norm([3; 4])").unwrap(), vec![5.0]);
+}
+
+#[test]
+fn sinc_is_the_runtime_sinc() {
+    // Both branches (|v| < 2^-13 and sin(v)/v), bit for bit.
+    for v in [0.0, 1e-9, -1e-5, 1.2e-4, 0.3, -1.0, 2.5, 100.0] {
+        let got = eval(&format!("sinc({v:e})")).unwrap()[0];
+        assert_eq!(
+            got.to_bits(),
+            tsf_runtime::math::sinc(v).to_bits(),
+            "sinc({v})"
+        );
+    }
 }
 
 #[test]

@@ -1,0 +1,148 @@
+//! The double-sum relaxation: `relaxation basic | tanaka(s = ..) | tuan |
+//! membership_mismatch(kappa = ..);` (default `basic`).
+
+use super::{unknown_choice, Checker, Draft};
+use crate::ast::{Ident, Item, NamedArg};
+use crate::diag::Diagnostic;
+use crate::span::{Span, Spanned};
+use crate::spec::{Relaxation, RuleSpec};
+
+impl Checker<'_> {
+    /// A `relaxation` item (given once).
+    pub(super) fn relaxation_item(
+        &mut self,
+        it: &Item,
+        name: &Ident,
+        args: &[NamedArg],
+        draft: &mut Draft,
+    ) {
+        let mut seen = draft.relaxation.as_ref().map(|r| r.span);
+        if self.singleton(&mut seen, it.span, "the relaxation") {
+            if let Some(r) = self.relaxation(name, args, it.span) {
+                draft.relaxation = Some(Spanned::new(r, it.span));
+            }
+        }
+    }
+
+    /// The relaxation in force (`basic` when none is given); `tanaka(s)` needs
+    /// 1 <= s <= r when every rule checked (`rule_items` of them).
+    pub(super) fn settle_relaxation(
+        &mut self,
+        relaxation: Option<Spanned<Relaxation>>,
+        rules: &[RuleSpec],
+        rule_items: usize,
+    ) -> Spanned<Relaxation> {
+        let relaxation = relaxation.unwrap_or(Spanned::new(Relaxation::Basic, Span::new(0, 0)));
+        if let Relaxation::Tanaka { s } = relaxation.node {
+            if rules.len() == rule_items && (s < 1 || s > rules.len()) {
+                self.err(
+                    Diagnostic::error(
+                        relaxation.span,
+                        format!("tanaka(s = {s}) needs 1 <= s <= r = {}", rules.len()),
+                    )
+                    .with_label("s is the most rules that fire at once"),
+                );
+            }
+        }
+        relaxation
+    }
+
+    fn relaxation(&mut self, name: &Ident, args: &[NamedArg], span: Span) -> Option<Relaxation> {
+        let kinds = ["basic", "tanaka", "tuan", "membership_mismatch"];
+        match name.node.as_str() {
+            "basic" | "tuan" => {
+                self.named(args, &[], &format!("relaxation `{}`", name.node))?;
+                Some(if name.node == "basic" {
+                    Relaxation::Basic
+                } else {
+                    Relaxation::Tuan
+                })
+            }
+            "tanaka" => {
+                let p = self.named(args, &["s"], "relaxation `tanaka`")?;
+                let Some(s) = p.get("s").copied() else {
+                    self.err(
+                        Diagnostic::error(
+                            span,
+                            "`tanaka` needs `s`, the most rules that fire at once",
+                        )
+                        .with_help("write `relaxation tanaka(s = 4);`"),
+                    );
+                    return None;
+                };
+                if s.fract() != 0.0 || s < 1.0 {
+                    self.err(Diagnostic::error(
+                        span,
+                        format!("`s` must be a whole number >= 1, found {s}"),
+                    ));
+                    return None;
+                }
+                Some(Relaxation::Tanaka { s: s as usize })
+            }
+            "membership_mismatch" => {
+                let p = self.named(args, &["kappa"], "relaxation `membership_mismatch`")?;
+                let kappa = p.get("kappa").copied().unwrap_or(0.0);
+                if !(0.0..1.0).contains(&kappa) {
+                    self.err(Diagnostic::error(
+                        span,
+                        format!("`kappa` must be in [0, 1), found {kappa}"),
+                    ));
+                    return None;
+                }
+                Some(Relaxation::MembershipMismatch { kappa })
+            }
+            other => {
+                self.err(unknown_choice(
+                    name.span,
+                    "relaxation",
+                    "relaxations",
+                    other,
+                    &kinds,
+                ));
+                None
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::check::testing::*;
+    use crate::spec::Relaxation;
+
+    #[test]
+    fn each_relaxation_with_its_parameters() {
+        assert_eq!(spec_with("").relaxation.node, Relaxation::Basic);
+        assert_eq!(
+            spec_with("relaxation tuan;").relaxation.node,
+            Relaxation::Tuan
+        );
+        assert_eq!(
+            spec_with("relaxation tanaka(s = 1);").relaxation.node,
+            Relaxation::Tanaka { s: 1 }
+        );
+        assert_eq!(
+            spec_with("relaxation membership_mismatch(kappa = 0.12);")
+                .relaxation
+                .node,
+            Relaxation::MembershipMismatch { kappa: 0.12 }
+        );
+    }
+
+    #[test]
+    fn parameters_are_checked() {
+        let (m, at) = only_error("relaxation tanaka(s = 4);");
+        assert_eq!(m, "tanaka(s = 4) needs 1 <= s <= r = 1");
+        assert_eq!(at, "relaxation tanaka(s = 4);");
+        let (m, _) = only_error("relaxation tanaka;");
+        assert_eq!(m, "`tanaka` needs `s`, the most rules that fire at once");
+        let (m, _) = only_error("relaxation membership_mismatch(kappa = 1);");
+        assert_eq!(m, "`kappa` must be in [0, 1), found 1");
+        let (m, at) = only_error("relaxation basic(s = 1);");
+        assert_eq!(m, "relaxation `basic` has no parameter `s`");
+        assert_eq!(at, "s");
+        let (m, at) = only_error("relaxation tanka(s = 1);");
+        assert_eq!(m, "unknown relaxation `tanka`");
+        assert_eq!(at, "tanka");
+    }
+}

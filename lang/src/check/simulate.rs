@@ -1,0 +1,247 @@
+//! The `simulate` scenario: initial state, time span, seed, integrator,
+//! disturbance signals of `t`, and the truth `dynamics` (see [`super::dynamics`]).
+
+use super::{unknown_choice, Checker, Draft};
+use crate::ast::{Expr, ExprKind, Ident, Item, Setting, SimStmt, Value};
+use crate::diag::Diagnostic;
+use crate::eval::Mat;
+use crate::span::Span;
+use crate::spec::{Dynamics, Integrator, Simulation};
+
+/// What the statements of a `simulate` block set so far.
+struct Scenario {
+    x0: Option<Vec<f64>>,
+    time: Option<(f64, f64, f64)>,
+    signals: Vec<(usize, Expr)>,
+    seed: u64,
+    integrator: Integrator,
+    dynamics: Option<Dynamics>,
+    /// False once a statement failed (missing settings are then not reported).
+    ok: bool,
+    /// Setting keys given so far.
+    seen: Vec<String>,
+}
+
+impl Checker<'_> {
+    /// The `simulate` item (given once).
+    pub(super) fn simulate_item(
+        &mut self,
+        it: &Item,
+        stmts: &[SimStmt],
+        n: usize,
+        draft: &mut Draft,
+    ) {
+        if self.singleton(&mut draft.simulate_seen, it.span, "the `simulate` block") {
+            draft.simulate = self.simulate(stmts, it.span, n);
+        }
+    }
+
+    /// The scenario; it needs `x0` and `time`.
+    fn simulate(&mut self, stmts: &[SimStmt], span: Span, n: usize) -> Option<Simulation> {
+        let mut sc = Scenario {
+            x0: None,
+            time: None,
+            signals: Vec::new(),
+            seed: 0,
+            integrator: Integrator::Rk4,
+            dynamics: None,
+            ok: true,
+            seen: Vec::new(),
+        };
+        for st in stmts {
+            match st {
+                SimStmt::Setting(s) => self.sim_setting(s, n, &mut sc),
+                SimStmt::Signal { name, param, value } => match self.sim_signal(name, param, value)
+                {
+                    Some(signal) => sc.signals.push(signal),
+                    None => sc.ok = false,
+                },
+                SimStmt::Dynamics(body, dspan) => {
+                    sc.dynamics = self.dynamics(body, *dspan);
+                    if sc.dynamics.is_none() {
+                        sc.ok = false;
+                    }
+                }
+            }
+        }
+        let Some(x0) = sc.x0 else {
+            if sc.ok && !sc.seen.iter().any(|k| k == "x0") {
+                self.err(
+                    Diagnostic::error(span, "`simulate` needs an initial state")
+                        .with_help("add `x0 = [...];`"),
+                );
+            }
+            return None;
+        };
+        let Some(time) = sc.time else {
+            if sc.ok && !sc.seen.iter().any(|k| k == "time") {
+                self.err(
+                    Diagnostic::error(span, "`simulate` needs a time span")
+                        .with_help("add `time = 0 .. 10 step 0.01;`"),
+                );
+            }
+            return None;
+        };
+        sc.ok.then_some(Simulation {
+            x0,
+            time,
+            signals: sc.signals,
+            seed: sc.seed,
+            integrator: sc.integrator,
+            dynamics: sc.dynamics,
+            span,
+        })
+    }
+
+    /// One setting: `x0`, `time`, `seed` or `integrator`, each given once.
+    fn sim_setting(&mut self, s: &Setting, n: usize, sc: &mut Scenario) {
+        if sc.seen.contains(&s.key.node) {
+            self.err(Diagnostic::error(
+                s.key.span,
+                format!("`{}` is given twice", s.key.node),
+            ));
+            sc.ok = false;
+            return;
+        }
+        sc.seen.push(s.key.node.clone());
+        match s.key.node.as_str() {
+            "x0" => match &s.value {
+                Value::Expr(e) => sc.x0 = self.vector(e, n, "x0"),
+                Value::Range(..) => {
+                    self.err(Diagnostic::error(s.span, "x0 is a vector, not a range"))
+                }
+            },
+            "time" => {
+                if let Some((a, b, st)) = self.range_setting(s) {
+                    let h = st.unwrap_or((b - a) / 1000.0);
+                    if (b - a) / h > 1e9 {
+                        self.err(
+                            Diagnostic::error(s.span, "too many time steps (more than 1e9)")
+                                .with_help("increase the step"),
+                        );
+                        sc.ok = false;
+                    } else {
+                        sc.time = Some((a, b, h));
+                    }
+                } else {
+                    sc.ok = false;
+                }
+            }
+            "seed" => match self.setting_scalar(s) {
+                Some(v) if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 => sc.seed = v as u64,
+                Some(_) => self.err(Diagnostic::error(
+                    s.span,
+                    "the seed is a non-negative whole number",
+                )),
+                None => sc.ok = false,
+            },
+            "integrator" => match &s.value {
+                Value::Expr(Expr {
+                    kind: ExprKind::Name(w),
+                    ..
+                }) if w == "rk4" => sc.integrator = Integrator::Rk4,
+                Value::Expr(Expr {
+                    kind: ExprKind::Name(w),
+                    ..
+                }) if w == "dopri5" => sc.integrator = Integrator::Dopri5,
+                _ => self.err(
+                    Diagnostic::error(s.span, "unknown integrator")
+                        .with_help("use `rk4` or `dopri5`"),
+                ),
+            },
+            other => {
+                let keys = ["x0", "time", "seed", "integrator"];
+                self.err(unknown_choice(
+                    s.key.span,
+                    "simulate setting",
+                    "settings",
+                    other,
+                    &keys,
+                ));
+                sc.ok = false;
+            }
+        }
+    }
+
+    /// `d(t) = expr;`: a disturbance of the right length as a function of time.
+    fn sim_signal(&mut self, name: &Ident, param: &Ident, value: &Expr) -> Option<(usize, Expr)> {
+        let Some(di) = self.disturbances.iter().position(|d| d.name == name.node) else {
+            self.err(
+                Diagnostic::error(name.span, format!("`{}` is not a disturbance", name.node))
+                    .with_help("signals in `simulate` define disturbances: `d(t) = ...;`"),
+            );
+            return None;
+        };
+        if param.node != "t" {
+            self.err(Diagnostic::error(
+                param.span,
+                "the signal parameter must be `t`",
+            ));
+            return None;
+        }
+        let len = self.disturbances[di].len;
+        let mut env = self.const_env();
+        env.unavailable.retain(|(n, _)| n != "t");
+        env.locals.push(("t".into(), Mat::zeros(1, 1)));
+        match env.eval(value) {
+            Ok(v) if v.nrows() == len && v.ncols() == 1 => Some((di, value.clone())),
+            Ok(v) => {
+                self.err(Diagnostic::error(
+                    value.span,
+                    format!(
+                        "disturbance `{}` has {len} components but this is {}x{}",
+                        name.node,
+                        v.nrows(),
+                        v.ncols()
+                    ),
+                ));
+                None
+            }
+            Err(d) => {
+                self.err(d);
+                None
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::check::testing::*;
+    use crate::spec::Integrator;
+
+    #[test]
+    fn a_scenario_with_its_settings_and_signals() {
+        let spec = spec_with(
+            "disturbance d; D = 1;\nsimulate { x0 = 0.5; time = 0 .. 2 step 0.1; seed = 3; integrator = dopri5; d(t) = sin(t); }",
+        );
+        let s = spec.simulate.expect("a scenario");
+        assert_eq!(s.x0, vec![0.5]);
+        assert_eq!(s.time, (0.0, 2.0, 0.1));
+        assert_eq!((s.seed, s.integrator), (3, Integrator::Dopri5));
+        assert_eq!(s.signals.len(), 1);
+    }
+
+    #[test]
+    fn required_and_unknown_settings() {
+        let (m, at) = only_error("simulate { time = 0 .. 1; }");
+        assert_eq!(m, "`simulate` needs an initial state");
+        assert_eq!(at, "simulate { time = 0 .. 1; }");
+        let (m, at) = only_error("simulate { x0 = 0; time = 0 .. 1; steps = 3; }");
+        assert_eq!(m, "unknown simulate setting `steps`");
+        assert_eq!(at, "steps");
+        let (m, _) = only_error("simulate { x0 = 0; x0 = 1; time = 0 .. 1; }");
+        assert_eq!(m, "`x0` is given twice");
+    }
+
+    #[test]
+    fn signals_define_disturbances_of_time() {
+        let (m, at) = only_error("simulate { x0 = 0; time = 0 .. 1; e(t) = t; }");
+        assert_eq!(m, "`e` is not a disturbance");
+        assert_eq!(at, "e");
+        let (m, at) =
+            only_error("disturbance d; D = 1;\nsimulate { x0 = 0; time = 0 .. 1; d(t) = [t; t]; }");
+        assert_eq!(m, "disturbance `d` has 1 components but this is 2x1");
+        assert_eq!(at, "[t; t]");
+    }
+}

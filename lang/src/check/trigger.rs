@@ -1,0 +1,368 @@
+//! The triggering law: `trigger continuous;`, `periodic { every }`,
+//! `aperiodic { sampling, threshold, weight }`, `mixed { sampling, beta, rho }`,
+//! and the design method of a synthesized weight.
+
+use super::{unknown_choice, Checker, Draft};
+use crate::ast::{Expr, ExprKind, Ident, Item, Setting, Value};
+use crate::diag::Diagnostic;
+use crate::span::Spanned;
+use crate::spec::{Threshold, Trigger, TriggerSynthesis, Weight};
+use std::collections::HashMap;
+
+impl Checker<'_> {
+    /// A `trigger` item (given once); a synthesized weight's design method with it.
+    pub(super) fn trigger_item(
+        &mut self,
+        it: &Item,
+        kind: &Ident,
+        settings: &[Setting],
+        n: usize,
+        draft: &mut Draft,
+    ) {
+        let mut seen = draft.trigger.as_ref().map(|t| t.span);
+        if !self.singleton(&mut seen, it.span, "the trigger") {
+            return;
+        }
+        let Some(t) = self.trigger(kind, settings, n) else {
+            return;
+        };
+        if matches!(
+            t,
+            Trigger::Aperiodic {
+                weight: Weight::Synthesize,
+                ..
+            }
+        ) {
+            let errors = self.diags.len();
+            draft.trigger_synthesis = self.trigger_synthesis(settings);
+            if self.diags.len() == errors {
+                let weight = settings.iter().find(|s| s.key.node == "weight");
+                draft.weight_span = Some(weight.map_or(kind.span, |s| s.span));
+            }
+        }
+        draft.trigger = Some(Spanned::new(t, it.span));
+    }
+
+    /// The law of `kind` with its settings, each known and given once.
+    fn trigger(&mut self, kind: &Ident, settings: &[Setting], n: usize) -> Option<Trigger> {
+        let allowed: &[&str] = match kind.node.as_str() {
+            "continuous" => &[],
+            "periodic" => &["every"],
+            "aperiodic" => &["sampling", "threshold", "weight"],
+            "mixed" => &["sampling", "beta", "rho"],
+            other => {
+                let kinds = ["continuous", "periodic", "aperiodic", "mixed"];
+                self.err(unknown_choice(
+                    kind.span, "trigger", "triggers", other, &kinds,
+                ));
+                return None;
+            }
+        };
+        let mut ok = true;
+        let mut get: HashMap<&str, &Setting> = HashMap::new();
+        for s in settings {
+            if !allowed.contains(&s.key.node.as_str()) {
+                self.err(
+                    Diagnostic::error(
+                        s.key.span,
+                        format!("trigger `{}` has no setting `{}`", kind.node, s.key.node),
+                    )
+                    .with_label(if allowed.is_empty() {
+                        "no settings".to_string()
+                    } else {
+                        format!("settings: {}", allowed.join(", "))
+                    }),
+                );
+                ok = false;
+            } else if get.insert(s.key.node.as_str(), s).is_some() {
+                self.err(Diagnostic::error(
+                    s.key.span,
+                    format!("setting `{}` is given twice", s.key.node),
+                ));
+                ok = false;
+            }
+        }
+        let require = |this: &mut Self, key: &str| -> Option<&Setting> {
+            let s = get.get(key).copied();
+            if s.is_none() && ok {
+                this.err(Diagnostic::error(
+                    kind.span,
+                    format!("trigger `{}` needs `{key} = ...;`", kind.node),
+                ));
+            }
+            s
+        };
+        let t = match kind.node.as_str() {
+            "continuous" => Some(Trigger::Continuous),
+            "periodic" => {
+                let s = require(self, "every")?;
+                let v = self.setting_scalar(s)?;
+                if v <= 0.0 {
+                    self.err(Diagnostic::error(s.span, "the period must be positive"));
+                    return None;
+                }
+                Some(Trigger::Periodic { every: v })
+            }
+            "aperiodic" => {
+                let s = require(self, "sampling")?;
+                let (lo, hi, _) = self.range_setting(s)?;
+                if lo <= 0.0 {
+                    self.err(Diagnostic::error(s.span, "h_min must be positive"));
+                    return None;
+                }
+                let threshold = match get.get("threshold") {
+                    Some(s) => Some(self.threshold(s)?),
+                    None => None,
+                };
+                let weight = match get.get("weight") {
+                    None => Weight::Synthesize,
+                    Some(s) => self.weight(s, n)?,
+                };
+                Some(Trigger::Aperiodic {
+                    sampling: (lo, hi),
+                    threshold,
+                    weight,
+                })
+            }
+            _ => {
+                let s = require(self, "sampling")?;
+                let (lo, hi, _) = self.range_setting(s)?;
+                let beta = require(self, "beta").and_then(|s| self.setting_scalar(s));
+                let rho = require(self, "rho").and_then(|s| self.setting_scalar(s));
+                Some(Trigger::Mixed {
+                    sampling: (lo, hi),
+                    beta: beta?,
+                    rho: rho?,
+                })
+            }
+        };
+        if ok {
+            t
+        } else {
+            None
+        }
+    }
+
+    /// `threshold nu = v [adaptive(mu1 = .., mu2 = .., mu3 = .. [, max = ..])];`
+    fn threshold(&mut self, s: &Setting) -> Option<Threshold> {
+        if s.qualifier.as_ref().is_some_and(|q| q.node != "nu") {
+            self.err(Diagnostic::error(s.span, "write `threshold nu = value;`"));
+            return None;
+        }
+        let nu = self.setting_scalar(s)?;
+        if nu < 0.0 {
+            self.err(Diagnostic::error(
+                s.span,
+                "the threshold nu must be non-negative",
+            ));
+            return None;
+        }
+        let mut adaptive = None;
+        let mut max = None;
+        for m in &s.modifiers {
+            if m.name.node != "adaptive" {
+                self.err(
+                    Diagnostic::error(
+                        m.name.span,
+                        format!("unknown threshold modifier `{}`", m.name.node),
+                    )
+                    .with_help("write `adaptive(mu1 = .., mu2 = .., mu3 = ..)` or `adaptive(mu1 = .., mu2 = .., mu3 = .., max = ..)`"),
+                );
+                return None;
+            }
+            let p = self.named(&m.args, &["mu1", "mu2", "mu3", "max"], "`adaptive`")?;
+            if let Some(&top) = p.get("max") {
+                if top < nu {
+                    self.err(
+                        Diagnostic::error(
+                            m.name.span,
+                            format!(
+                                "the adaptive ceiling max = {top} is below the threshold nu = {nu}"
+                            ),
+                        )
+                        .with_help("the law keeps nu(t_k) in [nu, max]: give max >= nu"),
+                    );
+                    return None;
+                }
+                max = Some(top);
+            }
+            match (p.get("mu1"), p.get("mu2"), p.get("mu3")) {
+                (Some(a), Some(b), Some(c)) => adaptive = Some((*a, *b, *c)),
+                _ => {
+                    self.err(Diagnostic::error(
+                        m.name.span,
+                        "`adaptive` needs mu1, mu2 and mu3",
+                    ));
+                    return None;
+                }
+            }
+        }
+        Some(Threshold { nu, adaptive, max })
+    }
+
+    /// `weight = synthesize [method];` or `weight = <n x n matrix>;`
+    fn weight(&mut self, s: &Setting, n: usize) -> Option<Weight> {
+        Some(match &s.value {
+            Value::Expr(Expr {
+                kind: ExprKind::Name(w),
+                ..
+            }) if w == "synthesize" => Weight::Synthesize,
+            Value::Expr(e) => {
+                let w = self.eval_const(e)?;
+                if w.nrows() != n || w.ncols() != n {
+                    self.err(
+                        Diagnostic::error(e.span, format!("the trigger weight must be {n}x{n}"))
+                            .with_label(format!("this is {}x{}", w.nrows(), w.ncols())),
+                    );
+                    return None;
+                }
+                Weight::Given(w)
+            }
+            Value::Range(..) => {
+                self.err(Diagnostic::error(
+                    s.span,
+                    "the weight is a matrix or `synthesize`",
+                ));
+                return None;
+            }
+        })
+    }
+
+    /// The design method of a synthesized trigger weight: `weight = synthesize;`
+    /// (none yet: the weight is left to later stages), `weight = synthesize two_step;`
+    /// (gains first, then the weight) or `weight = synthesize theorem2(eps1 = .., eps2 = .., eps3 = ..,
+    /// xi = .., reading = ..);` (Xu & Huang Theorem 2; every argument optional).
+    fn trigger_synthesis(&mut self, settings: &[Setting]) -> Option<TriggerSynthesis> {
+        let s = settings.iter().find(|s| s.key.node == "weight")?;
+        let mut out = None;
+        for m in &s.modifiers {
+            if m.name.node == "two_step" {
+                self.named(&m.args, &[], "`two_step`")?;
+                out = Some(TriggerSynthesis::TwoStep);
+                continue;
+            }
+            if m.name.node != "theorem2" {
+                self.err(
+                    Diagnostic::error(
+                        m.name.span,
+                        format!("unknown weight design method `{}`", m.name.node),
+                    )
+                    .with_help("write `weight = synthesize two_step;` or `weight = synthesize theorem2(eps1 = 1, eps2 = 1, eps3 = 1);`"),
+                );
+                return None;
+            }
+            let p = self.named(
+                &m.args,
+                &["eps1", "eps2", "eps3", "xi", "reading"],
+                "`theorem2`",
+            )?;
+            let reading = p.get("reading").copied().unwrap_or(1.0);
+            if ![1.0, 2.0, 3.0].contains(&reading) {
+                self.err(Diagnostic::error(
+                    m.name.span,
+                    "`reading` is 1 (as printed), 2 (block (1,2) from the derivation) or 3 (2 and the sector multiplier by congruence)",
+                ));
+                return None;
+            }
+            let eps = |k: &str| p.get(k).copied().unwrap_or(1.0);
+            out = Some(TriggerSynthesis::Theorem2 {
+                eps: [eps("eps1"), eps("eps2"), eps("eps3")],
+                xi: p.get("xi").copied(),
+                reading: reading as u8,
+            });
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::check::testing::*;
+    use crate::spec::{Threshold, Trigger, TriggerSynthesis, Weight};
+
+    fn trigger(body: &str) -> Trigger {
+        let spec = spec_with(&format!("trigger {body}"));
+        spec.trigger.expect("a trigger").node
+    }
+
+    #[test]
+    fn each_law_with_its_settings() {
+        assert_eq!(trigger("continuous;"), Trigger::Continuous);
+        assert_eq!(
+            trigger("periodic { every = 0.01; }"),
+            Trigger::Periodic { every: 0.01 }
+        );
+        assert_eq!(
+            trigger("mixed { sampling = 0.001 .. 0.1; beta = 0.1; rho = 0.001; }"),
+            Trigger::Mixed {
+                sampling: (0.001, 0.1),
+                beta: 0.1,
+                rho: 0.001
+            }
+        );
+        let Trigger::Aperiodic {
+            sampling,
+            threshold,
+            weight,
+        } = trigger(
+            "aperiodic { sampling = 0.001 .. 0.1; threshold nu = 0.02 adaptive(mu1 = 10, mu2 = 1, mu3 = 0.02, max = 0.05); weight = 2; }",
+        )
+        else {
+            panic!("not aperiodic");
+        };
+        assert_eq!(sampling, (0.001, 0.1));
+        assert_eq!(
+            threshold,
+            Some(Threshold {
+                nu: 0.02,
+                adaptive: Some((10.0, 1.0, 0.02)),
+                max: Some(0.05)
+            })
+        );
+        assert!(matches!(weight, Weight::Given(w) if w[(0, 0)] == 2.0));
+    }
+
+    #[test]
+    fn settings_are_known_given_once_and_required() {
+        let (m, at) = only_error("trigger periodic { period = 1; }");
+        assert_eq!(m, "trigger `periodic` has no setting `period`");
+        assert_eq!(at, "period");
+        let (m, at) = only_error("trigger periodic;");
+        assert_eq!(m, "trigger `periodic` needs `every = ...;`");
+        assert_eq!(at, "periodic");
+        let (m, _) = only_error("trigger periodic { every = 1; every = 2; }");
+        assert_eq!(m, "setting `every` is given twice");
+        let (m, at) = only_error("trigger aperiodic { sampling = 0 .. 0.1; weight = 1; }");
+        assert_eq!(m, "h_min must be positive");
+        assert_eq!(at, "sampling = 0 .. 0.1;");
+        let (m, at) = only_error("trigger aperiodic { sampling = 0.1 .. 1; weight = [1, 2]; }");
+        assert_eq!(m, "the trigger weight must be 1x1");
+        assert_eq!(at, "[1, 2]");
+    }
+
+    #[test]
+    fn a_synthesized_weight_records_its_design_method() {
+        let synthesis = |w: &str| {
+            let spec = valid(&format!(
+                "{}disturbance d; D = 1; output z = x1;\n\
+                 objective linf(d -> z) minimize with phi = 0.1;\nobjective saturation region;\n\
+                 trigger aperiodic {{ sampling = 0.01 .. 0.1; {w} }}",
+                base_with("input u;", "input u saturate 1;")
+            ));
+            spec.trigger_synthesis
+        };
+        assert_eq!(synthesis(""), None);
+        assert_eq!(
+            synthesis("weight = synthesize two_step;"),
+            Some(TriggerSynthesis::TwoStep)
+        );
+        assert_eq!(
+            synthesis("weight = synthesize theorem2(eps2 = 2, xi = 0.08, reading = 3);"),
+            Some(TriggerSynthesis::Theorem2 {
+                eps: [1.0, 2.0, 1.0],
+                xi: Some(0.08),
+                reading: 3
+            })
+        );
+    }
+}
