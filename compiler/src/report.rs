@@ -283,7 +283,7 @@ pub fn report(
         q: model.q,
         rules: model.r(),
         status,
-        relaxation: format!("{:?}", model.spec.relaxation.node),
+        relaxation: model.spec.relaxation.node.to_string(),
         lmi_margin_eps: design.map(|d| d.eps),
         objectives: design.map(|d| objectives(model, d)).unwrap_or_default(),
         gains: if certified {

@@ -247,8 +247,23 @@ pub enum ObjectiveKind {
 }
 
 impl ObjectiveKind {
-    /// The keyword of the language (`decay_rate`, `hinf`, ...), also the key
-    /// used in reports.
+    /// Every kind, in the order the language documents them.
+    pub const ALL: [ObjectiveKind; 7] = [
+        ObjectiveKind::Stability,
+        ObjectiveKind::DecayRate,
+        ObjectiveKind::Hinf,
+        ObjectiveKind::Linf,
+        ObjectiveKind::InputNorm,
+        ObjectiveKind::OutputNorm,
+        ObjectiveKind::SaturationRegion,
+    ];
+
+    /// The kind written as `keyword` after `objective`.
+    pub fn from_keyword(keyword: &str) -> Option<ObjectiveKind> {
+        Self::ALL.into_iter().find(|k| k.keyword() == keyword)
+    }
+
+    /// The keyword of the language (`decay_rate`, `hinf`, `saturation`, ...).
     pub fn keyword(self) -> &'static str {
         match self {
             ObjectiveKind::Stability => "stability",
@@ -257,7 +272,7 @@ impl ObjectiveKind {
             ObjectiveKind::Linf => "linf",
             ObjectiveKind::InputNorm => "input_norm",
             ObjectiveKind::OutputNorm => "output_norm",
-            ObjectiveKind::SaturationRegion => "saturation_region",
+            ObjectiveKind::SaturationRegion => "saturation",
         }
     }
 }

@@ -5,7 +5,7 @@ use super::objectives::ObjectiveItem;
 use super::Checker;
 use crate::ast::{ExprKind, Goal, Ident};
 use crate::diag::Diagnostic;
-use crate::spec::{InitialSet, Output, Target};
+use crate::spec::{InitialSet, ObjectiveKind, Output, Target};
 use crate::suggest::suggest;
 
 impl Checker<'_> {
@@ -163,7 +163,7 @@ impl Checker<'_> {
 
     /// Whether every `with` parameter is one the kind takes (only `linf` takes any).
     pub(super) fn with_allowed(&mut self, o: &ObjectiveItem) -> bool {
-        let allowed_with: &[&str] = if o.name.node == "linf" {
+        let allowed_with: &[&str] = if o.name.node == ObjectiveKind::Linf.keyword() {
             &["xi", "phi", "paper"]
         } else {
             &[]

@@ -6,18 +6,7 @@ use super::{unknown_choice, Checker};
 use crate::ast::{Goal, Ident, Item, ItemKind, NamedArg, ObjectiveFor};
 use crate::diag::Diagnostic;
 use crate::span::{Span, Spanned};
-use crate::spec::{Objective, Output, SpannedObjective, Target};
-
-/// The objective kinds, as written after `objective`.
-const KINDS: [&str; 7] = [
-    "stability",
-    "decay_rate",
-    "hinf",
-    "linf",
-    "input_norm",
-    "output_norm",
-    "saturation",
-];
+use crate::spec::{Objective, ObjectiveKind, Output, SpannedObjective, Target};
 
 /// The parts of one `objective` item.
 pub(super) struct ObjectiveItem<'i> {
@@ -88,8 +77,19 @@ impl Checker<'_> {
         if !self.with_allowed(&o) {
             return None;
         }
-        match name.node.as_str() {
-            "stability" => {
+        let Some(kind) = ObjectiveKind::from_keyword(&name.node) else {
+            let kinds = ObjectiveKind::ALL.map(ObjectiveKind::keyword);
+            self.err(unknown_choice(
+                name.span,
+                "objective",
+                "objectives",
+                &name.node,
+                &kinds,
+            ));
+            return None;
+        };
+        match kind {
+            ObjectiveKind::Stability => {
                 if goal.is_some() || for_.is_some() || !self.expect_signals(&o, 0) {
                     self.err(Diagnostic::error(
                         it.span,
@@ -99,14 +99,14 @@ impl Checker<'_> {
                 }
                 Some(Objective::Stability)
             }
-            "decay_rate" => {
+            ObjectiveKind::DecayRate => {
                 if !self.expect_signals(&o, 0) {
                     return None;
                 }
                 self.goal_target(&o, "maximize", ">=")
                     .map(Objective::DecayRate)
             }
-            "hinf" => {
+            ObjectiveKind::Hinf => {
                 let (from, to) = self.signal_pair(&o, outputs)?;
                 Some(Objective::Hinf {
                     from,
@@ -114,7 +114,7 @@ impl Checker<'_> {
                     target: self.goal_target(&o, "minimize", "<=")?,
                 })
             }
-            "linf" => {
+            ObjectiveKind::Linf => {
                 let (from, to) = self.signal_pair(&o, outputs)?;
                 let t = self.goal_target(&o, "minimize", "<=")?;
                 self.linf_paper = self.with_param(&o, "paper");
@@ -126,7 +126,7 @@ impl Checker<'_> {
                     phi: self.with_param(&o, "phi"),
                 })
             }
-            "input_norm" => {
+            ObjectiveKind::InputNorm => {
                 if let Some(s) = signals.first() {
                     if !self.inputs.iter().any(|i| i.name == s.node) {
                         self.err(Diagnostic::error(
@@ -142,7 +142,7 @@ impl Checker<'_> {
                     initial: self.initial_set(&o, n)?,
                 })
             }
-            "output_norm" => {
+            ObjectiveKind::OutputNorm => {
                 let Some(s) = signals.first() else {
                     self.err(Diagnostic::error(
                         it.span,
@@ -158,7 +158,7 @@ impl Checker<'_> {
                     initial: self.initial_set(&o, n)?,
                 })
             }
-            "saturation" => {
+            ObjectiveKind::SaturationRegion => {
                 match goal {
                     Some(Goal::Word(w)) if w.node == "region" => {}
                     _ => {
@@ -174,16 +174,6 @@ impl Checker<'_> {
                     None => None,
                 };
                 Some(Objective::SaturationRegion { contain })
-            }
-            other => {
-                self.err(unknown_choice(
-                    name.span,
-                    "objective",
-                    "objectives",
-                    other,
-                    &KINDS,
-                ));
-                None
             }
         }
     }
