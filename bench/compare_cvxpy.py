@@ -15,7 +15,7 @@ The CVXPY problem is the one tsfc solves for the spec, LMI for LMI:
 
 with tsfc's reduction for tanaka(s) when every rule shares B (as in the Zhang
 spec): the pair LMIs equal sums of vertex LMIs and the slack Y = 0 is optimal,
-so only the vertex LMIs Q_ii are solved (synth/relaxation.rs). The margin eps
+so only the vertex LMIs Q_ii are solved (synth/relaxations/tanaka.rs). The margin eps
 is tsfc's (1e-7). The model data (A_i, B_i, D_i, C, E, G, x0, mu, a, eps) are
 read from `bench-compile --dump-model SPEC`, so both sides use the same numbers.
 

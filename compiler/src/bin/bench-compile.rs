@@ -445,7 +445,7 @@ fn dump_model(model: &TsModel) -> Result<ModelDump, String> {
         decay_rate: None,
         input_norm: None,
         x0: None,
-        relaxation: format!("{:?}", spec.relaxation.node),
+        relaxation: spec.relaxation.node.to_string(),
         tanaka_s: match spec.relaxation.node {
             Relaxation::Tanaka { s } => Some(s),
             _ => None,
