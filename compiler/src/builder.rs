@@ -16,8 +16,8 @@
 
 use crate::codegen::GeneratedFile;
 use crate::error::Error;
-use crate::pipeline::{self, SpecName};
-use crate::report::write_atomic;
+use crate::output::write_set;
+use crate::pipeline;
 use crate::synth::Settings;
 use std::path::{Path, PathBuf};
 use tsf_lang::spec::Emit;
@@ -104,18 +104,20 @@ impl Builder {
         let mut written = Vec::new();
         for spec in &self.specs {
             println!("cargo:rerun-if-changed={}", spec.display());
-            for f in self.compile_one(spec, &targets)? {
-                let path = out.join(&f.name);
-                write_atomic(&path, f.text.as_bytes())
-                    .map_err(|e| Error::usage(format!("cannot write {}: {e}", path.display())))?;
-                written.push(path);
-            }
+            let files: Vec<(PathBuf, Vec<u8>)> = self
+                .compile_one(spec, &targets)?
+                .into_iter()
+                .map(|f| (out.join(&f.name), f.text.into_bytes()))
+                .collect();
+            write_set(&files)
+                .map_err(|e| Error::usage(format!("cannot write into {}: {e}", out.display())))?;
+            written.extend(files.into_iter().map(|(p, _)| p));
         }
         Ok(written)
     }
 
     fn compile_one(&self, spec: &Path, targets: &[Emit]) -> Result<Vec<GeneratedFile>, Error> {
-        pipeline::read(spec, SpecName::FileName)?
+        pipeline::read(spec)?
             .compile(&self.settings)?
             .generate(targets)
     }

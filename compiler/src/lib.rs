@@ -18,6 +18,7 @@
 pub mod builder;
 pub mod codegen;
 pub mod error;
+pub mod output;
 pub mod pipeline;
 pub mod report;
 pub mod sim;

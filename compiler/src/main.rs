@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use tsf_lang::diag;
 use tsf_lang::spec::Emit;
 use tsfc::frontend;
-use tsfc::pipeline::{self, SpecName};
+use tsfc::pipeline;
 
 /// Exit codes: 0 ok, 1 spec error, 2 usage or I/O error, 3 infeasible or refused.
 mod exit {
@@ -116,7 +116,7 @@ fn compile(
         }
         ExitCode::from(e.exit_code())
     };
-    let front = match pipeline::read(path, SpecName::AsGiven) {
+    let front = match pipeline::read(path) {
         Ok(f) => f,
         Err(e) => return fail(tsfc::Error::usage(format!("error: {}", e.message))),
     };
@@ -128,8 +128,17 @@ fn compile(
         Ok(r) => r,
         Err(e) => return fail(e),
     };
-    let report_path = report_path
-        .unwrap_or_else(|| out.join(format!("{}.report.json", run.model.spec.controller.node)));
+    // A compile that is not certified leaves the outputs of an earlier design
+    // untouched: its report goes beside them under another name.
+    let certified = run.certified().is_ok();
+    let report_path = report_path.unwrap_or_else(|| {
+        let name = &run.model.spec.controller.node;
+        out.join(if certified {
+            format!("{name}.report.json")
+        } else {
+            format!("{name}.failed.report.json")
+        })
+    });
     let json = match serde_json::to_string_pretty(&run.compiled.report) {
         Ok(j) => j + "\n",
         Err(e) => {
@@ -137,15 +146,8 @@ fn compile(
             return ExitCode::from(exit::IO);
         }
     };
-    if let Err(e) = tsfc::report::write_atomic(&report_path, json.as_bytes()) {
-        eprintln!("error: cannot write `{}`: {e}", report_path.display());
-        return ExitCode::from(exit::IO);
-    }
-    eprint!(
-        "{}",
-        tsfc::summary::summary(&run.model, &run.compiled, &report_path)
-    );
-    if run.certified().is_ok() {
+    let mut files = vec![(report_path.clone(), json.into_bytes())];
+    if certified {
         let targets: Vec<Emit> = match emit {
             Some(t) => t
                 .iter()
@@ -156,23 +158,30 @@ fn compile(
                 .collect(),
             None => run.model.spec.emit.clone(),
         };
-        let files = match run.generate(&targets) {
-            Ok(f) => f,
+        match run.generate(&targets) {
+            Ok(generated) => files.extend(
+                generated
+                    .into_iter()
+                    .map(|f| (out.join(&f.name), f.text.into_bytes())),
+            ),
             Err(e) => {
                 return fail(tsfc::Error {
                     message: format!("error: {}", e.message),
                     ..e
                 })
             }
-        };
-        for f in files {
-            let path = out.join(&f.name);
-            if let Err(e) = tsfc::report::write_atomic(&path, f.text.as_bytes()) {
-                eprintln!("error: cannot write `{}`: {e}", path.display());
-                return ExitCode::from(exit::IO);
-            }
-            eprintln!("  wrote                {}", path.display());
         }
+    }
+    if let Err(e) = tsfc::output::write_set(&files) {
+        eprintln!("error: cannot write the outputs: {e}");
+        return ExitCode::from(exit::IO);
+    }
+    eprint!(
+        "{}",
+        tsfc::summary::summary(&run.model, &run.compiled, &report_path)
+    );
+    for (path, _) in files.iter().skip(1) {
+        eprintln!("  wrote                {}", path.display());
     }
     ExitCode::from(run.exit_code())
 }

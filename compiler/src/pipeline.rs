@@ -14,16 +14,6 @@ use crate::synth::{Design, Settings};
 use std::path::Path;
 use tsf_lang::spec::Emit;
 
-/// How reports and generated headers name the spec.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SpecName {
-    /// The path as the user typed it (the CLI).
-    AsGiven,
-    /// The file name only (build scripts: outputs must not depend on where
-    /// the workspace lives).
-    FileName,
-}
-
 /// A spec read and checked.
 #[derive(Debug)]
 pub struct Front {
@@ -35,15 +25,15 @@ pub struct Front {
 }
 
 /// Reads and checks a spec file (an unreadable file is a usage error).
-pub fn read(path: &Path, name: SpecName) -> Result<Front, Error> {
+/// Reports and generated headers name the spec by its file name only, so
+/// their bytes do not depend on the working directory or where the project
+/// lives; diagnostics show the path as typed.
+pub fn read(path: &Path) -> Result<Front, Error> {
     let source = frontend::read_source(path).map_err(|e| Error::usage(e.message))?;
     let checked = frontend::check(&source);
-    let name = match name {
-        SpecName::AsGiven => source.name.clone(),
-        SpecName::FileName => path
-            .file_name()
-            .map_or_else(|| source.name.clone(), |n| n.to_string_lossy().into_owned()),
-    };
+    let name = path
+        .file_name()
+        .map_or_else(|| source.name.clone(), |n| n.to_string_lossy().into_owned());
     Ok(Front {
         source,
         checked,

@@ -7,7 +7,6 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
-use std::path::Path;
 
 /// Rows of a matrix, for JSON.
 pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
@@ -381,25 +380,4 @@ fn trigger_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> TriggerRe
     }
 }
 
-/// Writes `bytes` to `path` atomically (temporary file in the same folder, then
-/// rename), creating the folder; an existing file is left untouched on failure
-/// and not rewritten when the content is unchanged.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    if std::fs::read(path).is_ok_and(|old| old == bytes) {
-        return Ok(());
-    }
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir)?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
-}
+pub use crate::output::write_atomic;

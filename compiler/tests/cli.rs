@@ -1,7 +1,7 @@
 //! The `tsfc` binary: exit codes, output formats, help and version.
 
 use std::path::PathBuf;
-use std::process::Command;
+use std::process::{Command, Output};
 
 fn tsfc() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tsfc"))
@@ -176,6 +176,14 @@ fn compile_of_an_infeasible_spec_exits_3_without_gains() {
     );
     assert_ne!(tight, text, "the spec's decay line changed");
     std::fs::write(&spec, tight).expect("write");
+    // An earlier design's outputs in the same folder stay as they were.
+    let earlier = [
+        ("inverted_pendulum.report.json", "earlier report"),
+        ("inverted_pendulum.rs", "earlier code"),
+    ];
+    for (name, text) in earlier {
+        std::fs::write(dir.join(name), text).expect("earlier output");
+    }
     let out = tsfc()
         .arg("compile")
         .arg(&spec)
@@ -189,8 +197,15 @@ fn compile_of_an_infeasible_spec_exits_3_without_gains() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    for (name, text) in earlier {
+        assert_eq!(
+            std::fs::read_to_string(dir.join(name)).expect("still there"),
+            text,
+            "{name} changed by a failed compile"
+        );
+    }
     let report: serde_json::Value = serde_json::from_slice(
-        &std::fs::read(dir.join("inverted_pendulum.report.json")).expect("report"),
+        &std::fs::read(dir.join("inverted_pendulum.failed.report.json")).expect("report"),
     )
     .expect("JSON");
     assert_ne!(report["status"], "certified");
@@ -223,6 +238,8 @@ fn a_failed_compile_leaves_earlier_outputs_untouched() {
     );
     let out = dir.join("inverted_pendulum.rs");
     let before = std::fs::read(&out).expect("generated");
+    let report = dir.join("inverted_pendulum.report.json");
+    let report_before = std::fs::read(&report).expect("report");
     let bad = dir.join("bad.tsf");
     let text = std::fs::read_to_string(&good).expect("spec");
     std::fs::write(
@@ -240,6 +257,156 @@ fn a_failed_compile_leaves_earlier_outputs_untouched() {
         before,
         "the earlier output changed"
     );
+    assert_eq!(
+        std::fs::read(&report).expect("still there"),
+        report_before,
+        "the earlier report changed"
+    );
+    assert!(dir.join("inverted_pendulum.failed.report.json").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs `tsfc compile` on `spec` into `dir` with extra arguments.
+fn compile_into(spec: &std::path::Path, dir: &std::path::Path, extra: &[&str]) -> Output {
+    tsfc()
+        .arg("compile")
+        .arg(spec)
+        .arg("--out")
+        .arg(dir)
+        .args(extra)
+        .output()
+        .expect("runs tsfc")
+}
+
+#[cfg(unix)]
+#[test]
+fn outputs_onto_special_files_are_refused_with_exit_2() {
+    let dir = tmp_dir("special");
+    let good = fixture("specs/inverted_pendulum.tsf");
+    let out = compile_into(&good, &dir, &["--report", "/dev/null", "--emit", "rust"]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a regular file"));
+    // A symlink at an output path is neither followed nor replaced.
+    let target = dir.join("elsewhere.txt");
+    std::fs::write(&target, "user data").expect("write");
+    let link = dir.join("inverted_pendulum.rs");
+    std::os::unix::fs::symlink(&target, &link).expect("symlink");
+    let out = compile_into(&good, &dir, &["--emit", "rust"]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::symlink_metadata(&link)
+        .expect("link")
+        .file_type()
+        .is_symlink());
+    assert_eq!(
+        std::fs::read_to_string(&target).expect("target"),
+        "user data"
+    );
+    // Endless input is read up to the limit only.
+    let out = tsfc().args(["check", "/dev/zero"]).output().expect("runs");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("larger than the limit"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn reports_and_headers_name_the_spec_by_file_name_only() {
+    let dir = tmp_dir("names");
+    let good = fixture("specs/inverted_pendulum.tsf");
+    let absolute = std::fs::canonicalize(&good).expect("absolute path");
+    let out = compile_into(&absolute, &dir, &["--emit", "rust,c"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report =
+        std::fs::read_to_string(dir.join("inverted_pendulum.report.json")).expect("report");
+    let code = std::fs::read_to_string(dir.join("inverted_pendulum.rs")).expect("code");
+    let header = std::fs::read_to_string(dir.join("inverted_pendulum.h")).expect("header");
+    let parent = absolute
+        .parent()
+        .expect("folder")
+        .to_string_lossy()
+        .into_owned();
+    for (what, text) in [("report", &report), ("rust", &code), ("c header", &header)] {
+        assert!(!text.contains(&parent), "{what} records the absolute path");
+        assert!(
+            text.contains("inverted_pendulum.tsf"),
+            "{what} names the spec"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn concurrent_compiles_of_one_controller_leave_a_consistent_set() {
+    let dir = tmp_dir("concurrent");
+    let text = std::fs::read_to_string(fixture("specs/inverted_pendulum.tsf")).expect("spec");
+    let a = dir.join("a.tsf");
+    let b = dir.join("b.tsf");
+    std::fs::write(&a, &text).expect("write");
+    // The same controller with a slower decay rate: other gains, other sha256.
+    let slower = text.replace(
+        "objective decay_rate >= 0.5;",
+        "objective decay_rate >= 0.4;",
+    );
+    assert_ne!(slower, text);
+    std::fs::write(&b, slower).expect("write");
+    for _ in 0..20 {
+        let spawn = |spec: &std::path::Path| {
+            tsfc()
+                .arg("compile")
+                .arg(spec)
+                .arg("--out")
+                .arg(&dir)
+                .args(["--emit", "rust,c"])
+                .stderr(std::process::Stdio::null())
+                .spawn()
+                .expect("spawn")
+        };
+        let (mut pa, mut pb) = (spawn(&a), spawn(&b));
+        assert!(pa.wait().expect("a").success());
+        assert!(pb.wait().expect("b").success());
+        let report: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(dir.join("inverted_pendulum.report.json")).expect("report"),
+        )
+        .expect("JSON");
+        let sha = report["spec"]["sha256"].as_str().expect("sha").to_string();
+        for f in [
+            "inverted_pendulum.rs",
+            "inverted_pendulum.h",
+            "inverted_pendulum.c",
+        ] {
+            let code = std::fs::read_to_string(dir.join(f)).expect("code");
+            assert!(
+                code.contains(&sha),
+                "{f} is not from the spec of the report"
+            );
+        }
+    }
+    let leftovers: Vec<String> = std::fs::read_dir(&dir)
+        .expect("list")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("tsfc-tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -17,7 +17,7 @@ use std::process::ExitCode;
 use tsf_lang::spec::{InitialSet, Objective, Relaxation, Target};
 use tsfc::compile::Status;
 use tsfc::model::TsModel;
-use tsfc::pipeline::{read, SpecName};
+use tsfc::pipeline::read;
 use tsfc::report::{rows, Report, Timings};
 
 /// Seconds per pipeline stage (the report's `timings_s`).
@@ -140,7 +140,7 @@ fn main() -> ExitCode {
 
 fn run(cli: &Cli) -> Result<(), String> {
     if let Some(spec) = &cli.dump_model {
-        let front = read(spec, SpecName::AsGiven).map_err(|e| e.message)?;
+        let front = read(spec).map_err(|e| e.message)?;
         let Some(model) = front.checked.model else {
             return Err(format!(
                 "`{}` has spec errors; run `tsfc check` on it",
@@ -241,7 +241,7 @@ fn scaling_run(
 
 /// One full pipeline run: read, check, compile.
 fn pipeline(path: &Path, settings: &Settings) -> Result<(Report, Status), String> {
-    let run = read(path, SpecName::AsGiven)
+    let run = read(path)
         .and_then(|f| f.compile(settings))
         .map_err(|e| e.message)?;
     Ok((run.compiled.report, run.compiled.status))

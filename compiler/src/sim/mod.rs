@@ -85,8 +85,7 @@ pub struct Prepared {
 /// Reads, checks and compiles the spec at `path`; the design must be certified.
 /// Spec diagnostics are rendered into the error message.
 pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
-    let run = crate::pipeline::read(path, crate::pipeline::SpecName::AsGiven)?
-        .compile(&crate::synth::Settings::default())?;
+    let run = crate::pipeline::read(path)?.compile(&crate::synth::Settings::default())?;
     let tables = run.tables()?;
     let design = run.certified()?.0.clone();
     let model = run.model;
