@@ -272,6 +272,12 @@ pub fn report(
         ] {
             problem.insert(k.to_string(), serde_json::json!(v));
         }
+        if let Some(d) = design {
+            problem.insert(
+                "memory_estimate_bytes".into(),
+                serde_json::json!(d.log.memory_estimate),
+            );
+        }
     }
     Report {
         tsfc_version: env!("CARGO_PKG_VERSION"),

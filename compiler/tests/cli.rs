@@ -421,3 +421,63 @@ fn readme_command_runs_the_tsfc_binary_by_default() {
     let readme = std::fs::read_to_string(fixture("README.md")).expect("README");
     assert!(readme.contains("cargo run --release -p tsfc -- compile specs/"));
 }
+
+/// A two-rule spec with `n` states (one scalar premise state and a vector).
+fn wide_spec(n: usize) -> String {
+    format!(
+        "tsf 1;\ncontroller wide;\nstate x1;\nstate s[{k}];\ninput u;\n\
+         A = -eye({n}) + 0.1 * ones({n}, {n});\nB(x) = ones({n}, 1) * (1 + 0.1 * x1);\n\
+         premise p = x1 range -1 .. 1 {{ lo = trap(-2, -2, -1, 1); hi = trap(-1, 1, 2, 2); }}\n\
+         rule R1: p is lo => at(x1 = -1);\nrule R2: p is hi => at(x1 = 1);\n\
+         objective stability;\nrelaxation basic;\n",
+        k = n - 1
+    )
+}
+
+#[test]
+fn oversized_sdps_are_refused_before_solving_with_the_estimate() {
+    let dir = tmp_dir("oversized");
+    // 200 states: refused from the dimensions alone (the issue's case aborted
+    // inside the solver allocating 3.2 GB).
+    let big = dir.join("big.tsf");
+    std::fs::write(&big, wide_spec(200)).expect("write");
+    let out = compile_into(&big, &dir, &["--emit", "rust"]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("too large to solve") && err.contains("at least"),
+        "{err}"
+    );
+    assert!(err.contains("over the limit of 8.0 GiB"), "{err}");
+    // 12 states under a 1 MiB limit: built, estimated, refused, not solved.
+    let small = dir.join("small.tsf");
+    std::fs::write(&small, wide_spec(12)).expect("write");
+    let out = tsfc()
+        .env("TSFC_SDP_MEMORY_LIMIT_MB", "1")
+        .arg("compile")
+        .arg(&small)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("would need about"), "{err}");
+    assert!(err.contains("0 SDP(s)"), "nothing solved: {err}");
+    // Within the default limit it compiles and reports its estimate.
+    let out = compile_into(&small, &dir, &["--emit", "rust"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("wide.report.json")).expect("report"))
+            .expect("JSON");
+    let est = report["solver"]["problem"]["memory_estimate_bytes"]
+        .as_u64()
+        .expect("estimate");
+    assert!(est > 1 << 20 && est < 1 << 30, "{est}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -353,3 +353,27 @@ fn any_solver_plugs_into_the_seam() -> TestResult {
     assert!(matches!(err, Err(LmiError::Solver(_))), "{err:?}");
     Ok(())
 }
+
+/// The memory estimate counts each PSD cone's dense block, its coupling with
+/// the unknowns it touches and the shared unknowns' Schur complement: for one
+/// n x n LMI on a symmetric X (d = n(n+1)/2 rows, d unknowns) that is
+/// 5 copies x 8 bytes x (d^2 + d*d + d^2 + nnz(A)), and the floor counts the
+/// dense block only.
+#[test]
+fn memory_estimate_matches_its_closed_form_and_bounds_the_floor() -> TestResult {
+    for n in [4usize, 9] {
+        let mut p = Problem::new();
+        let x = p.symmetric("X", n)?;
+        p.psd("X > 0", Expr::var(x), 1e-6)?;
+        let prog = p.cone_program();
+        let d = (n * (n + 1) / 2) as u64;
+        let nnz = prog.a.nnz() as u64;
+        assert_eq!(nnz, d, "one entry per unknown");
+        let expected = 5 * 8 * (d * d + d * d + d * d + nnz);
+        assert_eq!(p.memory_estimate(), expected, "n = {n}");
+        let floor = ClarabelSolver::memory_floor([n]);
+        assert_eq!(floor, 5 * 8 * d * d);
+        assert!(floor <= p.memory_estimate());
+    }
+    Ok(())
+}

@@ -20,7 +20,14 @@ pub struct Settings {
     pub bisection_rel_tol: f64,
     /// phi used first when the spec leaves it free.
     pub default_phi: f64,
+    /// The largest estimated solver memory of one SDP, in bytes; a larger
+    /// problem is refused before solving ([`SynthError::TooLarge`]).
+    pub memory_limit: u64,
 }
+
+/// The default [`Settings::memory_limit`]: 8 GiB (a third of the 24 GiB
+/// machines tsfc is tested on; `TSFC_SDP_MEMORY_LIMIT_MB` overrides it).
+pub const DEFAULT_MEMORY_LIMIT: u64 = 8 << 30;
 
 impl Default for Settings {
     fn default() -> Self {
@@ -35,6 +42,10 @@ impl Default for Settings {
             },
             bisection_rel_tol: 1e-3,
             default_phi: 0.1,
+            memory_limit: std::env::var("TSFC_SDP_MEMORY_LIMIT_MB")
+                .ok()
+                .and_then(|v| v.trim().parse::<u64>().ok())
+                .map_or(DEFAULT_MEMORY_LIMIT, |mb| mb << 20),
         }
     }
 }
@@ -54,6 +65,8 @@ pub struct SolverLog {
     pub build_time: Duration,
     /// Sizes of the kept SDP.
     pub stats: Option<ProblemStats>,
+    /// Estimated solver memory of the largest SDP solved, in bytes.
+    pub memory_estimate: u64,
 }
 
 /// A synthesized (not yet certified) design.
@@ -130,6 +143,19 @@ pub enum SynthError {
     },
     /// A combination of objectives tsfc does not support.
     Unsupported(String),
+    /// The SDP would need more memory than the limit allows.
+    TooLarge {
+        /// Which problem.
+        what: String,
+        /// Estimated bytes.
+        estimate: u64,
+        /// The limit in bytes.
+        limit: u64,
+        /// Its largest LMI (rows).
+        largest_lmi: usize,
+        /// Whether `estimate` is a lower bound (found before building).
+        floor: bool,
+    },
     /// A bug in tsfc (malformed LMI, solver interface).
     Internal(String),
 }
@@ -168,6 +194,19 @@ impl std::fmt::Display for SynthError {
                 Ok(())
             }
             SynthError::Unsupported(m) | SynthError::Internal(m) => write!(f, "{m}"),
+            SynthError::TooLarge {
+                what,
+                estimate,
+                limit,
+                largest_lmi,
+                floor,
+            } => write!(
+                f,
+                "the {what} is too large to solve: the solver would need {} {:.1} GiB (largest LMI {largest_lmi} x {largest_lmi}), over the limit of {:.1} GiB; reduce the number of states or rules, or raise the limit with TSFC_SDP_MEMORY_LIMIT_MB",
+                if *floor { "at least" } else { "about" },
+                *estimate as f64 / f64::from(1u32 << 30),
+                *limit as f64 / f64::from(1u32 << 30)
+            ),
         }
     }
 }

@@ -8,7 +8,7 @@ use super::objectives::Linf;
 use super::plan::{Bound, Goal, Plan};
 use crate::model::TsModel;
 use std::time::{Duration, Instant};
-use tsf_lmi::SolveStatus;
+use tsf_lmi::{Problem, Solution, SolveStatus};
 
 /// With `linf <= g`, the largest xi tried is g (1 - XI_CAP_REL).
 const XI_CAP_REL: f64 = 1e-6;
@@ -36,15 +36,11 @@ impl Runner<'_> {
     /// Builds and solves `plan` once.
     pub fn attempt(&mut self, plan: &Plan) -> Result<Attempt, SynthError> {
         let relaxation = self.model.spec.relaxation.node;
+        self.check_floor()?;
         let t0 = Instant::now();
         let built = build(self.model, plan, relaxation, self.settings.eps, true)?;
         self.log.build_time += t0.elapsed();
-        let sol = built
-            .problem
-            .solve(&self.settings.solver)
-            .map_err(|e| SynthError::Internal(format!("solver refused the problem: {e}")))?;
-        self.log.solves += 1;
-        self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
+        let sol = self.solve(&built.problem, "gain problem")?;
         let approximate = sol.status == SolveStatus::AlmostSolved && self.accept_almost;
         match sol.status {
             SolveStatus::Solved => {}
@@ -96,6 +92,45 @@ impl Runner<'_> {
             approximate,
             trigger: None,
         })))
+    }
+
+    /// Refuses, before building anything, a model whose gain problem cannot
+    /// fit the memory budget: X > 0 and one vertex condition per rule are
+    /// LMIs of at least n x n, whatever the objectives.
+    pub fn check_floor(&self) -> Result<(), SynthError> {
+        let n = self.model.n;
+        let floor = tsf_lmi::ClarabelSolver::memory_floor(vec![n; 1 + self.model.r()]);
+        if floor > self.settings.memory_limit {
+            return Err(SynthError::TooLarge {
+                what: "gain problem".into(),
+                estimate: floor,
+                limit: self.settings.memory_limit,
+                largest_lmi: n,
+                floor: true,
+            });
+        }
+        Ok(())
+    }
+
+    /// Solves one SDP within the memory budget and logs it.
+    pub fn solve(&mut self, problem: &Problem, what: &str) -> Result<Solution, SynthError> {
+        let estimate = problem.memory_estimate();
+        if estimate > self.settings.memory_limit {
+            return Err(SynthError::TooLarge {
+                what: what.to_string(),
+                estimate,
+                limit: self.settings.memory_limit,
+                largest_lmi: problem.stats().psd_cones.iter().copied().max().unwrap_or(0),
+                floor: false,
+            });
+        }
+        self.log.memory_estimate = self.log.memory_estimate.max(estimate);
+        let sol = problem
+            .solve(&self.settings.solver)
+            .map_err(|e| SynthError::Internal(format!("solver refused the {what}: {e}")))?;
+        self.log.solves += 1;
+        self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
+        Ok(sol)
     }
 
     /// Largest decay rate for which `plan` is feasible: (design, bracket).

@@ -30,7 +30,7 @@ use super::relaxations::Relaxer;
 use super::search::Runner;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 use tsf_lang::spec::{Trigger, TriggerSynthesis, Weight};
 use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
 
@@ -315,11 +315,7 @@ impl Runner<'_> {
         let t0 = Instant::now();
         let built = build(self.model, plan, self.settings.eps, true)?;
         self.log.build_time += t0.elapsed();
-        let sol = built.problem.solve(&self.settings.solver).map_err(|e| {
-            SynthError::Internal(format!("solver refused the trigger problem: {e}"))
-        })?;
-        self.log.solves += 1;
-        self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
+        let sol = self.solve(&built.problem, "trigger problem")?;
         if sol.status != SolveStatus::Solved {
             return Ok(None);
         }

@@ -15,9 +15,67 @@ use super::solver::{ConeSolution, ConeSolver};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ClarabelSolver;
 
+/// The copies of the KKT data Clarabel keeps (matrix, factor, workspaces).
+const COPIES: u64 = 5;
+
+impl ClarabelSolver {
+    /// A lower bound of [`ConeSolver::memory_estimate`] for a program with
+    /// PSD cones of these matrix sizes (only their dense scaling blocks):
+    /// cheap enough to refuse an oversized problem before building it.
+    pub fn memory_floor(psd_sizes: impl IntoIterator<Item = usize>) -> u64 {
+        psd_sizes
+            .into_iter()
+            .map(|s| {
+                let d = (s * (s + 1) / 2) as u64;
+                COPIES * 8 * d * d
+            })
+            .sum()
+    }
+}
+
 impl ConeSolver for ClarabelSolver {
     fn name(&self) -> &'static str {
         "clarabel"
+    }
+
+    /// Clarabel's KKT system holds, per PSD cone of d = s(s+1)/2 rows, a dense
+    /// d x d scaling block; the factorization adds the couplings of each cone
+    /// with the unknowns it touches (d x u_i) and the dense Schur complement on
+    /// the shared unknowns (u x u). The sum of those entries times 8 bytes,
+    /// times 5 for the copies the solver keeps (matrix, factor, workspaces),
+    /// matched the measured peak within a factor of 1.3 on PDC problems of
+    /// 21 to 81 states (38 MB to 4.1 GB).
+    fn memory_estimate(&self, program: &ConeProgram) -> u64 {
+        let a = &program.a;
+        // The unknowns each row touches, gathered per cone.
+        let mut row_cone = vec![usize::MAX; a.nrows];
+        let mut start = 0;
+        let mut psd = Vec::new();
+        for cone in &program.cones {
+            let d = cone.dim();
+            if matches!(cone, crate::cone::Cone::PsdTriangle(_)) {
+                row_cone[start..start + d].fill(psd.len());
+                psd.push((d as u64, 0u64));
+            }
+            start += d;
+        }
+        let mut touched = vec![u32::MAX; psd.len()];
+        let mut shared = 0u64;
+        for col in 0..a.ncols {
+            let mut any = false;
+            for &row in &a.rowval[a.colptr[col]..a.colptr[col + 1]] {
+                let c = row_cone.get(row).copied().unwrap_or(usize::MAX);
+                if c != usize::MAX && touched[c] != col as u32 {
+                    touched[c] = col as u32;
+                    psd[c].1 += 1;
+                    any = true;
+                }
+            }
+            shared += u64::from(any);
+        }
+        let entries: u64 =
+            psd.iter().map(|&(d, u)| d * d + d * u).sum::<u64>() + shared * shared + a.nnz() as u64;
+        COPIES * 8 * entries
     }
 
     fn solve(&self, program: &ConeProgram, settings: &SolveSettings) -> Result<ConeSolution> {

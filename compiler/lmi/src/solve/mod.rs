@@ -76,6 +76,12 @@ impl Problem {
         self.solve_with(&ClarabelSolver, settings)
     }
 
+    /// The estimated peak memory, in bytes, of [`Problem::solve`] on this
+    /// problem (see [`ConeSolver::memory_estimate`]).
+    pub fn memory_estimate(&self) -> u64 {
+        ClarabelSolver.memory_estimate(&self.cone_program())
+    }
+
     /// Lowers the problem to its [`crate::ConeProgram`] and runs `solver` on
     /// it; like [`Problem::solve`] otherwise. A solver that returns the wrong
     /// number of values is reported as [`LmiError::Solver`].

@@ -18,6 +18,19 @@ pub trait ConeSolver {
     /// Solves the program. `Err` only when the solver refuses the data or
     /// settings; every termination status is returned in the [`ConeSolution`].
     fn solve(&self, program: &ConeProgram, settings: &SolveSettings) -> Result<ConeSolution>;
+
+    /// An estimate of the peak memory, in bytes, that solving `program`
+    /// takes (callers refuse problems over their budget before solving). The
+    /// default counts one dense block per PSD cone and the constraint matrix.
+    fn memory_estimate(&self, program: &ConeProgram) -> u64 {
+        let blocks: u64 = program
+            .cones
+            .iter()
+            .filter(|c| matches!(c, crate::cone::Cone::PsdTriangle(_)))
+            .map(|c| (c.dim() as u64).pow(2))
+            .sum();
+        8 * (blocks + program.a.nnz() as u64)
+    }
 }
 
 /// What a [`ConeSolver`] returns, in the cone program's own terms.
