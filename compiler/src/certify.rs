@@ -26,9 +26,14 @@ pub struct LmiMargin {
     pub ok: bool,
 }
 
+/// What the certificate certifies, in words (also in the report).
+pub const RULE: &str = "a strict LMI holds when its margin exceeds its rounding-error bound (margin > error_bound > 0); a non-strict one when its margin is at least -error_bound; the solver's margin lmi_margin_eps is what the SDP asked for, not what the certificate requires";
+
 /// The certificate of a design.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Certificate {
+    /// What passing means ([`RULE`]).
+    pub rule: &'static str,
     /// Smallest margin over the strict LMIs.
     pub min_margin: f64,
     /// Whether every constraint passes.
@@ -148,6 +153,7 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
         .map(|l| l.name.clone())
         .unwrap_or_default();
     Ok(Certificate {
+        rule: RULE,
         min_margin,
         ok,
         worst,

@@ -81,10 +81,15 @@ pub struct RegionOfAttraction {
     /// U = P (n x n rows).
     #[serde(rename = "U")]
     pub u: Vec<Vec<f64>>,
-    /// x0' U x0 for the scenario's initial state (<= 1 means inside).
+    /// x0' U x0 for the objective's `for x0 = ...` (a certified containment).
     pub x0_level: Option<f64>,
-    /// Whether the scenario's initial state lies in the region.
+    /// Whether the objective's x0 lies in the region (certified when present).
     pub contains_x0: Option<bool>,
+    /// x0' U x0 for the simulate block's initial state (a check, not a condition).
+    pub scenario_x0_level: Option<f64>,
+    /// Whether the simulate block's initial state lies in the region: when
+    /// false, the simulation starts outside what the certificate covers.
+    pub contains_scenario_x0: Option<bool>,
 }
 
 /// The synthesized event trigger: transmit x(t_k^l) when
@@ -330,14 +335,24 @@ pub fn report(
             })
             .map(|d| {
                 let p = d.trigger.as_ref().map_or(&d.p, |t| &t.p);
-                let level = model.spec.simulate.as_ref().map(|sim| {
-                    let x0 = nalgebra::DVector::from_column_slice(&sim.x0);
+                let level = |x0: &[f64]| {
+                    let x0 = nalgebra::DVector::from_column_slice(x0);
                     (x0.transpose() * p * &x0)[(0, 0)]
-                });
+                };
+                let objective_x0 = d
+                    .plan
+                    .get::<crate::synth::objectives::Saturation>()
+                    .and_then(|s| match &s.contain {
+                        Some(tsf_lang::spec::InitialSet::Point(x0)) => Some(level(x0)),
+                        _ => None,
+                    });
+                let scenario = model.spec.simulate.as_ref().map(|sim| level(&sim.x0));
                 RegionOfAttraction {
                     u: rows(p),
-                    x0_level: level,
-                    contains_x0: level.map(|l| l <= 1.0),
+                    x0_level: objective_x0,
+                    contains_x0: objective_x0.map(|l| l <= 1.0),
+                    scenario_x0_level: scenario,
+                    contains_scenario_x0: scenario.map(|l| l <= 1.0),
                 }
             }),
         trigger: design

@@ -6,7 +6,7 @@ mod common;
 use common::shipped;
 use tsf_lang::spec::Spec;
 use tsfc::model::TsModel;
-use tsfc::synth::objectives::Linf;
+use tsfc::synth::objectives::{Linf, Saturation};
 use tsfc::synth::{self, plan, Reduction, Settings};
 
 /// (variable names, constraint names) of the problem built for `model`'s plan.
@@ -96,4 +96,73 @@ fn the_certificate_inverts_reductions_and_refuses_without_them() {
     stripped.reductions.clear();
     let err = tsfc::certify::certify(&model, &stripped).expect_err("a slack has no value");
     assert!(err.to_string().contains("Y_"), "{err}");
+}
+
+/// A mass-spring-damper with a hardening spring k (1 + x1^2) and an input
+/// limit of 0.7 (issue 11's case: `saturate` with H-inf alone compiled as
+/// certified, and its saturated loop diverged).
+fn msd(objective: &str) -> String {
+    format!(
+        "tsf 1;\ncontroller msd;\nstate x1, x2;\ninput u saturate 0.7;\ndisturbance w;\n\
+         output z = [x1];\nA(x) = [0, 1; -(1 + x1 ^ 2), -0.5];\nB = [0; 1];\nD = [0; 1];\n\
+         premise p = x1 ^ 2 range 0 .. 1 {{ small = trap(-1, -1, 0, 1); large = trap(0, 1, 2, 2); }}\n\
+         rule R1: p is small => at(x1 = 0, x2 = 0);\nrule R2: p is large => at(x1 = 1, x2 = 0);\n\
+         {objective}\nrelaxation basic;\n"
+    )
+}
+
+#[test]
+fn declared_saturation_is_always_inside_the_certificate() {
+    // H-inf alone: the saturation region is implied and not supported with
+    // H-inf, so the compile refuses instead of certifying the unsaturated loop.
+    let model = common::model_of("msd.tsf", &msd("objective hinf(w -> z) minimize;"));
+    let err = synth::synthesize(&model, &Settings::default()).expect_err("refused");
+    assert!(err.to_string().contains("`saturate`"), "{err}");
+    // Stability: the region is implied, certified and noted.
+    let model = common::model_of("msd.tsf", &msd("objective stability;"));
+    let d = synth::synthesize(&model, &Settings::default()).expect("certifiable");
+    let sat = d
+        .plan
+        .get::<Saturation>()
+        .expect("implied saturation objective");
+    assert!(sat.implied && sat.levels == vec![0.7]);
+    assert!(d.notes.iter().any(|n| n.contains("implied")));
+    let cert = tsfc::certify::certify(&model, &d).expect("certify");
+    assert!(
+        cert.ok
+            && cert
+                .lmis
+                .iter()
+                .any(|l| l.name.starts_with("linear region"))
+    );
+    // Independent check of the linear region: on E(P, 1) the largest
+    // |(F_j - G_j) x| is sqrt((F_j - G_j) P^{-1} (F_j - G_j)') <= 0.7.
+    let z = |j: usize| {
+        d.values
+            .iter()
+            .find(|(n, _)| *n == format!("Z{}", j + 1))
+            .map(|(_, v)| v.clone())
+            .expect("Z_j")
+    };
+    for (j, f) in d.gains.iter().enumerate() {
+        let g = z(j) * &d.p;
+        let k = f - g;
+        let peak = (&k * &d.x * k.transpose())[(0, 0)].sqrt();
+        assert!(peak <= 0.7 * (1.0 + 1e-6), "rule {}: {peak}", j + 1);
+    }
+    // An input bound within the level covers it instead (no region implied).
+    let model = common::model_of(
+        "msd.tsf",
+        &msd("objective stability;\nobjective input_norm(u) <= 0.5 for x0 = [0.3, 0];"),
+    );
+    let d = synth::synthesize(&model, &Settings::default()).expect("certifiable");
+    assert!(d.plan.get::<Saturation>().is_none());
+    assert!(d.notes.iter().any(|n| n.contains("does not saturate")));
+    // An input bound above the level is refused.
+    let model = common::model_of(
+        "msd.tsf",
+        &msd("objective stability;\nobjective input_norm(u) <= 5 for x0 = [0.3, 0];"),
+    );
+    let err = synth::synthesize(&model, &Settings::default()).expect_err("refused");
+    assert!(err.to_string().contains("outside the certificate"), "{err}");
 }

@@ -51,6 +51,7 @@ pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthE
     };
     match runner.run(&plan, goal) {
         Ok(Some(mut d)) => {
+            saturation_covered(model, &mut d)?;
             if trigger::wanted(model) {
                 let (t, notes) = runner.trigger(&d)?;
                 d.notes.extend(notes);
@@ -76,5 +77,32 @@ pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthE
             })
         }
         Err(e) => Err(e),
+    }
+}
+
+/// Declared `saturate` levels must be inside the certificate: by the
+/// saturation region (asked for or implied, noted), or by a certified input
+/// bound no larger than the smallest level (then the actuator never
+/// saturates from the certified initial set).
+fn saturation_covered(model: &TsModel, d: &mut Design) -> Result<(), SynthError> {
+    let Some(levels) = &model.spec.saturation else {
+        return Ok(());
+    };
+    if let Some(s) = d.plan.get::<objectives::Saturation>() {
+        if s.implied {
+            d.notes.push("saturation region implied by the declared `saturate` levels: the certificate covers the saturated loop on E(P, 1) (write `objective saturation region;` to say so, or bound `input_norm` below the levels)".into());
+        }
+        return Ok(());
+    }
+    let smallest = levels.iter().copied().fold(f64::INFINITY, f64::min);
+    match d.achieved.get(Quantity::InputNormBound) {
+        Some(mu) if mu <= smallest => {
+            d.notes.push(format!("the certified input bound {mu:.6} is within the smallest `saturate` level {smallest}: the actuator does not saturate from the certified initial set"));
+            Ok(())
+        }
+        mu => Err(SynthError::Unsupported(format!(
+            "the declared `saturate` level {smallest} is outside the certificate: the certified input bound is {}; bound the input with `objective input_norm(u) <= {smallest} for x0 = ...` or add `objective saturation region;`",
+            mu.map_or_else(|| "missing".to_string(), |m| format!("{m:.6}"))
+        ))),
     }
 }

@@ -4,7 +4,7 @@
 
 pub use super::objective::{Bound, Goal, Objective};
 use super::objective::{BuildError, PlanView};
-use super::objectives::{self, Decay};
+use super::objectives::{self, Decay, Saturation};
 use tsf_lang::spec::{ObjectiveKind, Spec};
 
 /// The objectives of one SDP, with numbers.
@@ -103,13 +103,32 @@ impl Plan {
 
 /// The initial plan of a spec and how to solve it. A maximized decay rate
 /// starts at 0 and an L-inf phi the spec leaves free starts at `default_phi`.
+///
+/// Declared `saturate` levels are always inside the certificate: unless the
+/// spec asks for the saturation region or bounds the input norm (which
+/// [`super::synthesize`] then checks against the levels), the saturation
+/// region is implied.
 pub fn initial_plan(spec: &Spec, default_phi: f64) -> (Plan, Goal) {
-    let plan = Plan::new(
+    let mut plan = Plan::new(
         spec.objectives
             .iter()
             .filter_map(|o| objectives::from_spec(&o.node, spec, default_phi))
             .collect(),
     );
+    let covered = plan.objectives().any(|o| {
+        matches!(
+            o.kind(),
+            ObjectiveKind::SaturationRegion | ObjectiveKind::InputNorm
+        )
+    });
+    if let (Some(levels), false) = (&spec.saturation, covered) {
+        plan.objectives.push(Box::new(Saturation {
+            levels: levels.clone(),
+            disturbance_bound: spec.disturbance_bound,
+            contain: None,
+            implied: true,
+        }));
+    }
     let goal = plan.goal();
     (plan, goal)
 }

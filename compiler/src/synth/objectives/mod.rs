@@ -86,6 +86,7 @@ pub fn from_spec(o: &spec::Objective, spec: &Spec, default_phi: f64) -> Option<B
             levels: spec.saturation.clone()?,
             disturbance_bound: spec.disturbance_bound,
             contain: contain.clone(),
+            implied: false,
         }),
     })
 }

@@ -21,6 +21,8 @@ pub struct Saturation {
     pub disturbance_bound: Option<f64>,
     /// Initial states the region E(P, 1) must contain.
     pub contain: Option<InitialSet>,
+    /// Implied by declared `saturate` levels, not asked for by an objective.
+    pub implied: bool,
 }
 
 impl Objective for Saturation {
@@ -46,7 +48,12 @@ impl Objective for Saturation {
             ));
         };
         if let Some(kind) = ctx.plan.without_sector() {
-            return Err(BuildError::Unsupported(format!("the saturation region is supported with stability, decay rate and L-inf objectives, not with {kind}")));
+            let why = if self.implied {
+                "the declared `saturate` levels must be inside the certificate, by the saturation region or an input bound below the levels; the saturation region"
+            } else {
+                "the saturation region"
+            };
+            return Err(BuildError::Unsupported(format!("{why} is supported with stability, decay rate and L-inf objectives, not with {kind}: add `objective input_norm(u) <= <level> for x0 = ...` or remove {kind}")));
         }
         lmis.strict("S > 0", Expr::var(sector.s))?;
         if let Some(init) = &self.contain {
