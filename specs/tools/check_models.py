@@ -201,9 +201,10 @@ def xu():
     for Fb, P in zip(F_blk, F_prn):
         assert Fb.shape == (3, 6) and P.shape == (6, 3)
         assert np.array_equal(Fb, np.hstack([P[:3], P[3:]]))
-    # Re-read the OCR text if present to confirm the JSON transcription.
-    paper = "/work/shared/papers/xu-huang-2020-event-triggered-linf-saturation.txt"
-    if os.path.exists(paper):
+    # Re-read the paper's OCR text, if given in TSFC_XU_OCR, to confirm the
+    # JSON transcription.
+    paper = os.environ.get("TSFC_XU_OCR", "")
+    if paper and os.path.exists(paper):
         app = open(paper).read().split("Appendix A")[-1]
         ok = True
         for k in range(1, 8):

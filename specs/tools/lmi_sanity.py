@@ -2,7 +2,7 @@
 """Optional feasibility sanity check of the objectives chosen in the specs
 (needs cvxpy: `pip install cvxpy`).  Not a reference implementation of tsfc's
 synthesis: it only tells whether the decay rates written in the specs are
-reasonable, using the LMIs of /work/shared/design/lmi-reference.md with a
+reasonable, using the LMIs of the LMI reference of the design notes (Tanaka & Wang 2001 conventions) with a
 margin eps on strict inequalities.
 
   zhang:    Zhang & Zeng Theorem 1 (26)-(30): tanaka(s=4) relaxation over the
