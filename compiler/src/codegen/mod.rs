@@ -1,7 +1,8 @@
 //! Code generation: a certified design becomes controller source code.
 //!
-//! [`tables`] gathers the plain data (dimensions, premise code, rule terms,
-//! gains, the sensor-side trigger); one module per target language renders it.
+//! [`crate::tables`] gathers the plain data (dimensions, premise code, rule
+//! terms, gains, the sensor-side trigger); one module per target language
+//! renders it.
 //!
 //! An event-triggered loop (`trigger aperiodic { .. }`) has two networked
 //! roles, generated separately: the controller module `<name>` (PDC on the
@@ -13,15 +14,12 @@
 //! absolute paths.
 
 pub mod c;
-pub mod sym;
-pub mod tables;
-
-pub use tables::{tables, Header, PremiseCode, SensorLaw, SensorTables, Tables};
 pub mod rust;
 
 use crate::certify::Certificate;
 use crate::model::TsModel;
 use crate::synth::Design;
+use crate::tables::tables;
 use tsf_lang::spec::Emit;
 
 /// One generated file: its name (in the output folder) and its text.
@@ -45,7 +43,7 @@ pub fn generate(
     if !cert.ok {
         return Err("the certificate was refused: no code is generated".into());
     }
-    let t = tables(model, design, cert, spec_path, spec_sha256)?;
+    let t = tables(model, design, cert, spec_path, spec_sha256).map_err(|e| e.to_string())?;
     let mut out = Vec::new();
     for target in targets {
         match target {

@@ -3,9 +3,9 @@
 //! `tsf_runtime::Controller` and wraps them in a small `Controller` struct.
 //! The generated file is meant to be `include!`d (no inner attributes).
 
-use super::sym::{Func, Sym};
-use super::tables::{PremiseCode, SensorLaw, SensorTables, Tables};
 use crate::model::TermSpec;
+use crate::tables::sym::{Func, Sym};
+use crate::tables::{PremiseCode, SensorLaw, SensorTables, Tables};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
 use tsf_lang::spec::{Precision, SetShape};

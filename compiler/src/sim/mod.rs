@@ -21,8 +21,8 @@ pub mod trigger;
 pub use metrics::{Metrics, Trace};
 pub use scenario::{run, Outcome};
 
-use crate::codegen::Tables;
 use crate::model::TsModel;
+use crate::tables::Tables;
 use nalgebra::DMatrix;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -185,8 +185,8 @@ pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
             })
         }
     };
-    let tables = crate::codegen::tables(&model, &design, &cert, &source.name, &sha)
-        .map_err(SimError::spec)?;
+    let tables = crate::tables::tables(&model, &design, &cert, &source.name, &sha)
+        .map_err(|e| SimError::spec(e.to_string()))?;
     // The synthesized trigger weight Upsilon (two-step method); without one,
     // `weight = synthesize` falls back to P / lambda_max(P) (see
     // `trigger::trigger_weight`).

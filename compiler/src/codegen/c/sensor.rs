@@ -13,7 +13,7 @@
 
 use super::{lit, AdaptiveFields, CFiles, Gen};
 use crate::codegen::rust::{law_summary, sensor_certificate, sensor_name};
-use crate::codegen::tables::{SensorLaw, SensorTables, Tables};
+use crate::tables::{SensorLaw, SensorTables, Tables};
 use std::fmt::Write as _;
 use tsf_lang::spec::Precision;
 use tsf_runtime::math::{ATAN_COMP_J16, ATAN_J16, ATAN_Q};
