@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 use tsf_lang::spec::{Emit, Precision};
 use tsfc::certify::Certificate;
 use tsfc::codegen::rust::{emit_rust_sensor, sensor_name};
-use tsfc::codegen::{generate, GeneratedFile};
+use tsfc::codegen::{generate, CodegenError, GeneratedFile};
 use tsfc::compile::{compile, Status};
 use tsfc::frontend;
 use tsfc::model::TsModel;
@@ -75,7 +75,7 @@ fn compiled(name: &'static str) -> &'static Compiled {
     cell.get_or_init(|| compile_spec(name))
 }
 
-fn generate_rust(c: &Compiled) -> Result<Vec<GeneratedFile>, String> {
+fn generate_rust(c: &Compiled) -> Result<Vec<GeneratedFile>, CodegenError> {
     generate(
         &c.model,
         &c.design,
@@ -160,7 +160,7 @@ fn sensor_module_needs_the_synthesized_weight() {
     for targets in [[Emit::Rust], [Emit::C]] {
         let err = generate(&xu.model, &design, &xu.cert, &xu.shown, &xu.sha, &targets)
             .expect_err("no weight, no code");
-        assert!(err.contains("synthesize"), "{err}");
+        assert!(err.to_string().contains("synthesize"), "{err}");
     }
 }
 

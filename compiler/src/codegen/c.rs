@@ -18,14 +18,34 @@
 //! `<NAME>_REAL`, exactly like the runtime's `f32` functions; libm and the
 //! runtime differ by a few ulp per call, `sqrt` and `fabs` not at all.
 
+use super::{Backend, CodegenError, GeneratedFile};
 use crate::model::TermSpec;
 use crate::tables::sym::{Func, Sym};
 use crate::tables::{PremiseCode, Tables};
 use std::fmt::Write as _;
-use tsf_lang::spec::{Precision, SetShape};
+use tsf_lang::spec::{Emit, Precision, SetShape};
 
 mod sensor;
 pub use sensor::{c_sensor_file_names, emit_c_sensor};
+
+/// The C99 backend: `<name>.h` and `<name>.c`, and `<name>_sensor.h` and
+/// `<name>_sensor.c` for an aperiodic event trigger.
+#[derive(Debug, Clone, Copy)]
+pub struct CBackend;
+
+impl Backend for CBackend {
+    fn target(&self) -> Emit {
+        Emit::C
+    }
+
+    fn files(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        let mut out = emit_c(t).named(c_file_names(t));
+        if t.trigger.is_some() {
+            out.extend(emit_c_sensor(t)?.named(c_sensor_file_names(t)));
+        }
+        Ok(out)
+    }
+}
 
 /// The two generated files.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -34,6 +54,22 @@ pub struct CFiles {
     pub header: String,
     /// Contents of `<name>.c` (includes `"<name>.h"`).
     pub source: String,
+}
+
+impl CFiles {
+    /// The pair as generated files named `(header, source)`.
+    fn named(self, (h, c): (String, String)) -> Vec<GeneratedFile> {
+        vec![
+            GeneratedFile {
+                name: h,
+                text: self.header,
+            },
+            GeneratedFile {
+                name: c,
+                text: self.source,
+            },
+        ]
+    }
 }
 
 /// File names of the generated header and source: `(<name>.h, <name>.c)`.

@@ -3,12 +3,47 @@
 //! `tsf_runtime::Controller` and wraps them in a small `Controller` struct.
 //! The generated file is meant to be `include!`d (no inner attributes).
 
+use super::{Backend, CodegenError, GeneratedFile};
 use crate::model::TermSpec;
 use crate::tables::sym::{Func, Sym};
 use crate::tables::{PremiseCode, SensorLaw, SensorTables, Tables};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
-use tsf_lang::spec::{Precision, SetShape};
+use tsf_lang::spec::{Emit, Precision, SetShape};
+
+/// The Rust backend: `<name>.rs`, and `<name>_sensor.rs` for an aperiodic
+/// event trigger.
+#[derive(Debug, Clone, Copy)]
+pub struct RustBackend;
+
+impl Backend for RustBackend {
+    fn target(&self) -> Emit {
+        Emit::Rust
+    }
+
+    fn files(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        let mut out = vec![GeneratedFile {
+            name: format!("{}.rs", t.name),
+            text: emit_rust(t)?,
+        }];
+        if t.trigger.is_some() {
+            out.push(GeneratedFile {
+                name: format!("{}.rs", sensor_name(t)),
+                text: emit_rust_sensor(t)?,
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// Formats the generated tokens (an error names a generator bug).
+fn unparse(tokens: TokenStream) -> Result<String, CodegenError> {
+    let file: syn::File = syn::parse2(tokens).map_err(|e| CodegenError::Unparsable {
+        language: "Rust",
+        reason: e.to_string(),
+    })?;
+    Ok(prettyplease::unparse(&file))
+}
 
 /// A float literal of the table's precision (shortest round-trip form;
 /// negatives as a unary minus; infinities as the type's constant).
@@ -132,7 +167,7 @@ fn sym_in(s: &Sym, prec: Precision, parent: u8) -> TokenStream {
 }
 
 /// The generated module's text.
-pub fn emit_rust(t: &Tables) -> Result<String, String> {
+pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     let prec = t.precision;
     let ty = real_ty(prec);
     let (n, m, p, r) = (
@@ -314,9 +349,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, String> {
             }
         }
     };
-    let file: syn::File = syn::parse2(tokens)
-        .map_err(|e| format!("internal error: generated Rust does not parse: {e}"))?;
-    let body = prettyplease::unparse(&file);
+    let body = unparse(tokens)?;
     Ok(format!("{}{body}", header(t)))
 }
 
@@ -383,11 +416,8 @@ pub(crate) fn sensor_certificate(t: &Tables, s: &SensorTables) -> String {
 /// The sensor-side trigger module `<controller>_sensor.rs`: decides at each
 /// sampling instant whether to transmit the state, holds the last transmitted
 /// state and the threshold. Errors if the design has no trigger.
-pub fn emit_rust_sensor(t: &Tables) -> Result<String, String> {
-    let s = t
-        .trigger
-        .as_ref()
-        .ok_or("internal error: no aperiodic trigger: no sensor module")?;
+pub fn emit_rust_sensor(t: &Tables) -> Result<String, CodegenError> {
+    let s = t.trigger.as_ref().ok_or(CodegenError::NoSensor)?;
     let prec = t.precision;
     let ty = real_ty(prec);
     let n = Literal::usize_unsuffixed(t.n);
@@ -562,9 +592,7 @@ pub fn emit_rust_sensor(t: &Tables) -> Result<String, String> {
             }
         }
     };
-    let file: syn::File = syn::parse2(tokens)
-        .map_err(|e| format!("internal error: generated Rust does not parse: {e}"))?;
-    let body = prettyplease::unparse(&file);
+    let body = unparse(tokens)?;
     Ok(format!("{}{body}", sensor_header(t, s)))
 }
 

@@ -13,6 +13,7 @@
 
 use super::{lit, AdaptiveFields, CFiles, Gen};
 use crate::codegen::rust::{law_summary, sensor_certificate, sensor_name};
+use crate::codegen::CodegenError;
 use crate::tables::{SensorLaw, SensorTables, Tables};
 use std::fmt::Write as _;
 use tsf_lang::spec::Precision;
@@ -26,11 +27,8 @@ pub fn c_sensor_file_names(t: &Tables) -> (String, String) {
 
 /// Generates the sensor module's header and source; errors if the design
 /// has no aperiodic trigger.
-pub fn emit_c_sensor(t: &Tables) -> Result<CFiles, String> {
-    let s = t
-        .trigger
-        .as_ref()
-        .ok_or("internal error: no aperiodic trigger: no sensor module")?;
+pub fn emit_c_sensor(t: &Tables) -> Result<CFiles, CodegenError> {
+    let s = t.trigger.as_ref().ok_or(CodegenError::NoSensor)?;
     let name = sensor_name(t);
     let g = Gen::with_prefix(
         t,
