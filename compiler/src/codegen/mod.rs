@@ -17,9 +17,11 @@
 
 pub mod c;
 mod error;
+mod header;
 pub mod rust;
 
 pub use error::CodegenError;
+pub use header::{marker, sensor_name};
 
 use crate::certify::Certificate;
 use crate::model::TsModel;

@@ -12,7 +12,7 @@
 //! decisions and thresholds bit-identical to `tsf_runtime::AdaptiveTrigger`.
 
 use super::{lit, AdaptiveFields, CFiles, Gen};
-use crate::codegen::rust::{law_summary, sensor_certificate, sensor_name};
+use crate::codegen::header::{law_summary, marker, sensor_certificate, sensor_name};
 use crate::codegen::CodegenError;
 use crate::tables::{SensorLaw, SensorTables, Tables};
 use std::fmt::Write as _;
@@ -56,7 +56,7 @@ fn flat_rows(rows: &[Vec<f64>]) -> String {
 /// The comment block both sensor files start with.
 fn banner(g: &Gen<'_>, s: &SensorTables, what: &str) -> String {
     let t = g.t;
-    let mut out = super::marker(&t.header);
+    let mut out = marker(&t.header);
     let _ = writeln!(
         out,
         "// {what} of the sensor-side event trigger of controller `{}` ({} states): at each",
