@@ -23,7 +23,8 @@ pub enum Func {
     Atan,
     /// |v|
     Abs,
-    /// sin(v)/v with 1 at 0
+    /// sin(v)/v with 1 at 0 (the runtime's `math::sinc`, with its
+    /// small-argument branch)
     Sinc,
 }
 
@@ -49,13 +50,7 @@ impl Func {
             Func::Sqrt => v.sqrt(),
             Func::Atan => v.atan(),
             Func::Abs => v.abs(),
-            Func::Sinc => {
-                if v.abs() < 1e-8 {
-                    1.0 - v * v / 6.0
-                } else {
-                    v.sin() / v
-                }
-            }
+            Func::Sinc => tsf_runtime::math::sinc(v),
         }
     }
 }
