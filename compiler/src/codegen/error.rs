@@ -13,6 +13,13 @@ pub enum CodegenError {
     Tables(TablesError),
     /// No backend is registered for an `emit` target.
     NoBackend(Emit),
+    /// The controller's name would collide with support code of a language.
+    ReservedName {
+        /// The controller name.
+        name: String,
+        /// The language, e.g. `C`.
+        language: &'static str,
+    },
     /// A sensor module was asked for but the design has no aperiodic trigger.
     NoSensor,
     /// The generated text of a language does not parse (a generator bug).
@@ -34,6 +41,10 @@ impl fmt::Display for CodegenError {
             CodegenError::NoBackend(target) => write!(
                 f,
                 "internal error: no code generator is registered for `emit {target:?}`"
+            ),
+            CodegenError::ReservedName { name, language } => write!(
+                f,
+                "the controller name `{name}` is reserved in generated {language} (the runtime's symbols start with `tsf_`): rename the controller"
             ),
             CodegenError::NoSensor => {
                 f.write_str("internal error: no aperiodic trigger: no sensor module")
