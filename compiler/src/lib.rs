@@ -2,8 +2,8 @@
 //!
 //! The pipeline flows one way, one module per stage, plain data between them:
 //! `tsf_lang` (parse, resolve, shape-check) → model (local models, premises,
-//! coverage) → synthesis → LMI solve → certificate → code generation /
-//! simulation / report.
+//! coverage) → synthesis → LMI solve → certificate → tables (the plain data of
+//! a certified design) → code generation / simulation / report.
 //!
 //! The API for build scripts and tools is small: [`Builder`] (prost-build
 //! style, for `build.rs`), [`pipeline`] (read → compile → tables / generated
@@ -35,6 +35,8 @@ pub mod model;
 pub mod summary;
 #[doc(hidden)]
 pub mod synth;
+#[doc(hidden)]
+pub mod tables;
 
 pub use builder::Builder;
 pub use error::{Error, ErrorKind};

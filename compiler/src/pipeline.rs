@@ -3,7 +3,6 @@
 //! and the benches all go through it.
 
 use crate::certify::Certificate;
-use crate::codegen::Tables;
 use crate::codegen::{self, GeneratedFile};
 use crate::compile::{compile as compile_model, Compiled, Status};
 use crate::error::Error;
@@ -11,6 +10,7 @@ use crate::frontend::{self, Checked, Source};
 use crate::model::TsModel;
 use crate::report::{sha256_hex, SpecInfo};
 use crate::synth::{Design, Settings};
+use crate::tables::{self, Tables};
 use std::path::Path;
 use tsf_lang::spec::Emit;
 
@@ -121,7 +121,7 @@ impl Run {
     /// The certified design's tables (what generated code and the simulator use).
     pub fn tables(&self) -> Result<Tables, Error> {
         let (design, cert) = self.certified()?;
-        codegen::tables(&self.model, design, cert, &self.name, &self.sha256)
+        tables::tables(&self.model, design, cert, &self.name, &self.sha256)
             .map_err(|e| Error::not_certified(format!("{}: {e}", self.name)))
     }
 

@@ -1,5 +1,7 @@
 //! The C generator against the Rust runtime: every shipped spec that compiles
-//! is generated, built with the system C compiler (`$CC` or `cc`) under
+//! is generated, built together with the C runtime (runtime/c/tsf_runtime.c,
+//! which the backend writes next to the generated files) with the system C
+//! compiler (`$CC` or `cc`) under
 //! `-std=c99 -Wall -Wextra -Werror -pedantic` (and with UBSan + ASan when the
 //! compiler accepts them), driven over random and edge-case states, and
 //! compared with `tsf_runtime::Controller` built here from the same tables:
@@ -20,9 +22,9 @@ use std::sync::OnceLock;
 use tsf_runtime::{
     math, AdaptiveTrigger, Controller, MixedTrigger, PeriodicTrigger, RelativeTrigger, Rule,
 };
-use tsfc::codegen::c::{c_file_names, c_sensor_file_names, emit_c, emit_c_sensor, CFiles};
-use tsfc::codegen::sym::{Func, Sym};
-use tsfc::codegen::{PremiseCode, SensorLaw, Tables};
+use tsfc::codegen::c::{c_file_names, c_sensor_file_names, emit_c, emit_c_sensor, runtime, CFiles};
+use tsfc::tables::sym::{Func, Sym};
+use tsfc::tables::{PremiseCode, SensorLaw, Tables};
 
 /// Shipped specs the generator is tested on; all must compile.
 const SPECS: [(&str, bool); 3] = [
@@ -72,7 +74,7 @@ fn tables_of(file: &str) -> Result<Tables, String> {
     if !cert.ok {
         return Err("certificate refused".into());
     }
-    tsfc::codegen::tables(&model, &design, &cert, &spec_path, &sha)
+    tsfc::tables::tables(&model, &design, &cert, &spec_path, &sha).map_err(|e| e.to_string())
 }
 
 // ---------------------------------------------------------------- snapshots
@@ -102,6 +104,15 @@ fn generated_c_is_deterministic_and_snapshotted() {
                 "absolute path"
             );
             assert!(!text.contains("malloc"), "no allocation");
+            assert_no_runtime_text(&t.name, text);
+        }
+        for line in a.source.lines().filter(|l| l.starts_with("#include")) {
+            assert!(
+                line == format!("#include \"{h}\"")
+                    || line == "#include \"tsf_runtime.h\""
+                    || line == "#include <math.h>",
+                "{c}: unexpected `{line}`"
+            );
         }
         insta::assert_snapshot!(format!("{}.h", t.name), a.header);
         insta::assert_snapshot!(format!("{}.c", t.name), a.source);
@@ -131,10 +142,14 @@ fn generated_c_is_deterministic_and_snapshotted() {
             let first = text.lines().next().unwrap_or_default();
             assert!(first.contains(&t.header.spec_sha256), "{first}: spec hash");
             assert!(!text.contains("/work/") && !text.contains("malloc"));
-            // Self-contained: only the sensor's own header and standard ones.
+            assert_no_runtime_text(&h, text);
+            // Independent of the controller: its own header, the runtime's
+            // and standard ones.
             for line in text.lines().filter(|l| l.starts_with("#include")) {
                 assert!(
-                    line == format!("#include \"{h}\"") || line == "#include <math.h>",
+                    line == format!("#include \"{h}\"")
+                        || line == "#include \"tsf_runtime.h\""
+                        || line == "#include <math.h>",
                     "{h}: unexpected `{line}`"
                 );
             }
@@ -146,6 +161,56 @@ fn generated_c_is_deterministic_and_snapshotted() {
         shipped_tables().iter().any(|t| t.trigger.is_some()),
         "the event-triggered spec must have a sensor module"
     );
+}
+
+/// Generated files hold no runtime code: the runtime's functions are
+/// defined once, in tsf_runtime.c.
+fn assert_no_runtime_text(file: &str, text: &str) {
+    for needle in [
+        "atan_j16",
+        "quad_form",
+        "edge_ratio",
+        "clamp01",
+        "nearest_scaled",
+        "static int ",
+        "static double ",
+    ] {
+        assert!(!text.contains(needle), "{file}: runtime text `{needle}`");
+    }
+}
+
+/// The C backend writes the runtime next to the generated files, byte for
+/// byte the checked-in runtime/c/tsf_runtime.{h,c}.
+#[test]
+fn emitted_runtime_files_are_the_checked_in_ones() {
+    use tsfc::codegen::backend;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../runtime/c");
+    for t in shipped_tables() {
+        let files = backend(tsf_lang::spec::Emit::C)
+            .expect("the C backend is registered")
+            .files(t)
+            .expect("generates");
+        let mut names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
+        let (h, c) = c_file_names(t);
+        let mut expected = vec![h, c];
+        if t.trigger.is_some() {
+            let (sh, sc) = c_sensor_file_names(t);
+            expected.extend([sh, sc]);
+        }
+        expected.extend(["tsf_runtime.h".to_string(), "tsf_runtime.c".to_string()]);
+        assert_eq!(names, expected, "{}: C files", t.name);
+        names.clear();
+        for f in files.iter().filter(|f| f.name.starts_with("tsf_runtime.")) {
+            let checked_in = std::fs::read(dir.join(&f.name)).expect("checked-in runtime file");
+            assert!(
+                f.text.as_bytes() == checked_in.as_slice(),
+                "{}: emitted {} differs from runtime/c/{}",
+                t.name,
+                f.name,
+                f.name
+            );
+        }
+    }
 }
 
 // ------------------------------------------------------------- C toolchain
@@ -222,6 +287,14 @@ fn sanitizers_work(cc: &str) -> bool {
             .env("ASAN_OPTIONS", "detect_leaks=0")
             .status()
             .is_ok_and(|s| s.success())
+}
+
+/// Writes the runtime's header and source into `dir`; returns the source.
+fn write_runtime(dir: &Path) -> PathBuf {
+    for f in runtime::files() {
+        std::fs::write(dir.join(&f.name), &f.text).expect("write runtime file");
+    }
+    dir.join(runtime::SOURCE_NAME)
 }
 
 fn write_sensor_files(dir: &Path, t: &Tables, files: &CFiles) -> PathBuf {
@@ -649,6 +722,7 @@ fn generated_c_matches_the_runtime() {
     for (k, t) in shipped_tables().iter().enumerate() {
         let dir = work_dir(&t.name);
         let src = write_files(&dir, t, &emit_c(t));
+        let rt = write_runtime(&dir);
         let drv = dir.join("driver.c");
         std::fs::write(&drv, driver(t)).expect("write driver");
         let xs = states(t, 0x5eed + k as u64);
@@ -669,7 +743,7 @@ fn generated_c_matches_the_runtime() {
         }
         for (tag, flags) in builds {
             let exe = dir.join(format!("driver_{}", tag.replace('+', "_")));
-            build(&cc, &[src.clone(), drv.clone()], &exe, &flags);
+            build(&cc, &[src.clone(), rt.clone(), drv.clone()], &exe, &flags);
             let out = run_driver(&exe, &input_path);
             let c: Vec<Row> = out.lines().map(|l| parse_row(l, t)).collect();
             let (worst, at) = compare(t, tag, &xs, &c, &rust);
@@ -697,8 +771,8 @@ fn generated_c_links_together_and_builds_as_float_and_cpp() {
     let cc = c_compiler();
     let tables = shipped_tables();
     let dir = work_dir("together");
-    let mut sources = Vec::new();
-    let mut main = String::new();
+    let mut sources = vec![write_runtime(&dir)];
+    let mut main = String::from("#include \"tsf_runtime.h\"\n");
     for t in tables {
         sources.push(write_files(&dir, t, &emit_c(t)));
         let _ = writeln!(main, "#include \"{}.h\"", t.name);
@@ -745,6 +819,20 @@ fn generated_c_links_together_and_builds_as_float_and_cpp() {
     float_flags.extend(["-O2".into(), "-Wdouble-promotion".into()]);
     let float_flags: Vec<&str> = float_flags.iter().map(String::as_str).collect();
     build(&cc, &sources, &dir.join("together_float"), &float_flags);
+    // Both precisions in one image: the first controller in float, the
+    // others in double, one runtime.
+    let mixed = format!("-D{}_REAL=float", tables[0].name.to_ascii_uppercase());
+    let mixed_exe = dir.join("together_mixed");
+    build(
+        &cc,
+        &sources,
+        &mixed_exe,
+        &[mixed.as_str(), "-O2", "-Wdouble-promotion"],
+    );
+    assert!(
+        Command::new(&mixed_exe).status().expect("run").success(),
+        "mixed precision: x = 0 must give u = 0, no flags"
+    );
     // C++: the headers compile and declare C linkage.
     let cxx = std::env::var("CXX").unwrap_or_else(|_| "c++".into());
     let cpp = dir.join("main.cpp");
@@ -895,8 +983,8 @@ fn sensor_reference_rows(t: &Tables, cmds: &[Cmd], float: bool) -> Vec<(bool, u6
     }
 }
 
-/// A driver that includes the sensor's source (so the static atan can be
-/// driven too) and reads commands: `r` (init), `s` + N hex doubles (sample),
+/// A driver that includes the sensor's source (linked with the runtime, whose
+/// atan is driven too) and reads commands: `r` (init), `s` + N hex doubles (sample),
 /// `a` + hex double (the binary64 atan), `w` + hex double (the atan of the
 /// real type). Each sample prints the decision, nu's bits as a double and
 /// whether `x_tx` and `last` behaved (copied on transmission, untouched
@@ -911,11 +999,11 @@ fn sensor_driver(t: &Tables) -> String {
     let atan = if adaptive {
         format!(
             r#"        if (cmd[0] == 'a') {{
-            put_bits({p}atan_f64(read_hex()));
+            put_bits(tsf_atan(read_hex()));
             continue;
         }}
         if (cmd[0] == 'w') {{
-            put_bits((double){p}atan(({u}REAL)read_hex()));
+            put_bits((double){u}RT(tsf_atan)(({u}REAL)read_hex()));
             continue;
         }}
 "#
@@ -990,14 +1078,14 @@ int main(void) {{
     )
 }
 
-/// Writes the sensor files of `t` and the driver into `dir`; returns the
-/// driver's path.
-fn sensor_setup(dir: &Path, t: &Tables) -> PathBuf {
+/// Writes the sensor files of `t`, the runtime and the driver into `dir`;
+/// returns the sources to build (the driver includes the sensor's source).
+fn sensor_setup(dir: &Path, t: &Tables) -> Vec<PathBuf> {
     let files = emit_c_sensor(t).expect("sensor module");
     write_sensor_files(dir, t, &files);
     let drv = dir.join("sensor_driver.c");
     std::fs::write(&drv, sensor_driver(t)).expect("write driver");
-    drv
+    vec![drv, write_runtime(dir)]
 }
 
 fn hex_line(tag: &str, v: &[f64]) -> String {
@@ -1046,7 +1134,7 @@ fn sensor_conformance(
         let exe = dir.join(format!("sensor_{}", tag.replace('+', "_")));
         let mut all: Vec<&str> = flags.clone();
         all.extend(extra);
-        build(cc, std::slice::from_ref(&drv), &exe, &all);
+        build(cc, &drv, &exe, &all);
         let out = run_driver(&exe, &input_path);
         let lines: Vec<&str> = out.lines().collect();
         assert_eq!(lines.len(), cmds.len(), "{tag}: one line per command");
@@ -1269,7 +1357,7 @@ fn sensor_c_atan_is_the_runtimes() {
             let exe = dir.join(format!("atan_{}_{float}", tag.replace('+', "_")));
             let mut all = flags.clone();
             all.extend(&extra);
-            build(&cc, std::slice::from_ref(&drv), &exe, &all);
+            build(&cc, &drv, &exe, &all);
             let out = run_driver(&exe, &input_path);
             let mut lines = out.lines();
             let mut checked = 0usize;

@@ -6,13 +6,14 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use tsf_lang::spec::{Emit, Precision};
 use tsfc::certify::Certificate;
-use tsfc::codegen::rust::{emit_rust_sensor, sensor_name};
-use tsfc::codegen::{generate, GeneratedFile, SensorLaw};
+use tsfc::codegen::rust::emit_rust_sensor;
+use tsfc::codegen::{generate, sensor_name, CodegenError, GeneratedFile};
 use tsfc::compile::{compile, Status};
 use tsfc::frontend;
 use tsfc::model::TsModel;
 use tsfc::report::{sha256_hex, SpecInfo};
 use tsfc::synth::{Design, Settings};
+use tsfc::tables::SensorLaw;
 
 fn spec_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -74,7 +75,7 @@ fn compiled(name: &'static str) -> &'static Compiled {
     cell.get_or_init(|| compile_spec(name))
 }
 
-fn generate_rust(c: &Compiled) -> Result<Vec<GeneratedFile>, String> {
+fn generate_rust(c: &Compiled) -> Result<Vec<GeneratedFile>, CodegenError> {
     generate(
         &c.model,
         &c.design,
@@ -159,7 +160,7 @@ fn sensor_module_needs_the_synthesized_weight() {
     for targets in [[Emit::Rust], [Emit::C]] {
         let err = generate(&xu.model, &design, &xu.cert, &xu.shown, &xu.sha, &targets)
             .expect_err("no weight, no code");
-        assert!(err.contains("synthesize"), "{err}");
+        assert!(err.to_string().contains("synthesize"), "{err}");
     }
 }
 
@@ -169,7 +170,7 @@ fn sensor_module_needs_the_synthesized_weight() {
 fn sensor_module_variants_parse() {
     let xu = compiled(XU);
     let t =
-        tsfc::codegen::tables(&xu.model, &xu.design, &xu.cert, &xu.shown, &xu.sha).expect("tables");
+        tsfc::tables::tables(&xu.model, &xu.design, &xu.cert, &xu.shown, &xu.sha).expect("tables");
     let s = t.trigger.clone().expect("xu has an aperiodic trigger");
     assert!(matches!(s.law, SensorLaw::Adaptive(..)), "{:?}", s.law);
     assert_eq!(sensor_name(&t), "xu_event_triggered_sensor");

@@ -1,27 +1,32 @@
 //! Code generation: a certified design becomes controller source code.
 //!
-//! [`tables`] gathers the plain data (dimensions, premise code, rule terms,
-//! gains, the sensor-side trigger); one module per target language renders it.
+//! [`crate::tables`] gathers the plain data (dimensions, premise code, rule
+//! terms, gains, the sensor-side trigger); one [`Backend`] per output
+//! language renders it, and [`generate`] runs the backends the spec's `emit`
+//! selects. Adding a language is one new backend module and one line in
+//! [`BACKENDS`].
 //!
 //! An event-triggered loop (`trigger aperiodic { .. }`) has two networked
 //! roles, generated separately: the controller module `<name>` (PDC on the
 //! received state x(t_k), saturation) and the sensor module `<name>_sensor`
 //! (decides at each sampling instant whether to transmit x, holds x(t_k) and
-//! the threshold nu(t_k)). Only these modules know
+//! the threshold nu(t_k)). Only the backends know
 //! Rust or C syntax. Outputs are deterministic (same spec, same bytes) and
 //! carry a `@generated` marker with the spec's hash, no timestamps, no
 //! absolute paths.
 
 pub mod c;
-pub mod sym;
-pub mod tables;
-
-pub use tables::{tables, Header, PremiseCode, SensorLaw, SensorTables, Tables};
+mod error;
+mod header;
 pub mod rust;
+
+pub use error::CodegenError;
+pub use header::{marker, sensor_name};
 
 use crate::certify::Certificate;
 use crate::model::TsModel;
 use crate::synth::Design;
+use crate::tables::{tables, Tables};
 use tsf_lang::spec::Emit;
 
 /// One generated file: its name (in the output folder) and its text.
@@ -33,6 +38,23 @@ pub struct GeneratedFile {
     pub text: String,
 }
 
+/// A code generator for one output language.
+pub trait Backend: Sync {
+    /// The `emit` target this backend serves.
+    fn target(&self) -> Emit;
+    /// Every file of the design in this language (the controller module,
+    /// the sensor module of an aperiodic trigger, support files).
+    fn files(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError>;
+}
+
+/// Every backend; [`generate`] picks them by [`Backend::target`].
+pub const BACKENDS: &[&dyn Backend] = &[&rust::RustBackend, &c::CBackend];
+
+/// The backend of an `emit` target.
+pub fn backend(target: Emit) -> Option<&'static dyn Backend> {
+    BACKENDS.iter().copied().find(|b| b.target() == target)
+}
+
 /// Generates the requested targets for a certified design.
 pub fn generate(
     model: &TsModel,
@@ -41,45 +63,15 @@ pub fn generate(
     spec_path: &str,
     spec_sha256: &str,
     targets: &[Emit],
-) -> Result<Vec<GeneratedFile>, String> {
+) -> Result<Vec<GeneratedFile>, CodegenError> {
     if !cert.ok {
-        return Err("the certificate was refused: no code is generated".into());
+        return Err(CodegenError::NotCertified);
     }
     let t = tables(model, design, cert, spec_path, spec_sha256)?;
     let mut out = Vec::new();
-    for target in targets {
-        match target {
-            Emit::Rust => {
-                out.push(GeneratedFile {
-                    name: format!("{}.rs", t.name),
-                    text: rust::emit_rust(&t)?,
-                });
-                if t.trigger.is_some() {
-                    out.push(GeneratedFile {
-                        name: format!("{}.rs", rust::sensor_name(&t)),
-                        text: rust::emit_rust_sensor(&t)?,
-                    });
-                }
-            }
-            Emit::C => {
-                push_c(&mut out, c::c_file_names(&t), c::emit_c(&t));
-                if t.trigger.is_some() {
-                    push_c(&mut out, c::c_sensor_file_names(&t), c::emit_c_sensor(&t)?);
-                }
-            }
-        }
+    for &target in targets {
+        let b = backend(target).ok_or(CodegenError::NoBackend(target))?;
+        out.extend(b.files(&t)?);
     }
     Ok(out)
-}
-
-/// Appends a C header/source pair named `(header, source)`.
-fn push_c(out: &mut Vec<GeneratedFile>, (h, src): (String, String), files: c::CFiles) {
-    out.push(GeneratedFile {
-        name: h,
-        text: files.header,
-    });
-    out.push(GeneratedFile {
-        name: src,
-        text: files.source,
-    });
 }

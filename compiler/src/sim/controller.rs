@@ -10,8 +10,8 @@
 //! to the runtime's sums, so the commands equal the unpadded controller's.
 
 use super::SimError;
-use crate::codegen::{PremiseCode, Tables};
 use crate::model::TermSpec;
+use crate::tables::{PremiseCode, Tables};
 use tsf_runtime::{premises_linear, Controller, Flags, Membership, Rule, Term};
 
 /// A padding rule's only term: premise index `usize::MAX` is out of range, degree 0.

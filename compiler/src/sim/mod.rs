@@ -21,8 +21,8 @@ pub mod trigger;
 pub use metrics::{Metrics, Trace};
 pub use scenario::{run, Outcome};
 
-use crate::codegen::Tables;
 use crate::model::TsModel;
+use crate::tables::Tables;
 use nalgebra::DMatrix;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};

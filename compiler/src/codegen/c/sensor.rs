@@ -1,22 +1,22 @@
 //! The sensor-side trigger in C99: `<name>_sensor.h` / `<name>_sensor.c`,
-//! self-contained (they do not include the controller's files).
+//! independent of the controller's files.
 //!
-//! The decision and the threshold update are the controller library's
-//! trigger functions (the same generator text, `Gen::relative_decide_e_fn`
-//! and `Gen::adaptive_update`) on a state struct holding only `last`,
-//! `has_last` and `nu`, with the weight a `static const` table. Unlike the
-//! controller library, which calls libm's `atan`, the sensor carries
-//! tsf-runtime's `math::atan` operation by operation, so a build without
-//! contraction across statements (`-ffp-contract=off`; one operation per
-//! statement already rules out contraction within an expression) gives
-//! decisions and thresholds bit-identical to `tsf_runtime::AdaptiveTrigger`.
+//! The decision and the threshold update are the runtime's
+//! (`tsf_relative_decide`, `tsf_adaptive_decide` in `tsf_runtime.c`, the
+//! functions the controller library's triggers call) on a state struct
+//! holding only `last`, `has_last` and `nu`, with the weight and the
+//! adaptive law `static const` tables. The runtime carries tsf-runtime's
+//! `math::atan` operation by operation, so a build without contraction
+//! across statements (`-ffp-contract=off`; one operation per statement
+//! already rules out contraction within an expression) gives decisions and
+//! thresholds bit-identical to `tsf_runtime::AdaptiveTrigger`.
 
-use super::{lit, AdaptiveFields, CFiles, Gen};
-use crate::codegen::rust::{law_summary, sensor_certificate, sensor_name};
-use crate::codegen::tables::{SensorLaw, SensorTables, Tables};
+use super::{flat_rows, lit, CFiles, Gen};
+use crate::codegen::header::{law_summary, marker, sensor_certificate, sensor_name};
+use crate::codegen::CodegenError;
+use crate::tables::{SensorLaw, SensorTables, Tables};
 use std::fmt::Write as _;
 use tsf_lang::spec::Precision;
-use tsf_runtime::math::{ATAN_COMP_J16, ATAN_J16, ATAN_Q};
 
 /// File names of the sensor module: `(<name>_sensor.h, <name>_sensor.c)`.
 pub fn c_sensor_file_names(t: &Tables) -> (String, String) {
@@ -26,11 +26,8 @@ pub fn c_sensor_file_names(t: &Tables) -> (String, String) {
 
 /// Generates the sensor module's header and source; errors if the design
 /// has no aperiodic trigger.
-pub fn emit_c_sensor(t: &Tables) -> Result<CFiles, String> {
-    let s = t
-        .trigger
-        .as_ref()
-        .ok_or("internal error: no aperiodic trigger: no sensor module")?;
+pub fn emit_c_sensor(t: &Tables) -> Result<CFiles, CodegenError> {
+    let s = t.trigger.as_ref().ok_or(CodegenError::NoSensor)?;
     let name = sensor_name(t);
     let g = Gen::with_prefix(
         t,
@@ -43,22 +40,10 @@ pub fn emit_c_sensor(t: &Tables) -> Result<CFiles, String> {
     })
 }
 
-/// The rows of a matrix as one flat initializer, one row per line.
-fn flat_rows(rows: &[Vec<f64>]) -> String {
-    let lines: Vec<String> = rows
-        .iter()
-        .map(|r| {
-            let items: Vec<String> = r.iter().map(|v| lit(*v)).collect();
-            format!("    {}", items.join(", "))
-        })
-        .collect();
-    lines.join(",\n")
-}
-
 /// The comment block both sensor files start with.
 fn banner(g: &Gen<'_>, s: &SensorTables, what: &str) -> String {
     let t = g.t;
-    let mut out = super::marker(&t.header);
+    let mut out = marker(&t.header);
     let _ = writeln!(
         out,
         "// {what} of the sensor-side event trigger of controller `{}` ({} states): at each",
@@ -103,8 +88,10 @@ fn sensor_header(g: &Gen<'_>, s: &SensorTables) -> String {
         out,
         r#"//
 // Semantics are those of {runtime}, operation by operation
-// (the runtime's own atan included): with contraction across statements off
-// (GCC outside ISO modes: -ffp-contract=off) decisions and nu are bit-identical.
+// (the runtime's own atan included), computed by tsf_runtime.c (written next to
+// this file: compile and link it once per image): with contraction across
+// statements off (GCC outside ISO modes: -ffp-contract=off) decisions and nu are
+// bit-identical.
 // The first sample is always transmitted; a comparison involving NaN transmits.
 
 #ifndef {u}H
@@ -200,26 +187,10 @@ const {real} *{p}last(const {p}t *t);
 }
 
 fn sensor_source(g: &Gen<'_>, s: &SensorTables) -> String {
-    let t = g.t;
     let (p, u) = (&g.p, &g.u);
     let real = format!("{u}REAL");
     let mut out = banner(g, s, "C99 implementation");
-    let adaptive = matches!(s.law, SensorLaw::Adaptive(..));
-    let _ = write!(
-        out,
-        r#"
-#include "{name}.h"
-
-#include <math.h>
-
-#define {u}C(v) (({real})(v))
-"#,
-        name = sensor_name(t)
-    );
-    if adaptive {
-        let _ = writeln!(out, "#define {u}FRAC_2_PI {u}C(0.6366197723675814)");
-    }
-    out.push('\n');
+    out.push_str(&g.prelude(&sensor_name(g.t)));
     if s.law != SensorLaw::EverySample {
         let _ = write!(
             out,
@@ -227,19 +198,11 @@ fn sensor_source(g: &Gen<'_>, s: &SensorTables) -> String {
             flat_rows(&s.weight)
         );
     }
-    if adaptive {
-        out.push_str(&atan(g));
-        out.push_str(&g.libm_wrapper("sqrt"));
-    }
-    if s.law != SensorLaw::EverySample {
-        out.push_str(&g.dot_fn());
-    }
-    if adaptive {
-        out.push_str(&g.norm_fn());
-    }
-    if s.law != SensorLaw::EverySample {
-        out.push_str(&g.quad_form_fn());
-        out.push_str(&g.relative_decide_e_fn(&format!("{p}t"), &format!("{p}weight")));
+    if let SensorLaw::Adaptive(..) = s.law {
+        let _ = write!(
+            out,
+            "/* The adaptive law, nu(t_k) in [NU_MIN, NU_MAX]. */\nstatic const {u}RT(tsf_adaptive_law) {p}law = {{\n    {u}C({u}MU1),\n    {u}C({u}MU2),\n    {u}C({u}MU3),\n    {u}C({u}NU_MIN),\n    {u}C({u}NU_MAX)\n}};\n\n"
+        );
     }
     let _ = write!(
         out,
@@ -254,8 +217,17 @@ fn sensor_source(g: &Gen<'_>, s: &SensorTables) -> String {
 
 "#
     );
-    let body = match s.law {
-        SensorLaw::EverySample => format!(
+    let decide = match s.law {
+        SensorLaw::EverySample => None,
+        SensorLaw::Relative => Some(format!(
+            "{u}RT(tsf_relative_decide)({p}weight, t->nu, t->last, &t->has_last, x, e, {u}N)"
+        )),
+        SensorLaw::Adaptive(..) => Some(format!(
+            "{u}RT(tsf_adaptive_decide)(&{p}law, {p}weight, &t->nu, t->last, &t->has_last, x, e, {u}N)"
+        )),
+    };
+    let body = match decide {
+        None => format!(
             r#"    int i;
     for (i = 0; i < {u}N; i++) {{
         t->last[i] = x[i];
@@ -263,38 +235,14 @@ fn sensor_source(g: &Gen<'_>, s: &SensorTables) -> String {
     t->has_last = 1;
 "#
         ),
-        SensorLaw::Relative => format!(
+        Some(call) => format!(
             r#"    {real} e[{u}N];
     int i;
-    if (!{p}relative_decide_e(t, x, e)) {{
+    if (!{call}) {{
         return 0;
     }}
 "#
         ),
-        SensorLaw::Adaptive(..) => {
-            let update = g.adaptive_update(
-                &AdaptiveFields {
-                    nu: "t->nu".into(),
-                    mu1: format!("{u}C({u}MU1)"),
-                    mu2: format!("{u}C({u}MU2)"),
-                    mu3: format!("{u}C({u}MU3)"),
-                    nu_min: format!("{u}C({u}NU_MIN)"),
-                    nu_max: Some(format!("{u}C({u}NU_MAX)")),
-                },
-                "        ",
-            );
-            format!(
-                r#"    {real} e[{u}N];
-    const int first = !t->has_last;
-    int i;
-    if (!{p}relative_decide_e(t, x, e)) {{
-        return 0;
-    }}
-    if (!first) {{
-{update}    }}
-"#
-            )
-        }
     };
     let _ = write!(
         out,
@@ -315,112 +263,4 @@ const {real} *{p}last(const {p}t *t) {{
 "#
     );
     out
-}
-
-/// tsf-runtime's `math::atan` in C (binary64, one operation per statement)
-/// and `name_atan`, which rounds it once to the real type (as `atanf`).
-fn atan(g: &Gen<'_>) -> String {
-    let (p, u) = (&g.p, &g.u);
-    let real = format!("{u}REAL");
-    let pairs = |tab: &[(f64, f64)]| -> String {
-        let items: Vec<String> = tab
-            .iter()
-            .map(|(hi, lo)| format!("    {{{}, {}}}", lit(*hi), lit(*lo)))
-            .collect();
-        items.join(",\n")
-    };
-    let q: Vec<String> = ATAN_Q.iter().map(|v| format!("    {}", lit(*v))).collect();
-    format!(
-        r#"/* tsf-runtime's math::atan, operation by operation (binary64). */
-
-/* (atan(j/16) high, low), j = 0..39. */
-static const double {p}atan_j16[40][2] = {{
-{j16}
-}};
-
-/* (pi/2 - atan(j/16)) high, low, j = 0..7. */
-static const double {p}atan_comp_j16[8][2] = {{
-{comp}
-}};
-
-/* Taylor coefficients of atan(t)/t - 1 = s Q(s), s = t^2: -1/3, 1/5, ..., -1/23. */
-static const double {p}atan_q[11] = {{
-{q}
-}};
-
-/* atan(t) - t for |t| <= 1/8: t (s Q(s)), Horner innermost first. */
-static double {p}atan_tail(double t) {{
-    const double s = t * t;
-    double acc = 0.0;
-    int k;
-    for (k = 10; k >= 0; k--) {{
-        const double m = s * acc;
-        acc = {p}atan_q[k] + m;
-    }}
-    {{
-        const double sq = s * acc;
-        return t * sq;
-    }}
-}}
-
-/* Arc tangent on a = |x| (sign restored at the end): a < 2^-27 -> x;
-   a > 2^66 -> pi/2; a < 1/8 -> a + tail(a); a <= 39/16 -> j = trunc(16a + 1/2),
-   c = j/16, t = (a - c)/(1 + a c), atan(j/16) + t + tail(t); else
-   j = trunc(16/a + 1/2), t = (1 - a c)/(a + c), pi/2 - atan(j/16) - (t + tail(t)). */
-static double {p}atan_f64(double x) {{
-    double a;
-    double r;
-    if (isnan(x)) {{
-        return x;
-    }}
-    a = fabs(x);
-    if (a < 7.450580596923828e-09) {{
-        return x;
-    }}
-    if (a > 7.378697629483821e19) {{
-        r = {p}atan_comp_j16[0][0] + {p}atan_comp_j16[0][1];
-    }} else if (a < 0.125) {{
-        const double tl = {p}atan_tail(a);
-        r = a + tl;
-    }} else if (a <= 2.4375) {{
-        const double a16 = a * 16.0;
-        const int j = (int)(a16 + 0.5);
-        const double c = (double)j * 0.0625;
-        const double num = a - c;
-        const double ac = a * c;
-        const double den = 1.0 + ac;
-        const double t = num / den;
-        const double tl = {p}atan_tail(t);
-        const double tt = t + tl;
-        const double hi = j >= 0 && j < 40 ? {p}atan_j16[j][0] : 0.0;
-        const double lo = j >= 0 && j < 40 ? {p}atan_j16[j][1] : 0.0;
-        const double lt = lo + tt;
-        r = hi + lt;
-    }} else {{
-        const double q16 = 16.0 / a;
-        const int j = (int)(q16 + 0.5);
-        const double c = (double)j * 0.0625;
-        const double ac = a * c;
-        const double num = 1.0 - ac;
-        const double den = a + c;
-        const double t = num / den;
-        const double tl = {p}atan_tail(t);
-        const double tt = t + tl;
-        const double hi = j >= 0 && j < 8 ? {p}atan_comp_j16[j][0] : 0.0;
-        const double lo = j >= 0 && j < 8 ? {p}atan_comp_j16[j][1] : 0.0;
-        const double lt = lo - tt;
-        r = hi + lt;
-    }}
-    return signbit(x) ? -r : r;
-}}
-
-static {real} {p}atan({real} v) {{
-    return {u}C({p}atan_f64((double)v));
-}}
-
-"#,
-        j16 = pairs(&ATAN_J16),
-        comp = pairs(&ATAN_COMP_J16),
-        q = q.join(",\n"),
-    )
 }

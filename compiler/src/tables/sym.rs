@@ -23,7 +23,8 @@ pub enum Func {
     Atan,
     /// |v|
     Abs,
-    /// sin(v)/v with 1 at 0
+    /// sin(v)/v with 1 at 0 (the runtime's `math::sinc`, with its
+    /// small-argument branch)
     Sinc,
 }
 
@@ -49,13 +50,7 @@ impl Func {
             Func::Sqrt => v.sqrt(),
             Func::Atan => v.atan(),
             Func::Abs => v.abs(),
-            Func::Sinc => {
-                if v.abs() < 1e-8 {
-                    1.0 - v * v / 6.0
-                } else {
-                    v.sin() / v
-                }
-            }
+            Func::Sinc => tsf_runtime::math::sinc(v),
         }
     }
 }
@@ -232,8 +227,29 @@ impl SymMat {
     }
 }
 
-/// Why an expression cannot be generated.
-pub type SymError = String;
+/// Why an expression cannot be generated (a sentence for the user).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SymError(String);
+
+impl std::fmt::Display for SymError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SymError {}
+
+impl From<String> for SymError {
+    fn from(s: String) -> Self {
+        SymError(s)
+    }
+}
+
+impl From<&str> for SymError {
+    fn from(s: &str) -> Self {
+        SymError(s.to_string())
+    }
+}
 
 struct Ctx<'a> {
     spec: &'a Spec,
@@ -426,7 +442,7 @@ impl Ctx<'_> {
         let one = |a: &[SymMat]| -> Result<SymMat, SymError> {
             a.first()
                 .cloned()
-                .ok_or_else(|| format!("`{name}` needs an argument"))
+                .ok_or_else(|| format!("`{name}` needs an argument").into())
         };
         let func = match name {
             "sin" => Some(Func::Sin),
@@ -490,7 +506,7 @@ impl Ctx<'_> {
                 }
                 .eval(&f.body)
             }
-            _ => Err(format!("`{name}` nests too deeply")),
+            _ => Err(format!("`{name}` nests too deeply").into()),
         }
     }
 }

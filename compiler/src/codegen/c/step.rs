@@ -1,0 +1,124 @@
+//! The controller's step, accessors and trigger state machines in
+//! `<name>.c`: thin wrappers that hand this controller's tables and
+//! dimensions to the runtime (`tsf_runtime.c`), which does the arithmetic.
+
+use super::Gen;
+
+impl Gen<'_> {
+    /// Init, step, accessors.
+    pub(super) fn controller(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        let pd = self.pd;
+        format!(
+            r#"void {p}init({p}t *s) {{
+    int i;
+    for (i = 0; i < {u}R; i++) {{
+        s->h[i] = {u}C(0);
+    }}
+    s->flags = 0;
+}}
+
+void {p}step_with_premises({p}t *s, const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
+    s->flags = {u}RT(tsf_step_with_premises)(&{p}tables, x, z, s->h, u);
+}}
+
+void {p}step({p}t *s, const {real} x[{u}N], {real} u[{u}M]) {{
+    {real} z[{pd}];
+    {p}premises(x, z);
+    {p}step_with_premises(s, x, z, u);
+}}
+
+uint8_t {p}flags(const {p}t *s) {{
+    return s->flags;
+}}
+
+int {p}is_fault(const {p}t *s) {{
+    return (s->flags & ({u}FLAG_STATE_NONFINITE | {u}FLAG_PREMISE_NONFINITE)) != 0;
+}}
+
+int {p}no_rule_fired(const {p}t *s) {{
+    return (s->flags & {u}FLAG_NO_RULE_FIRED) != 0;
+}}
+
+int {p}saturated(const {p}t *s) {{
+    return (s->flags & {u}FLAG_SATURATED) != 0;
+}}
+
+const {real} *{p}strengths(const {p}t *s) {{
+    return s->h;
+}}
+
+"#
+        )
+    }
+
+    /// The periodic, relative, adaptive and mixed triggers (tsf-runtime's
+    /// `trigger` module) on this controller's state dimension.
+    pub(super) fn triggers(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        format!(
+            r#"void {p}periodic_init({p}periodic_t *t, uint32_t every) {{
+    t->every = every;
+    t->count = 0;
+}}
+
+int {p}periodic_decide({p}periodic_t *t) {{
+    return tsf_periodic_decide(&t->count, t->every);
+}}
+
+void {p}relative_init({p}relative_t *t, const {real} *weight, {real} nu) {{
+    int k;
+    for (k = 0; k < {u}N * {u}N; k++) {{
+        t->weight[k] = weight[k];
+    }}
+    for (k = 0; k < {u}N; k++) {{
+        t->last[k] = {u}C(0);
+    }}
+    t->nu = nu;
+    t->has_last = 0;
+}}
+
+int {p}relative_decide({p}relative_t *t, const {real} x[{u}N]) {{
+    {real} e[{u}N];
+    return {u}RT(tsf_relative_decide)(t->weight, t->nu, t->last, &t->has_last, x, e, {u}N);
+}}
+
+void {p}adaptive_init({p}adaptive_t *t, const {real} *weight, {real} nu_min, {real} mu1, {real} mu2, {real} mu3) {{
+    {p}relative_init(&t->inner, weight, nu_min);
+    t->mu1 = mu1;
+    t->mu2 = mu2;
+    t->mu3 = mu3;
+    t->nu_min = nu_min;
+}}
+
+int {p}adaptive_decide({p}adaptive_t *t, const {real} x[{u}N]) {{
+    const {u}RT(tsf_adaptive_law) law = {{t->mu1, t->mu2, t->mu3, t->nu_min, TSF_REAL_MAX({real})}};
+    {real} e[{u}N];
+    return {u}RT(tsf_adaptive_decide)(&law, t->inner.weight, &t->inner.nu, t->inner.last,
+        &t->inner.has_last, x, e, {u}N);
+}}
+
+{real} {p}adaptive_nu(const {p}adaptive_t *t) {{
+    return t->inner.nu;
+}}
+
+void {p}mixed_init({p}mixed_t *t, {real} beta, {real} rho) {{
+    int k;
+    t->beta = beta;
+    t->rho = rho;
+    for (k = 0; k < {u}N; k++) {{
+        t->last[k] = {u}C(0);
+    }}
+    t->has_last = 0;
+}}
+
+int {p}mixed_decide({p}mixed_t *t, const {real} sigma[{u}N]) {{
+    {real} d[{u}N];
+    return {u}RT(tsf_mixed_decide)(t->beta, t->rho, t->last, &t->has_last, sigma, d, {u}N);
+}}
+"#
+        )
+    }
+}

@@ -1,0 +1,266 @@
+//! The Rust generator: a `no_std` module built with proc-macro2 + quote and
+//! formatted with prettyplease. It declares the tables as `static` data for
+//! `tsf_runtime::Controller` and wraps them in a small `Controller` struct.
+//! The generated file is meant to be `include!`d (no inner attributes).
+//!
+//! `tokens` builds literals, arrays and premise expressions; `sensor`
+//! the sensor-side module of an aperiodic event trigger.
+
+mod sensor;
+mod tokens;
+
+pub use sensor::emit_rust_sensor;
+
+use super::header::{marker, sensor_name};
+use super::{Backend, CodegenError, GeneratedFile};
+use crate::model::TermSpec;
+use crate::tables::{PremiseCode, Tables};
+use proc_macro2::{Literal, TokenStream};
+use quote::{format_ident, quote};
+use tokens::{array, float, matrix, membership, real_ty, sym};
+use tsf_lang::spec::Emit;
+
+/// The Rust backend: `<name>.rs`, and `<name>_sensor.rs` for an aperiodic
+/// event trigger.
+#[derive(Debug, Clone, Copy)]
+pub struct RustBackend;
+
+impl Backend for RustBackend {
+    fn target(&self) -> Emit {
+        Emit::Rust
+    }
+
+    fn files(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        let mut out = vec![GeneratedFile {
+            name: format!("{}.rs", t.name),
+            text: emit_rust(t)?,
+        }];
+        if t.trigger.is_some() {
+            out.push(GeneratedFile {
+                name: format!("{}.rs", sensor_name(t)),
+                text: emit_rust_sensor(t)?,
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// Formats the generated tokens (an error names a generator bug).
+fn unparse(tokens: TokenStream) -> Result<String, CodegenError> {
+    let file: syn::File = syn::parse2(tokens).map_err(|e| CodegenError::Unparsable {
+        language: "Rust",
+        reason: e.to_string(),
+    })?;
+    Ok(prettyplease::unparse(&file))
+}
+
+/// The generated module's text.
+pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
+    let prec = t.precision;
+    let ty = real_ty(prec);
+    let (n, m, p, r) = (
+        Literal::usize_unsuffixed(t.n),
+        Literal::usize_unsuffixed(t.m),
+        Literal::usize_unsuffixed(t.p),
+        Literal::usize_unsuffixed(t.r),
+    );
+    // Rule premises: one static term array per rule (and point arrays for `about`).
+    let mut statics = Vec::new();
+    let mut rule_refs = Vec::new();
+    for (ri, terms) in t.terms.iter().enumerate() {
+        let terms_ident = format_ident!("TERMS_{}", ri + 1);
+        let mut items = Vec::new();
+        for (ti, term) in terms.iter().enumerate() {
+            match term {
+                TermSpec::Is { var, set } => {
+                    let var = Literal::usize_unsuffixed(*var);
+                    let set = membership(set, prec);
+                    items.push(quote!(Term::Is { var: #var, set: #set }));
+                }
+                TermSpec::About {
+                    first,
+                    point,
+                    sigma,
+                } => {
+                    let pt = format_ident!("POINT_{}_{}", ri + 1, ti + 1);
+                    let len = Literal::usize_unsuffixed(point.len());
+                    let vals = array(point, prec);
+                    statics.push(quote! {
+                        #[allow(clippy::approx_constant, clippy::excessive_precision)]
+                        static #pt: [#ty; #len] = #vals;
+                    });
+                    let first = Literal::usize_unsuffixed(*first);
+                    let sigma = float(*sigma, prec);
+                    items.push(quote!(Term::About { first: #first, point: &#pt, sigma: #sigma }));
+                }
+            }
+        }
+        let count = Literal::usize_unsuffixed(items.len());
+        let doc = format!(
+            "Premise of rule {}.",
+            t.rule_names.get(ri).map_or("?", String::as_str)
+        );
+        statics.push(quote! {
+            #[doc = #doc]
+            #[allow(clippy::approx_constant, clippy::excessive_precision)]
+            static #terms_ident: [Term<'static, #ty>; #count] = [#(#items),*];
+        });
+        rule_refs.push(quote!(Rule::new(&#terms_ident)));
+    }
+    let (premise_map, step_body, premise_fn) = match &t.premise {
+        PremiseCode::Linear(l) => (matrix(l, prec), quote!(TABLE.step(x)), quote!()),
+        PremiseCode::Exprs(exprs) => {
+            let zero_rows: Vec<Vec<f64>> = (0..t.p).map(|_| vec![0.0; t.n]).collect();
+            let items = exprs.iter().map(|e| sym(e, prec));
+            (
+                matrix(&zero_rows, prec),
+                quote!(TABLE.step_with_premises(x, &premises(x))),
+                quote! {
+                    /// The premise variables z as functions of the state (from the spec).
+                    #[allow(clippy::approx_constant, clippy::excessive_precision)]
+                    pub fn premises(x: &[#ty; N]) -> [#ty; P] {
+                        [#(#items),*]
+                    }
+                },
+            )
+        }
+    };
+    let centres = matrix(&t.centres, prec);
+    let gains = {
+        let items = t.gains.iter().map(|g| matrix(g, prec));
+        quote!([#(#items),*])
+    };
+    let u_max = array(&t.u_max, prec);
+    let state_doc = format!("State order: {}.", t.state_names.join(", "));
+    let input_doc = format!("Input order: {}.", t.input_names.join(", "));
+    let uses_real = matches!(t.premise, PremiseCode::Exprs(_));
+    let uses_membership = t
+        .terms
+        .iter()
+        .flatten()
+        .any(|x| matches!(x, TermSpec::Is { .. }));
+    let mut imports = vec![quote!(Flags)];
+    if uses_membership {
+        imports.push(quote!(Membership));
+    }
+    if uses_real {
+        imports.push(quote!(Real));
+    }
+    imports.push(quote!(Rule));
+    imports.push(quote!(Term));
+    let tokens = quote! {
+        use tsf_runtime::{#(#imports),*};
+
+        /// Number of states.
+        pub const N: usize = #n;
+        /// Number of inputs.
+        pub const M: usize = #m;
+        /// Number of premise variables.
+        pub const P: usize = #p;
+        /// Number of rules.
+        pub const R: usize = #r;
+
+        #(#statics)*
+
+        /// The controller's tables, certified by tsfc.
+        #[allow(clippy::approx_constant, clippy::excessive_precision, clippy::unreadable_literal)]
+        pub static TABLE: tsf_runtime::Controller<'static, #ty, N, M, P, R> = tsf_runtime::Controller {
+            premise_map: #premise_map,
+            rules: [#(#rule_refs),*],
+            centres: #centres,
+            gains: #gains,
+            u_max: #u_max,
+        };
+
+        #premise_fn
+
+        /// The T-S PDC controller: u = sat(sum_j h_j(z) F_j x).
+        #[doc = #state_doc]
+        #[doc = #input_doc]
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub struct Controller {
+            flags: Flags,
+            strengths: [#ty; R],
+        }
+
+        impl Controller {
+            /// Number of states.
+            pub const N: usize = N;
+            /// Number of inputs.
+            pub const M: usize = M;
+            /// Number of rules.
+            pub const R: usize = R;
+
+            /// A controller with no step taken yet.
+            pub const fn new() -> Self {
+                Controller { flags: Flags::NONE, strengths: [0.0; R] }
+            }
+
+            /// One control update: the saturated command for state `x`.
+            /// Never panics; NaN or infinite states give a zero command and a fault flag.
+            pub fn step(&mut self, x: &[#ty; N]) -> [#ty; M] {
+                let s = #step_body;
+                self.flags = s.flags;
+                self.strengths = s.h;
+                s.u
+            }
+
+            /// Flags of the last step.
+            pub fn flags(&self) -> Flags {
+                self.flags
+            }
+
+            /// Whether the last step saw a NaN or infinite state (command forced to zero).
+            pub fn fault(&self) -> bool {
+                self.flags.is_fault()
+            }
+
+            /// Whether no rule fired in the last step (nearest rule's gain used).
+            pub fn no_rule_fired(&self) -> bool {
+                self.flags.contains(Flags::NO_RULE_FIRED)
+            }
+
+            /// Whether a channel was clipped in the last step.
+            pub fn saturated(&self) -> bool {
+                self.flags.contains(Flags::SATURATED)
+            }
+
+            /// Normalised firing strengths of the last step.
+            pub fn strengths(&self) -> &[#ty; R] {
+                &self.strengths
+            }
+        }
+
+        impl Default for Controller {
+            fn default() -> Self {
+                Self::new()
+            }
+        }
+    };
+    let body = unparse(tokens)?;
+    Ok(format!("{}{body}", header(t)))
+}
+
+/// The header comment (no timestamps, no absolute paths).
+fn header(t: &Tables) -> String {
+    let h = &t.header;
+    let mut s = marker(h);
+    s.push_str(&format!(
+        "// Controller `{}`: {} states, {} inputs, {} rules, {} premise variables; relaxation {}.\n",
+        t.name, t.n, t.m, t.r, t.p, h.relaxation
+    ));
+    if t.trigger.is_some() {
+        s.push_str(&format!(
+            "// Controller-side role of the event-triggered loop: `step` is fed the received x(t_k),\n// the last state transmitted by the sensor module `{}`; memberships\n// and feedback are evaluated at x(t_k), and the command is held between transmissions.\n",
+            sensor_name(t)
+        ));
+    }
+    for (k, v) in &h.objectives {
+        s.push_str(&format!("// {k} = {v}\n"));
+    }
+    s.push_str(&format!(
+        "// certificate: every LMI holds; minimum margin {:.3e}\n\n",
+        h.min_margin
+    ));
+    s
+}

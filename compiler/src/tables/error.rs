@@ -1,0 +1,73 @@
+//! Why the tables of a certified design cannot be built.
+
+use super::sym::SymError;
+use std::fmt;
+
+/// What keeps a certified design from becoming tables (and so code).
+#[derive(Debug, Clone, PartialEq)]
+pub enum TablesError {
+    /// A premise expression has no scalar form generated code can evaluate.
+    Premise {
+        /// Premise name.
+        name: String,
+        /// Why it cannot be generated.
+        reason: SymError,
+    },
+    /// A premise names a component its expression does not have.
+    PremiseComponent {
+        /// Premise name.
+        name: String,
+        /// The missing component.
+        component: usize,
+    },
+    /// The premise expressions and the model disagree on the premise count.
+    PremiseCount {
+        /// Scalar entries of the premise expressions.
+        entries: usize,
+        /// Premise components of the model.
+        components: usize,
+    },
+    /// `weight = synthesize` but the design carries no synthesized weight.
+    TriggerWeightMissing,
+    /// The trigger weight is not N x N.
+    TriggerWeightShape {
+        /// Rows of the weight.
+        rows: usize,
+        /// Columns of the weight.
+        cols: usize,
+        /// States.
+        n: usize,
+    },
+    /// The trigger weight has a NaN or infinite entry.
+    TriggerWeightNonFinite,
+}
+
+impl fmt::Display for TablesError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TablesError::Premise { name, reason } => write!(f, "premise `{name}`: {reason}"),
+            TablesError::PremiseComponent { name, component } => {
+                write!(f, "premise `{name}`: component {component} missing")
+            }
+            TablesError::PremiseCount {
+                entries,
+                components,
+            } => write!(
+                f,
+                "internal error: {entries} premise entries for {components} components"
+            ),
+            TablesError::TriggerWeightMissing => f.write_str(
+                "the trigger weight is `synthesize` but the design has no synthesized trigger weight: no sensor module is generated",
+            ),
+            TablesError::TriggerWeightShape { rows, cols, n } => write!(
+                f,
+                "the trigger weight is {rows}x{cols}, expected {n}x{n}"
+            ),
+            TablesError::TriggerWeightNonFinite => {
+                f.write_str("the trigger weight has a non-finite entry")
+            }
+        }
+    }
+}
+
+impl std::error::Error for TablesError {}

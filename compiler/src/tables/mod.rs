@@ -1,0 +1,193 @@
+//! The plain data of a certified design that every consumer of the gains
+//! reads: dimensions, premise code, rule premises, rule centres, gain tables,
+//! saturation levels, header facts and the sensor-side trigger. The code
+//! generators render it ([`crate::codegen`]); the simulator runs it in closed
+//! loop ([`crate::sim`]).
+
+mod error;
+mod sensor;
+pub mod sym;
+
+pub use error::TablesError;
+pub use sensor::{SensorLaw, SensorTables};
+
+use crate::certify::Certificate;
+use crate::model::{TermSpec, TsModel};
+use crate::synth::{Achieved, Design};
+use sym::{premise_entries, Func, Sym};
+use tsf_lang::spec::Precision;
+
+/// How generated code computes the premise vector z from x.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PremiseCode {
+    /// z = L x (P rows of N): evaluated by the runtime.
+    Linear(Vec<Vec<f64>>),
+    /// One scalar expression of x per premise component.
+    Exprs(Vec<Sym>),
+}
+
+/// Facts for the generated file's header comment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Header {
+    /// tsfc version.
+    pub tsfc_version: String,
+    /// Spec path as given (relative paths keep outputs reproducible).
+    pub spec_path: String,
+    /// SHA-256 of the spec.
+    pub spec_sha256: String,
+    /// Achieved objectives, formatted.
+    pub objectives: Vec<(String, String)>,
+    /// Certificate's minimum margin.
+    pub min_margin: f64,
+    /// Relaxation used.
+    pub relaxation: String,
+}
+
+/// Everything a generator needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tables {
+    /// Controller name (a Rust and C identifier).
+    pub name: String,
+    /// Header facts.
+    pub header: Header,
+    /// States.
+    pub n: usize,
+    /// Inputs.
+    pub m: usize,
+    /// Premise components.
+    pub p: usize,
+    /// Rules.
+    pub r: usize,
+    /// Names of the state components, in order (`w[0]`, ..., `theta`).
+    pub state_names: Vec<String>,
+    /// Names of the input components.
+    pub input_names: Vec<String>,
+    /// Rule names.
+    pub rule_names: Vec<String>,
+    /// Premise computation.
+    pub premise: PremiseCode,
+    /// Rule premises.
+    pub terms: Vec<Vec<TermSpec>>,
+    /// Rule centres (R x P).
+    pub centres: Vec<Vec<f64>>,
+    /// Gains F_j as rows (R x M x N).
+    pub gains: Vec<Vec<Vec<f64>>>,
+    /// Saturation levels (infinite when a channel is not limited).
+    pub u_max: Vec<f64>,
+    /// Floating-point type of generated code.
+    pub precision: Precision,
+    /// The sensor-side event trigger (`trigger aperiodic { .. }` only): the
+    /// networked loop is generated as a sensor module (this trigger) and the
+    /// controller module (fed the transmitted state x(t_k)).
+    pub trigger: Option<SensorTables>,
+}
+
+fn component_names(signals: &[tsf_lang::spec::Signal]) -> Vec<String> {
+    signals.iter().flat_map(|s| s.component_names()).collect()
+}
+
+/// The achieved objectives named in generated headers, `(name, value)` with
+/// the value formatted.
+fn achieved_objectives(a: &Achieved) -> Vec<(String, String)> {
+    a.bounds()
+        .map(|(q, v)| (q.key().to_string(), format!("{v:.6e}")))
+        .collect()
+}
+
+/// The premise code of the model: `z = L x` when every premise component is
+/// linear in x, else one scalar expression per component.
+fn premise_code(model: &TsModel) -> Result<PremiseCode, TablesError> {
+    let spec = &model.spec;
+    let mut entries = Vec::new();
+    for p in &spec.premises {
+        let all = premise_entries(spec, &p.expr).map_err(|e| TablesError::Premise {
+            name: p.name.clone(),
+            reason: e,
+        })?;
+        match p.component {
+            Some(k) => {
+                entries.push(
+                    all.get(k)
+                        .cloned()
+                        .ok_or_else(|| TablesError::PremiseComponent {
+                            name: p.name.clone(),
+                            component: k,
+                        })?,
+                )
+            }
+            None => entries.extend(all),
+        }
+    }
+    if entries.len() != model.premises.len() {
+        return Err(TablesError::PremiseCount {
+            entries: entries.len(),
+            components: model.premises.len(),
+        });
+    }
+    let linear: Option<Vec<Vec<f64>>> = entries.iter().map(|s| s.linear(model.n)).collect();
+    Ok(match linear {
+        Some(l) => PremiseCode::Linear(l),
+        None => PremiseCode::Exprs(entries),
+    })
+}
+
+/// Builds the tables of a certified design. Errors say what cannot be generated.
+pub fn tables(
+    model: &TsModel,
+    design: &Design,
+    cert: &Certificate,
+    spec_path: &str,
+    spec_sha256: &str,
+) -> Result<Tables, TablesError> {
+    let spec = &model.spec;
+    let premise = premise_code(model)?;
+    Ok(Tables {
+        name: spec.controller.node.clone(),
+        header: Header {
+            tsfc_version: env!("CARGO_PKG_VERSION").to_string(),
+            spec_path: spec_path.to_string(),
+            spec_sha256: spec_sha256.to_string(),
+            objectives: achieved_objectives(&design.achieved),
+            min_margin: cert.min_margin,
+            relaxation: spec.relaxation.node.to_string(),
+        },
+        n: model.n,
+        m: model.m,
+        p: model.premises.len(),
+        r: model.r(),
+        state_names: component_names(&spec.states),
+        input_names: component_names(&spec.inputs),
+        rule_names: model.rules.iter().map(|r| r.name.clone()).collect(),
+        premise,
+        terms: model.terms.clone(),
+        centres: model.centers.clone(),
+        gains: design
+            .gains
+            .iter()
+            .map(|f| {
+                (0..f.nrows())
+                    .map(|i| f.row(i).iter().copied().collect())
+                    .collect()
+            })
+            .collect(),
+        u_max: spec
+            .saturation
+            .clone()
+            .unwrap_or_else(|| vec![f64::INFINITY; model.m]),
+        precision: spec.precision,
+        trigger: sensor::sensor_tables(model, design)?,
+    })
+}
+
+impl Tables {
+    /// The scalar functions the premise code calls.
+    pub fn functions(&self) -> Vec<Func> {
+        let mut out = Vec::new();
+        if let PremiseCode::Exprs(e) = &self.premise {
+            for s in e {
+                s.functions(&mut out);
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,589 @@
+/* tsf_runtime.c: the C99 runtime of the controllers tsfc generates (see
+ * tsf_runtime.h). Compile it once per image, with the flags of the generated
+ * files.
+ *
+ * Each function is written once over a real type TSF_R and instantiated for
+ * double and for float: the second half of this file is included twice by the
+ * first (with TSF_RUNTIME_INSTANCE defined), so keep the file name. Every
+ * operation is the Rust runtime's, in its order, one product per statement.
+ */
+
+#ifndef TSF_RUNTIME_INSTANCE
+
+#include "tsf_runtime.h"
+
+#include <math.h>
+
+/* ------------------------------------------------- binary64 arc tangent */
+
+/* tsf-runtime's math::atan, operation by operation (binary64). */
+
+/* (atan(j/16) high, low), j = 0..39. */
+static const double tsf_atan_j16[40][2] = {
+    {0.0, 0.0},
+    {0.06241880999595735, -1.5490756308295046e-18},
+    {0.12435499454676144, -3.1253241424539383e-18},
+    {0.18534794999569476, 4.180692268843079e-18},
+    {0.24497866312686414, 1.0698755618734451e-17},
+    {0.3028848683749714, -1.1010827903001369e-17},
+    {0.35877067027057225, -2.4623815582638635e-17},
+    {0.4124104415973873, -1.587652227770689e-17},
+    {0.4636476090008061, 2.2698777452961687e-17},
+    {0.5123894603107377, -2.5462781472855804e-17},
+    {0.5585993153435624, -5.4556305485916264e-18},
+    {0.6022873461349642, 2.950430737228402e-17},
+    {0.6435011087932844, 1.5834785051444286e-17},
+    {0.6823165548747481, 6.943223671560008e-18},
+    {0.7188299996216245, -2.1478388444456983e-17},
+    {0.7531512809621944, -2.4256934659182068e-17},
+    {0.7853981633974483, 3.061616997868383e-17},
+    {0.8156919233162234, -1.071456562778743e-17},
+    {0.844153986113171, -4.841337011934917e-17},
+    {0.870903457075653, -2.269823590747287e-17},
+    {0.8960553845713439, 2.923876285774305e-17},
+    {0.9197196053504169, -4.057439412852768e-17},
+    {0.9420000403794636, 5.4608374858466876e-17},
+    {0.9629943306809362, -3.9866605952107524e-18},
+    {0.982793723247329, 1.3903311031230998e-17},
+    {1.0014831356942346, 9.438308023545392e-17},
+    {1.0191413442663497, 1.0004018869366799e-17},
+    {1.0358412530088001, 3.194313981784504e-17},
+    {1.0516502125483738, -9.650564731467514e-17},
+    {1.0666303653157436, -5.956589637160375e-17},
+    {1.0808390005411683, -1.5676322511359073e-17},
+    {1.09432890732119, -5.490676155022364e-18},
+    {1.1071487177940904, 9.40447137356638e-17},
+    {1.1193432352423422, 6.954284199374601e-17},
+    {1.1309537439791604, 7.123833804538446e-17},
+    {1.1420182993488803, -9.642430524429942e-17},
+    {1.1525719972156676, -9.159738508900379e-17},
+    {1.1626472230398073, 6.255046986097143e-17},
+    {1.1722738811284763, 8.385188614028674e-17},
+    {1.1814796049617557, 1.511867738554561e-17}
+};
+
+/* (pi/2 - atan(j/16)) high, low, j = 0..7. */
+static const double tsf_atan_comp_j16[8][2] = {
+    {1.5707963267948966, 6.123233995736766e-17},
+    {1.5083775167989393, -6.6075234508751206e-18},
+    {1.446441332248135, 9.211323971545052e-17},
+    {1.3854483767992019, 1.540496457266753e-18},
+    {1.3258176636680326, -8.824429373951136e-17},
+    {1.2679114584199251, 7.224316786036903e-17},
+    {1.2120256565243244, 3.034500430874847e-17},
+    {1.1583858851975093, 2.1597711003816724e-17}
+};
+
+/* Taylor coefficients of atan(t)/t - 1 = s Q(s), s = t^2: -1/3, 1/5, ..., -1/23. */
+static const double tsf_atan_q[11] = {
+    -0.3333333333333333,
+    0.2,
+    -0.14285714285714285,
+    0.1111111111111111,
+    -0.09090909090909091,
+    0.07692307692307693,
+    -0.06666666666666667,
+    0.058823529411764705,
+    -0.05263157894736842,
+    0.047619047619047616,
+    -0.043478260869565216
+};
+
+/* atan(t) - t for |t| <= 1/8: t (s Q(s)), Horner innermost first. */
+static double tsf_atan_tail(double t) {
+    const double s = t * t;
+    double acc = 0.0;
+    int k;
+    for (k = 10; k >= 0; k--) {
+        const double m = s * acc;
+        acc = tsf_atan_q[k] + m;
+    }
+    {
+        const double sq = s * acc;
+        return t * sq;
+    }
+}
+
+/* Arc tangent on a = |x| (sign restored at the end): a < 2^-27 -> x;
+   a > 2^66 -> pi/2; a < 1/8 -> a + tail(a); a <= 39/16 -> j = trunc(16a + 1/2),
+   c = j/16, t = (a - c)/(1 + a c), atan(j/16) + t + tail(t); else
+   j = trunc(16/a + 1/2), t = (1 - a c)/(a + c), pi/2 - atan(j/16) - (t + tail(t)). */
+static double tsf_atan_f64(double x) {
+    double a;
+    double r;
+    if (isnan(x)) {
+        return x;
+    }
+    a = fabs(x);
+    if (a < 7.450580596923828e-09) {
+        return x;
+    }
+    if (a > 7.378697629483821e19) {
+        r = tsf_atan_comp_j16[0][0] + tsf_atan_comp_j16[0][1];
+    } else if (a < 0.125) {
+        const double tl = tsf_atan_tail(a);
+        r = a + tl;
+    } else if (a <= 2.4375) {
+        const double a16 = a * 16.0;
+        const int j = (int)(a16 + 0.5);
+        const double c = (double)j * 0.0625;
+        const double num = a - c;
+        const double ac = a * c;
+        const double den = 1.0 + ac;
+        const double t = num / den;
+        const double tl = tsf_atan_tail(t);
+        const double tt = t + tl;
+        const double hi = j >= 0 && j < 40 ? tsf_atan_j16[j][0] : 0.0;
+        const double lo = j >= 0 && j < 40 ? tsf_atan_j16[j][1] : 0.0;
+        const double lt = lo + tt;
+        r = hi + lt;
+    } else {
+        const double q16 = 16.0 / a;
+        const int j = (int)(q16 + 0.5);
+        const double c = (double)j * 0.0625;
+        const double ac = a * c;
+        const double num = 1.0 - ac;
+        const double den = a + c;
+        const double t = num / den;
+        const double tl = tsf_atan_tail(t);
+        const double tt = t + tl;
+        const double hi = j >= 0 && j < 8 ? tsf_atan_comp_j16[j][0] : 0.0;
+        const double lo = j >= 0 && j < 8 ? tsf_atan_comp_j16[j][1] : 0.0;
+        const double lt = lo - tt;
+        r = hi + lt;
+    }
+    return signbit(x) ? -r : r;
+}
+
+/* ------------------------------------------------------------- triggers */
+
+int tsf_periodic_decide(uint32_t *count, uint32_t every) {
+    const int fire = *count == 0;
+    if (*count != UINT32_MAX) {
+        *count = *count + 1u;
+    }
+    if (*count >= every) {
+        *count = 0;
+    }
+    return fire;
+}
+
+/* ------------------------------------------------- the two instantiations */
+
+#define TSF_RUNTIME_INSTANCE
+#define TSF_R double
+#define TSF_FN(name) name
+#define TSF_TINY_SCALE 0x1p-520
+#include "tsf_runtime.c"
+#undef TSF_R
+#undef TSF_FN
+#undef TSF_TINY_SCALE
+
+#define TSF_R float
+#define TSF_FN(name) name##f
+#define TSF_TINY_SCALE 0x1p-70
+#include "tsf_runtime.c"
+#undef TSF_R
+#undef TSF_FN
+#undef TSF_TINY_SCALE
+#undef TSF_RUNTIME_INSTANCE
+
+#else /* TSF_RUNTIME_INSTANCE: the functions of one real type TSF_R */
+
+/* A constant of the real type. */
+#define TSF_C(v) ((TSF_R)(v))
+
+/* -------------------------------------------------- elementary functions */
+
+/* libm's f evaluated in double, rounded once to the real type. */
+TSF_R TSF_FN(tsf_exp)(TSF_R v) {
+    return TSF_C(exp((double)v));
+}
+
+TSF_R TSF_FN(tsf_sqrt)(TSF_R v) {
+    return TSF_C(sqrt((double)v));
+}
+
+TSF_R TSF_FN(tsf_sin)(TSF_R v) {
+    return TSF_C(sin((double)v));
+}
+
+TSF_R TSF_FN(tsf_cos)(TSF_R v) {
+    return TSF_C(cos((double)v));
+}
+
+TSF_R TSF_FN(tsf_fabs)(TSF_R v) {
+    return TSF_C(fabs((double)v));
+}
+
+/* sin(v)/v with the runtime's small-argument branch (|v| < 2^-13:
+   1 - v*v/6, truncation error < 2^-59), evaluated in double. */
+TSF_R TSF_FN(tsf_sinc)(TSF_R v) {
+    const double d = (double)v;
+    if (fabs(d) < 0x1p-13) {
+        const double d2 = d * d;
+        return TSF_C(1.0 - d2 / 6.0);
+    }
+    return TSF_C(sin(d) / d);
+}
+
+/* The runtime's atan in binary64, rounded once to the real type (as atanf). */
+TSF_R TSF_FN(tsf_atan)(TSF_R v) {
+    return TSF_C(tsf_atan_f64((double)v));
+}
+
+/* ------------------------------------------------------ vector algebra */
+
+TSF_R TSF_FN(tsf_dot)(const TSF_R *a, const TSF_R *b, int n) {
+    TSF_R acc = TSF_C(0);
+    int k;
+    for (k = 0; k < n; k++) {
+        const TSF_R t = a[k] * b[k];
+        acc = acc + t;
+    }
+    return acc;
+}
+
+/* sqrt(sum v_k^2), no rescaling. */
+static TSF_R TSF_FN(tsf_norm)(const TSF_R *v, int n) {
+    return TSF_FN(tsf_sqrt)(TSF_FN(tsf_dot)(v, v, n));
+}
+
+/* v'Uv = sum_i v_i (sum_j U_ij v_j), U row-major n x n. */
+static TSF_R TSF_FN(tsf_quad_form)(const TSF_R *w, const TSF_R *v, int n) {
+    TSF_R acc = TSF_C(0);
+    int i;
+    for (i = 0; i < n; i++) {
+        const TSF_R r = TSF_FN(tsf_dot)(&w[i * n], v, n);
+        const TSF_R t = v[i] * r;
+        acc = acc + t;
+    }
+    return acc;
+}
+
+/* ----------------------------------------------------------- memberships */
+
+/* Maps into [0, 1]; NaN -> 0. */
+static TSF_R TSF_FN(tsf_clamp01)(TSF_R v) {
+    if (v >= TSF_C(1)) {
+        return TSF_C(1);
+    }
+    if (v > TSF_C(0)) {
+        return v;
+    }
+    return TSF_C(0);
+}
+
+/* (p - q)/(r - s); if r - s overflows, every operand is halved first. */
+static TSF_R TSF_FN(tsf_edge_ratio)(TSF_R p, TSF_R q, TSF_R r, TSF_R s) {
+    const TSF_R den = r - s;
+    if (isfinite(den)) {
+        return (p - q) / den;
+    } else {
+        const TSF_R ph = p * TSF_C(0.5);
+        const TSF_R qh = q * TSF_C(0.5);
+        const TSF_R rh = r * TSF_C(0.5);
+        const TSF_R sh = s * TSF_C(0.5);
+        return (ph - qh) / (rh - sh);
+    }
+}
+
+/* Degree of one term at premise vector z (p values), in [0, 1], never NaN. */
+static TSF_R TSF_FN(tsf_degree)(const TSF_FN(tsf_term) *t, const TSF_R *z, int p,
+                                const TSF_R *about_points) {
+    TSF_R v;
+    if (t->var < 0 || t->len < 0 || t->var + t->len > p) {
+        return TSF_C(0);
+    }
+    switch (t->kind) {
+    case TSF_TERM_TRAP: {
+        const TSF_R x = z[t->var];
+        const TSF_R a = t->prm[0], b = t->prm[1], c = t->prm[2], d = t->prm[3];
+        if (!(x >= a && x <= d)) {
+            v = TSF_C(0);
+        } else if (x >= b && x <= c) {
+            v = TSF_C(1);
+        } else if (x < b) {
+            v = TSF_FN(tsf_edge_ratio)(x, a, b, a);
+        } else {
+            v = TSF_FN(tsf_edge_ratio)(d, x, d, c);
+        }
+        break;
+    }
+    case TSF_TERM_GAUSS: {
+        const TSF_R w = (z[t->var] - t->prm[0]) / t->prm[1];
+        const TSF_R w2 = w * w;
+        const TSF_R e = TSF_C(0.5) * w2;
+        v = TSF_FN(tsf_exp)(-e);
+        break;
+    }
+    case TSF_TERM_SIGMOID: {
+        const TSF_R d = z[t->var] - t->prm[1];
+        const TSF_R k = t->prm[0] * d;
+        const TSF_R e = TSF_FN(tsf_exp)(-k);
+        v = TSF_C(1) / (TSF_C(1) + e);
+        break;
+    }
+    default: {
+        TSF_R d2 = TSF_C(0);
+        int k;
+        for (k = 0; k < t->len; k++) {
+            const TSF_R d = z[t->var + k] - about_points[t->point + k];
+            const TSF_R dd = d * d;
+            d2 = d2 + dd;
+        }
+        {
+            const TSF_R s2 = t->prm[0] * t->prm[0];
+            const TSF_R e = TSF_C(0.5) * (d2 / s2);
+            v = TSF_FN(tsf_exp)(-e);
+        }
+        break;
+    }
+    }
+    return TSF_FN(tsf_clamp01)(v);
+}
+
+/* ------------------------------------------------------- controller step */
+
+/* Rule weight (product t-norm): ((1 * d_1) * d_2) * ... */
+static TSF_R TSF_FN(tsf_rule_weight)(const TSF_FN(tsf_controller) *c, int i, const TSF_R *z) {
+    TSF_R w = TSF_C(1);
+    int k;
+    for (k = c->rule_terms[i]; k < c->rule_terms[i + 1]; k++) {
+        w = w * TSF_FN(tsf_degree)(&c->terms[k], z, c->p, c->about_points);
+    }
+    return w;
+}
+
+/* In place: h_i = w_i / sum w (weights NaN or <= 0 count as 0); 0 if no
+   rule fires. */
+static int TSF_FN(tsf_normalize)(TSF_R *h, int r) {
+    TSF_R s = TSF_C(0);
+    int i;
+    for (i = 0; i < r; i++) {
+        h[i] = h[i] > TSF_C(0) ? h[i] : TSF_C(0);
+    }
+    for (i = 0; i < r; i++) {
+        s = s + h[i];
+    }
+    if (!(s > TSF_C(0) && isfinite(s))) {
+        return 0;
+    }
+    for (i = 0; i < r; i++) {
+        h[i] = h[i] / s;
+    }
+    return 1;
+}
+
+/* Nearest rule centre with operands scaled by `scale`; *found is 0 if every
+   distance was NaN. Ties and NaN go to the lowest index. */
+static int TSF_FN(tsf_nearest_scaled)(const TSF_FN(tsf_controller) *c, const TSF_R *z,
+                                      TSF_R scale, TSF_R *best_d, int *found) {
+    const int stride = c->p > 0 ? c->p : 1;
+    int best = 0, i, k;
+    *found = 0;
+    for (i = 0; i < c->r; i++) {
+        TSF_R d = TSF_C(0);
+        int better;
+        for (k = 0; k < c->p; k++) {
+            const TSF_R a = z[k] * scale;
+            const TSF_R b = c->centres[i * stride + k] * scale;
+            const TSF_R e = a - b;
+            const TSF_R e2 = e * e;
+            d = d + e2;
+        }
+        better = *found ? d < *best_d : !isnan(d);
+        if (better) {
+            best = i;
+            *best_d = d;
+            *found = 1;
+        }
+    }
+    return best;
+}
+
+/* Index of the nearest rule centre; overflowing distances are recomputed
+   with operands scaled by TSF_TINY_SCALE. */
+static int TSF_FN(tsf_nearest_rule)(const TSF_FN(tsf_controller) *c, const TSF_R *z) {
+    TSF_R d = TSF_C(0);
+    int found;
+    int best = TSF_FN(tsf_nearest_scaled)(c, z, TSF_C(1), &d, &found);
+    if (found && !isfinite(d)) {
+        best = TSF_FN(tsf_nearest_scaled)(c, z, TSF_C(TSF_TINY_SCALE), &d, &found);
+    }
+    return best;
+}
+
+/* u = sum_j h_j (F_j x), rules with h_j == 0 skipped. */
+static void TSF_FN(tsf_blend)(const TSF_FN(tsf_controller) *c, const TSF_R *h, const TSF_R *x,
+                              TSF_R *u) {
+    int j, s;
+    for (s = 0; s < c->m; s++) {
+        u[s] = TSF_C(0);
+    }
+    for (j = 0; j < c->r; j++) {
+        if (h[j] == TSF_C(0)) {
+            continue;
+        }
+        for (s = 0; s < c->m; s++) {
+            const TSF_R f = TSF_FN(tsf_dot)(&c->gains[(j * c->m + s) * c->n], x, c->n);
+            const TSF_R t = h[j] * f;
+            u[s] = u[s] + t;
+        }
+    }
+}
+
+/* In place: |u_s| <= b_s, b_s = u_max_s if u_max_s >= 0 else 0; NaN -> 0,
+   +-inf -> +-b_s (0 if b_s is infinite). Returns the flags. */
+static uint8_t TSF_FN(tsf_saturate)(const TSF_FN(tsf_controller) *c, TSF_R *u) {
+    uint8_t flags = 0;
+    int s;
+    for (s = 0; s < c->m; s++) {
+        const TSF_R b = c->u_max[s] >= TSF_C(0) ? c->u_max[s] : TSF_C(0);
+        TSF_R v = u[s];
+        if (!isfinite(v)) {
+            flags |= TSF_FLAG_COMMAND_NONFINITE;
+            if (isnan(v) || !isfinite(b)) {
+                v = TSF_C(0);
+            }
+        }
+        if (v > b) {
+            flags |= TSF_FLAG_SATURATED;
+            u[s] = b;
+        } else if (v < -b) {
+            flags |= TSF_FLAG_SATURATED;
+            u[s] = -b;
+        } else {
+            u[s] = v;
+        }
+    }
+    return flags;
+}
+
+uint8_t TSF_FN(tsf_step_with_premises)(const TSF_FN(tsf_controller) *c, const TSF_R *x,
+                                       const TSF_R *z, TSF_R *h, TSF_R *u) {
+    uint8_t flags = 0;
+    int i;
+    for (i = 0; i < c->n; i++) {
+        if (!isfinite(x[i])) {
+            flags |= TSF_FLAG_STATE_NONFINITE;
+        }
+    }
+    for (i = 0; i < c->p; i++) {
+        if (!isfinite(z[i])) {
+            flags |= TSF_FLAG_PREMISE_NONFINITE;
+        }
+    }
+    if (flags & (TSF_FLAG_STATE_NONFINITE | TSF_FLAG_PREMISE_NONFINITE)) {
+        for (i = 0; i < c->r; i++) {
+            h[i] = TSF_C(0);
+        }
+        for (i = 0; i < c->m; i++) {
+            u[i] = TSF_C(0);
+        }
+        return flags;
+    }
+    for (i = 0; i < c->r; i++) {
+        h[i] = TSF_FN(tsf_rule_weight)(c, i, z);
+    }
+    if (!TSF_FN(tsf_normalize)(h, c->r)) {
+        for (i = 0; i < c->r; i++) {
+            h[i] = TSF_C(0);
+        }
+        h[TSF_FN(tsf_nearest_rule)(c, z)] = TSF_C(1);
+        flags |= TSF_FLAG_NO_RULE_FIRED;
+    }
+    TSF_FN(tsf_blend)(c, h, x, u);
+    flags |= TSF_FN(tsf_saturate)(c, u);
+    return flags;
+}
+
+/* -------------------------------------------------------------- triggers */
+
+int TSF_FN(tsf_relative_decide)(const TSF_R *weight, TSF_R nu, TSF_R *last, int *has_last,
+                                const TSF_R *x, TSF_R *e, int n) {
+    int k;
+    if (!*has_last) {
+        for (k = 0; k < n; k++) {
+            last[k] = x[k];
+            e[k] = TSF_C(0);
+        }
+        *has_last = 1;
+        return 1;
+    }
+    for (k = 0; k < n; k++) {
+        e[k] = x[k] - last[k];
+    }
+    {
+        const TSF_R lhs = TSF_FN(tsf_quad_form)(weight, e, n);
+        const TSF_R q = TSF_FN(tsf_quad_form)(weight, last, n);
+        const TSF_R rhs = nu * q;
+        if (lhs < rhs) {
+            return 0;
+        }
+    }
+    for (k = 0; k < n; k++) {
+        last[k] = x[k];
+    }
+    return 1;
+}
+
+/* The law's threshold after a transmission with jump e:
+   g = (mu1 * (2/pi)) * atan(mu2 * (||e|| - mu3)), cand = nu * (1 - g), then
+   the bounds. */
+static TSF_R TSF_FN(tsf_adaptive_nu)(const TSF_FN(tsf_adaptive_law) *law, TSF_R nu,
+                                     const TSF_R *e, int n) {
+    const TSF_R a = TSF_FN(tsf_norm)(e, n) - law->mu3;
+    const TSF_R b = law->mu2 * a;
+    const TSF_R k = law->mu1 * TSF_C(0.6366197723675814);
+    const TSF_R g = k * TSF_FN(tsf_atan)(b);
+    const TSF_R cand = nu * (TSF_C(1) - g);
+    if (!(cand >= law->nu_min)) {
+        /* below the bound, or NaN */
+        return law->nu_min;
+    }
+    if (cand > law->nu_max) {
+        return law->nu_max >= law->nu_min ? law->nu_max : law->nu_min;
+    }
+    return cand;
+}
+
+int TSF_FN(tsf_adaptive_decide)(const TSF_FN(tsf_adaptive_law) *law, const TSF_R *weight,
+                                TSF_R *nu, TSF_R *last, int *has_last, const TSF_R *x, TSF_R *e,
+                                int n) {
+    const int first = !*has_last;
+    if (!TSF_FN(tsf_relative_decide)(weight, *nu, last, has_last, x, e, n)) {
+        return 0;
+    }
+    if (!first) {
+        *nu = TSF_FN(tsf_adaptive_nu)(law, *nu, e, n);
+    }
+    return 1;
+}
+
+int TSF_FN(tsf_mixed_decide)(TSF_R beta, TSF_R rho, TSF_R *last, int *has_last,
+                             const TSF_R *sigma, TSF_R *d, int n) {
+    int k;
+    if (*has_last) {
+        for (k = 0; k < n; k++) {
+            d[k] = last[k] - sigma[k];
+        }
+        {
+            const TSF_R xi = TSF_FN(tsf_norm)(d, n);
+            const TSF_R bs = beta * TSF_FN(tsf_norm)(sigma, n);
+            const TSF_R threshold = bs + rho;
+            if (xi < threshold) {
+                return 0;
+            }
+        }
+    }
+    for (k = 0; k < n; k++) {
+        last[k] = sigma[k];
+    }
+    *has_last = 1;
+    return 1;
+}
+
+#undef TSF_C
+
+#endif /* TSF_RUNTIME_INSTANCE */

@@ -1,0 +1,197 @@
+/* tsf_runtime.h: the C99 runtime of the controllers tsfc generates.
+ *
+ * Part of tsf-runtime (runtime/c in the tsfc repository). `tsfc compile
+ * --emit c` writes this file and tsf_runtime.c, byte for byte, next to the
+ * generated controller and sensor files: compile and link tsf_runtime.c
+ * once per image, however many controllers it holds.
+ *
+ * The C counterpart of the Rust crate tsf-runtime, operation by operation in
+ * the Rust runtime's order (runtime/README.md): memberships, firing
+ * strengths, the nearest-rule fallback, blend, saturation, the trigger state
+ * machines and the runtime's own atan. Static memory only: no malloc, no
+ * recursion, no global mutable state; arrays are passed with their lengths.
+ *
+ * Both precisions live in one image, named like libm: tsf_<f> works on
+ * double and tsf_<f>f on float (types likewise: tsf_term and tsf_termf).
+ * Generated code picks its instance with TSF_REAL_FN(<its real type>, name).
+ *
+ * Elementary functions: tsf_atan is tsf-runtime's math::atan, bit for bit;
+ * exp, sqrt, sin, cos and fabs are libm's, evaluated in double and rounded
+ * once to the real type (as tsf-runtime's f32 functions); libm and the Rust
+ * runtime differ by a few ulp per call, sqrt and fabs not at all. Products
+ * are separate statements, so contraction within an expression cannot fuse
+ * them; for bit-exact runtime order also avoid contraction across statements
+ * (GCC outside ISO modes: -ffp-contract=off).
+ */
+
+#ifndef TSF_RUNTIME_H
+#define TSF_RUNTIME_H
+
+#include <float.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Flag bits of a control step, identical to tsf_runtime::Flags. */
+#define TSF_FLAG_NO_RULE_FIRED 1u
+#define TSF_FLAG_STATE_NONFINITE 2u
+#define TSF_FLAG_PREMISE_NONFINITE 4u
+#define TSF_FLAG_COMMAND_NONFINITE 8u
+#define TSF_FLAG_SATURATED 16u
+
+/* TSF_REAL_FN(double, tsf_dot) is tsf_dot, TSF_REAL_FN(float, tsf_dot) is
+   tsf_dotf; the type may be a macro expanding to double or float. */
+#define TSF_PASTE(a, b) TSF_PASTE_(a, b)
+#define TSF_PASTE_(a, b) a##b
+#define TSF_SUFFIX_double
+#define TSF_SUFFIX_float f
+#define TSF_REAL_FN(real, name) TSF_PASTE(name, TSF_PASTE(TSF_SUFFIX_, real))
+
+/* Largest finite value of the real type (DBL_MAX or FLT_MAX). */
+#define TSF_MAX_double DBL_MAX
+#define TSF_MAX_float FLT_MAX
+#define TSF_REAL_MAX(real) TSF_PASTE(TSF_MAX_, real)
+
+/* Kinds of rule-premise terms. */
+enum { TSF_TERM_TRAP, TSF_TERM_GAUSS, TSF_TERM_SIGMOID, TSF_TERM_ABOUT };
+
+/* One conjunct of a rule premise: trap(a, b, c, d) (tri(a, b, c) is
+   trap(a, b, b, c)), gauss(center, sigma), sigmoid(slope, center) on z[var],
+   or `about` the point about_points[point .. point + len] with width prm[0]
+   on z[var .. var + len]. */
+typedef struct tsf_term {
+    int kind;
+    int var;
+    int len;
+    int point;
+    double prm[4];
+} tsf_term;
+
+/* tsf_term of a float controller. */
+typedef struct tsf_termf {
+    int kind;
+    int var;
+    int len;
+    int point;
+    float prm[4];
+} tsf_termf;
+
+/* The const tables of one controller; matrices are row-major. */
+typedef struct tsf_controller {
+    int n;                      /* states */
+    int m;                      /* inputs */
+    int p;                      /* premise components */
+    int r;                      /* rules */
+    const tsf_term *terms;      /* every rule's terms, rule after rule */
+    const int *rule_terms;      /* rule i: terms[rule_terms[i] .. rule_terms[i + 1]] */
+    const double *about_points; /* operating points of `about` terms */
+    const double *centres;      /* r rows of max(p, 1): rule centres in premise space */
+    const double *gains;        /* r blocks of m x n: the PDC gains F_j */
+    const double *u_max;        /* m saturation levels (INFINITY = unlimited) */
+} tsf_controller;
+
+/* tsf_controller of a float controller. */
+typedef struct tsf_controllerf {
+    int n;
+    int m;
+    int p;
+    int r;
+    const tsf_termf *terms;
+    const int *rule_terms;
+    const float *about_points;
+    const float *centres;
+    const float *gains;
+    const float *u_max;
+} tsf_controllerf;
+
+/* Parameters of the adaptive threshold law (Xu & Huang 2020): after each
+   transmission but the first, nu = min(max(nu (1 - (2 mu1/pi) atan(mu2
+   (||e|| - mu3))), nu_min), nu_max); a NaN candidate gives nu_min, and
+   nu_max < nu_min keeps nu_min. nu_max = TSF_REAL_MAX(real) is
+   tsf_runtime::AdaptiveTrigger::new, anything else `with_max(nu_max)`. */
+typedef struct tsf_adaptive_law {
+    double mu1;
+    double mu2;
+    double mu3;
+    double nu_min;
+    double nu_max;
+} tsf_adaptive_law;
+
+/* tsf_adaptive_law of a float trigger. */
+typedef struct tsf_adaptive_lawf {
+    float mu1;
+    float mu2;
+    float mu3;
+    float nu_min;
+    float nu_max;
+} tsf_adaptive_lawf;
+
+/* Elementary functions of premise code (see the top of this file).
+   tsf_sinc(v) = sin(v)/v, 1 - v*v/6 for |v| < 2^-13 (math::SINC_SMALL). */
+double tsf_exp(double v);
+double tsf_sqrt(double v);
+double tsf_sin(double v);
+double tsf_cos(double v);
+double tsf_fabs(double v);
+double tsf_sinc(double v);
+double tsf_atan(double v);
+float tsf_expf(float v);
+float tsf_sqrtf(float v);
+float tsf_sinf(float v);
+float tsf_cosf(float v);
+float tsf_fabsf(float v);
+float tsf_sincf(float v);
+float tsf_atanf(float v);
+
+/* sum_k a[k] b[k], accumulated from 0 in index order. */
+double tsf_dot(const double *a, const double *b, int n);
+float tsf_dotf(const float *a, const float *b, int n);
+
+/* One control step of tsf_runtime::Controller::step_with_premises on state x
+   (c->n values) and premise vector z (c->p values): writes the normalised
+   firing strengths h (c->r values) and the saturated command u (c->m values)
+   and returns the TSF_FLAG_* bits. A NaN or infinite x or z gives u = 0,
+   h = 0; when no rule fires, the nearest rule centre's gain is used alone. */
+uint8_t tsf_step_with_premises(const tsf_controller *c, const double *x, const double *z,
+                               double *h, double *u);
+uint8_t tsf_step_with_premisesf(const tsf_controllerf *c, const float *x, const float *z,
+                                float *h, float *u);
+
+/* Periodic trigger: transmit on the first tick and then every `every` ticks
+   (0 acts as 1); *count starts at 0. */
+int tsf_periodic_decide(uint32_t *count, uint32_t every);
+
+/* Relative trigger (Xu & Huang 2020, condition (10) with a fixed nu):
+   transmit iff e'U e >= nu x_k'U x_k, e = x - x_k, x_k = last (n values,
+   valid when *has_last), U = weight (n x n, row-major). The first call and
+   a comparison involving NaN transmit; on transmission x becomes last. The
+   jump e (zeros on the first call) is written to e (n values). */
+int tsf_relative_decide(const double *weight, double nu, double *last, int *has_last,
+                        const double *x, double *e, int n);
+int tsf_relative_decidef(const float *weight, float nu, float *last, int *has_last,
+                         const float *x, float *e, int n);
+
+/* Adaptive trigger: the relative decision with threshold *nu, then the law's
+   update of *nu after every transmission but the first. e is scratch space
+   of n values. */
+int tsf_adaptive_decide(const tsf_adaptive_law *law, const double *weight, double *nu,
+                        double *last, int *has_last, const double *x, double *e, int n);
+int tsf_adaptive_decidef(const tsf_adaptive_lawf *law, const float *weight, float *nu,
+                         float *last, int *has_last, const float *x, float *e, int n);
+
+/* Mixed trigger (Amrr et al. 2019, condition (28)): transmit iff
+   ||sigma_k - sigma|| >= beta ||sigma|| + rho, sigma_k = last (n values,
+   valid when *has_last); the first call and NaN comparisons transmit, and
+   on transmission sigma becomes last. d is scratch space of n values. */
+int tsf_mixed_decide(double beta, double rho, double *last, int *has_last,
+                     const double *sigma, double *d, int n);
+int tsf_mixed_decidef(float beta, float rho, float *last, int *has_last,
+                      const float *sigma, float *d, int n);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TSF_RUNTIME_H */
