@@ -8,6 +8,17 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
+/// Prints `e` with an `error:` prefix unless it is a rendered diagnostic.
+fn fail(e: &tsfc::sim::SimError) -> ExitCode {
+    let rendered = e.message.starts_with("error") || e.message.starts_with("warning");
+    eprintln!(
+        "{}{}",
+        if rendered { "" } else { "error: " },
+        e.message.trim_end()
+    );
+    ExitCode::from(e.exit_code())
+}
+
 fn main() -> ExitCode {
     let mut args = std::env::args().skip(1);
     let spec = args.next().map_or_else(
@@ -25,10 +36,7 @@ fn main() -> ExitCode {
     let t = Instant::now();
     let prepared = match tsfc::sim::prepare(&spec) {
         Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(e.exit_code());
-        }
+        Err(e) => return fail(&e),
     };
     let compile_s = t.elapsed().as_secs_f64();
     let opts = tsfc::sim::Options {
@@ -38,10 +46,7 @@ fn main() -> ExitCode {
     let t = Instant::now();
     let outcome = match tsfc::sim::simulate(&prepared, &opts) {
         Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(e.exit_code());
-        }
+        Err(e) => return fail(&e),
     };
     let sim_s = t.elapsed().as_secs_f64();
     let m = &outcome.metrics;
