@@ -434,6 +434,33 @@ fn leaving_the_premise_region_fails_the_run_and_is_counted() {
 }
 
 #[test]
+fn an_open_loop_run_diverges_inside_the_region() {
+    // Zero gains: the upright pendulum falls; over 0.5 s from 0.05 rad it stays
+    // inside the premise range but V = x'Px grows.
+    let mut p = prepared("inverted_pendulum.tsf").clone();
+    for row in p.tables.gains.iter_mut().flatten() {
+        row.iter_mut().for_each(|v| *v = 0.0);
+    }
+    let opts = Options {
+        x0: Some(vec![0.05, 0.0]),
+        ..horizon(0.5)
+    };
+    let m = simulate(&p, &opts).expect("runs").metrics;
+    assert_eq!(m.out_of_region_samples, 0);
+    assert!(
+        m.lyapunov_ratio.is_some_and(|r| r > 1.0),
+        "{:?}",
+        m.lyapunov_ratio
+    );
+    assert!(m.diverged && m.failed && !m.converged);
+    assert!(
+        m.failures().iter().any(|f| f.contains("diverged")),
+        "{:?}",
+        m.failures()
+    );
+}
+
+#[test]
 fn a_failed_run_replaces_no_file_and_points_into_the_spec() {
     // The derivative divides by zero once t > 1 s (an error of the evaluator).
     let (path, _) = pendulum_variant(

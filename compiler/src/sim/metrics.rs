@@ -133,11 +133,11 @@ pub fn norm(v: &[f64]) -> f64 {
         return s.sqrt();
     }
     let scale = v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
-    if scale == 0.0 || !scale.is_finite() {
-        return if v.iter().all(|a| a.is_finite()) {
-            scale
-        } else {
+    if scale == 0.0 || scale.is_infinite() {
+        return if v.iter().any(|a| a.is_nan()) {
             f64::NAN
+        } else {
+            scale
         };
     }
     scale * v.iter().map(|a| (a / scale).powi(2)).sum::<f64>().sqrt()
@@ -368,5 +368,90 @@ impl Tally {
             wall_time_s: 0.0,
         };
         (metrics, trace)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn norms_neither_overflow_nor_underflow() {
+        assert_eq!(norm(&[3.0, 4.0]), 5.0);
+        assert_eq!(norm(&[1e160, 0.0]), 1e160);
+        assert!((norm(&[3e-170, 4e-170]) / 5e-170 - 1.0).abs() < 1e-15);
+        assert_eq!(norm(&[0.0, 0.0]), 0.0);
+        assert_eq!(norm(&[f64::INFINITY, 1.0]), f64::INFINITY);
+        assert!(norm(&[f64::NAN, 1.0]).is_nan());
+        let p = DMatrix::from_row_slice(2, 2, &[2.0, 0.0, 0.0, 1.0]);
+        assert_eq!(lyapunov_ratio(&p, &[1.0, 0.0], &[0.0, 2.0]), Some(2.0));
+        assert_eq!(lyapunov_ratio(&p, &[1e160, 0.0], &[1e160, 0.0]), Some(1.0));
+        assert_eq!(lyapunov_ratio(&p, &[0.0, 0.0], &[1.0, 0.0]), None);
+        assert_eq!(lyapunov_ratio(&p, &[1.0, 0.0], &[f64::NAN, 0.0]), None);
+    }
+
+    fn tally(x0: &[f64], norms: &[f64], sent: &[bool], nonfinite_at: Option<f64>) -> Metrics {
+        let mut t = Tally::new(x0.len(), 1, x0, 0.05);
+        let u = [1.0];
+        let xs: Vec<Vec<f64>> = norms.iter().map(|&r| vec![r, 0.0]).collect();
+        for (k, (x, &s)) in xs.iter().zip(sent).enumerate() {
+            t.sample(&Sample {
+                t: k as f64,
+                x,
+                u: &u,
+                sent: s,
+                no_rule: k == 1,
+                in_region: k != 2,
+            });
+        }
+        let p = DMatrix::identity(2, 2);
+        let k = xs.len() - 1;
+        let last = Sample {
+            t: k as f64,
+            x: &xs[k],
+            u: &u,
+            sent: sent[k],
+            no_rule: false,
+            in_region: true,
+        };
+        let facts = RunFacts {
+            u_max: vec![f64::INFINITY],
+            t_end: 5.0,
+            saturated: 0,
+            nonfinite_at,
+            p: &p,
+        };
+        t.finish(&facts, &last, Trace::default()).0
+    }
+
+    #[test]
+    fn streamed_metrics_follow_their_definitions() {
+        let norms = [1.0, 0.5, 0.01, 0.2, 0.01];
+        let sent = [true, false, true, true, false];
+        let m = tally(&[1.0, 0.0], &norms, &sent, None);
+        assert!(m.converged);
+        assert_eq!(
+            m.settle_time_s,
+            Some(4.0),
+            "the last entry into the tolerance"
+        );
+        assert_eq!(m.energy, 5.0, "|u| = 1 held over 0 .. 5");
+        assert_eq!((m.samples, m.transmissions), (5, 3));
+        assert_eq!(m.mean_inter_event_s, Some(1.5));
+        assert_eq!(
+            (m.min_inter_event_s, m.max_inter_event_s),
+            (Some(1.0), Some(2.0))
+        );
+        assert_eq!((m.no_rule_samples, m.out_of_region_samples), (1, 1));
+        assert_eq!(m.left_region_at_s, Some(2.0));
+        assert!(m.failed, "a sample left the region");
+        assert_eq!(m.lyapunov_ratio, Some(1e-4));
+        // A run that went non-finite is never converged nor settled.
+        let m = tally(&[1.0, 0.0], &norms, &sent, Some(4.5));
+        assert!(!m.converged && m.settle_time_s.is_none() && m.failed);
+        // An infinite tolerance (||x0|| overflows) is never met.
+        let m = tally(&[f64::MAX, f64::MAX], &norms, &sent, None);
+        assert_eq!(m.convergence_tolerance, f64::INFINITY);
+        assert!(!m.converged && m.settle_time_s.is_none());
     }
 }
