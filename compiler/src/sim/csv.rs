@@ -22,11 +22,21 @@ pub fn header(
     out.write_all(b",transmitted\n")
 }
 
+/// Writes one number (shortest round-trip digits; see the module notes).
+pub fn number(out: &mut dyn Write, v: f64) -> io::Result<()> {
+    if v != 0.0 && v.is_finite() && !(1e-6..1e21).contains(&v.abs()) {
+        write!(out, "{v:e}")
+    } else {
+        write!(out, "{v}")
+    }
+}
+
 /// Writes one row.
 pub fn row(out: &mut dyn Write, t: f64, x: &[f64], u: &[f64], sent: bool) -> io::Result<()> {
-    write!(out, "{t}")?;
-    for v in x.iter().chain(u) {
-        write!(out, ",{v}")?;
+    number(out, t)?;
+    for &v in x.iter().chain(u) {
+        out.write_all(b",")?;
+        number(out, v)?;
     }
     out.write_all(if sent { b",1\n" } else { b",0\n" })
 }
@@ -121,5 +131,44 @@ impl Drop for AtomicFile {
     fn drop(&mut self) {
         // After a successful rename the temporary no longer exists.
         let _ = std::fs::remove_file(&self.tmp);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn text(v: f64) -> String {
+        let mut out = Vec::new();
+        number(&mut out, v).expect("in memory");
+        String::from_utf8(out).expect("ASCII")
+    }
+
+    #[test]
+    fn numbers_are_short_and_round_trip() {
+        for (v, want) in [
+            (0.0, "0"),
+            (0.001, "0.001"),
+            (-1.5, "-1.5"),
+            (1e-6, "0.000001"),
+            (9.99e-7, "9.99e-7"),
+            (1.5e-300, "1.5e-300"),
+            (1e21, "1e21"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+        ] {
+            assert_eq!(text(v), want);
+        }
+        for v in [
+            f64::MIN_POSITIVE,
+            5e-324,
+            1.2345678901234567e-7,
+            f64::MAX,
+            0.1 + 0.2,
+        ] {
+            let s = text(v);
+            assert!(s.len() <= 25, "{s}");
+            assert_eq!(s.parse::<f64>(), Ok(v), "{s}");
+        }
     }
 }
