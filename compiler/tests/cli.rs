@@ -369,3 +369,38 @@ fn simulate_errors_from_the_spec_exit_1_or_3_and_point_into_it() {
     assert!(stderr.starts_with("error: "), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[cfg(unix)]
+#[test]
+fn simulate_refuses_a_csv_target_that_is_not_a_regular_file() {
+    let dir = tmp_dir("sim-special");
+    let spec = fixture("specs/inverted_pendulum.tsf");
+    let csv = dir.join("inverted_pendulum.csv");
+    let elsewhere = dir.join("elsewhere.txt");
+    std::fs::write(&elsewhere, "keep me\n").expect("write");
+    std::os::unix::fs::symlink(&elsewhere, &csv).expect("symlink");
+    let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.1"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("not a regular file"), "{stderr}");
+    assert!(std::fs::symlink_metadata(&csv)
+        .expect("still there")
+        .file_type()
+        .is_symlink());
+    assert_eq!(
+        std::fs::read_to_string(&elsewhere).expect("read"),
+        "keep me\n"
+    );
+    std::fs::remove_file(&csv).expect("remove link");
+    std::fs::create_dir(&csv).expect("a folder in the way");
+    let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.1"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        names.iter().all(|n| !n.contains(".tmp")),
+        "no temporary file is left: {names:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

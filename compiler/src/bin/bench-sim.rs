@@ -1,6 +1,7 @@
 //! Simulation benchmark: 1000 s of the 7-rule spacecraft (Xu & Huang 2020
 //! spec) at a 1 ms RK4 step with its adaptive event trigger, in closed loop
-//! with the runtime controller. Prints the wall time and the run's figures.
+//! with the runtime controller, the CSV trace formatted and discarded (as
+//! `tsfc simulate` streams it). Prints the wall time and the run's figures.
 //!
 //! `cargo run --release -p tsfc --bin bench-sim [-- SPEC [HORIZON_S]]`
 
@@ -44,7 +45,7 @@ fn main() -> ExitCode {
         ..tsfc::sim::Options::default()
     };
     let t = Instant::now();
-    let outcome = match tsfc::sim::simulate(&prepared, &opts) {
+    let outcome = match tsfc::sim::simulate_csv(&prepared, &opts, &mut std::io::sink()) {
         Ok(o) => o,
         Err(e) => return fail(&e),
     };
