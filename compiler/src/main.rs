@@ -68,17 +68,23 @@ enum Command {
         emit: Option<Vec<Target>>,
     },
     /// Compile the design and run the spec's `simulate` scenario (CSV, metrics JSON, plots).
+    ///
+    /// Exit codes: 0 the run finished inside the premise region; 1 spec error (also a scenario
+    /// over the step limit of docs/limits.md); 2 usage or I/O error (a non-positive or too long
+    /// --horizon, a non-finite --x0); 3 design not certified; 4 the run went non-finite, diverged
+    /// (V = x'Px ended above its initial value) or left the premise region (outputs are written).
     Simulate {
         /// Spec file.
         spec: PathBuf,
         /// Output folder.
         #[arg(long, default_value = "tsfc-out")]
         out: PathBuf,
-        /// Initial state, comma-separated (default: the spec's x0).
+        /// Initial state, comma-separated finite numbers (default: the spec's x0).
         #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
         x0: Option<Vec<f64>>,
-        /// Simulated time in seconds from t0 (default: the spec's span).
-        #[arg(long)]
+        /// Simulated time in seconds from t0, positive (default: the spec's span); at most 1e7
+        /// steps of the scenario's time step.
+        #[arg(long, allow_negative_numbers = true)]
         horizon: Option<f64>,
     },
 }
@@ -192,7 +198,9 @@ fn simulate(
     x0: Option<Vec<f64>>,
     horizon: Option<f64>,
 ) -> ExitCode {
-    let run = || -> Result<Vec<PathBuf>, tsfc::sim::SimError> {
+    /// The run went non-finite, diverged or left the premise region.
+    const RUN_FAILED: u8 = 4;
+    let run = || -> Result<(tsfc::sim::Outcome, Vec<PathBuf>), tsfc::sim::SimError> {
         let prepared = tsfc::sim::prepare(path)?;
         let opts = tsfc::sim::Options {
             x0,
@@ -200,34 +208,43 @@ fn simulate(
             progress: true,
             ..tsfc::sim::Options::default()
         };
-        let outcome = tsfc::sim::simulate(&prepared, &opts)?;
-        let m = &outcome.metrics;
-        eprintln!(
-            "simulated `{}`: {} samples, {} transmissions, final ||x|| = {:.3e} ({}converged, tol {:.3e}), max |u| = [{}], {:.2} s",
-            outcome.name,
-            m.samples,
-            m.transmissions,
-            m.final_state_norm,
-            if m.converged { "" } else { "not " },
-            m.convergence_tolerance,
-            m.max_abs_u
-                .iter()
-                .map(|u| format!("{u:.3e}"))
-                .collect::<Vec<_>>()
-                .join(", "),
-            m.wall_time_s
-        );
-        tsfc::sim::write_outputs(&outcome, out)
+        tsfc::sim::simulate_to(&prepared, &opts, out)
     };
     match run() {
-        Ok(files) => {
+        Ok((outcome, files)) => {
+            let m = &outcome.metrics;
+            eprintln!(
+                "simulated `{}`: {} samples, {} transmissions, final ||x|| = {:.3e} ({}converged, tol {:.3e}), max |u| = [{}], {:.2} s",
+                outcome.name,
+                m.samples,
+                m.transmissions,
+                m.final_state_norm,
+                if m.converged { "" } else { "not " },
+                m.convergence_tolerance,
+                m.max_abs_u
+                    .iter()
+                    .map(|u| format!("{u:.3e}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                m.wall_time_s
+            );
             for f in files {
                 eprintln!("  wrote                {}", f.display());
             }
-            ExitCode::SUCCESS
+            let failures = m.failures();
+            for f in &failures {
+                eprintln!("error: {f}");
+            }
+            if failures.is_empty() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(RUN_FAILED)
+            }
         }
         Err(e) => {
-            eprint!("{}", e.message);
+            // Rendered spec diagnostics carry their own `error:` lines.
+            let rendered = e.message.starts_with("error") || e.message.starts_with("warning");
+            eprint!("{}{}", if rendered { "" } else { "error: " }, e.message);
             if !e.message.ends_with('\n') {
                 eprintln!();
             }

@@ -481,3 +481,152 @@ fn oversized_sdps_are_refused_before_solving_with_the_estimate() {
     assert!(est > 1 << 20 && est < 1 << 30, "{est}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `tsfc simulate SPEC --out DIR ARGS...`: exit code and stderr.
+fn simulate(spec: &std::path::Path, dir: &std::path::Path, args: &[&str]) -> (Option<i32>, String) {
+    let out = tsfc()
+        .arg("simulate")
+        .arg(spec)
+        .arg("--out")
+        .arg(dir)
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn simulate_exit_codes_for_bad_overrides_are_2_with_an_error_prefix() {
+    let dir = tmp_dir("sim-usage");
+    let spec = fixture("specs/inverted_pendulum.tsf");
+    for args in [
+        &["--horizon", "0"][..],
+        &["--horizon", "-1"],
+        &["--horizon", "NaN"],
+        &["--horizon", "inf"],
+        &["--horizon", "1e12"],
+        &["--x0", "NaN,0"],
+        &["--x0", "inf,0"],
+        &["--x0", "1,2,3"],
+    ] {
+        let (code, stderr) = simulate(&spec, &dir, args);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+    }
+    let (_, stderr) = simulate(&spec, &dir, &["--horizon", "1e12"]);
+    assert!(stderr.contains("at most 1e7"), "{stderr}");
+    assert!(
+        std::fs::read_dir(&dir).expect("dir").next().is_none(),
+        "refused runs write nothing"
+    );
+    let (code, stderr) = simulate(&fixture("specs/nope.tsf"), &dir, &[]);
+    assert_eq!(code, Some(2));
+    assert!(stderr.starts_with("error: cannot read"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn simulate_exits_4_when_the_run_fails_and_0_when_it_does_not() {
+    let dir = tmp_dir("sim-fail");
+    let spec = fixture("specs/inverted_pendulum.tsf");
+    let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.5"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    // 172 degrees: outside the premise range of sinc(theta).
+    let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.5", "--x0", "3,0"]);
+    assert_eq!(code, Some(4), "{stderr}");
+    assert!(
+        stderr.contains("error: the state left the premise region"),
+        "{stderr}"
+    );
+    // x0 = [1e160, 0]: never "converged", the state goes non-finite.
+    let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.5", "--x0", "1e160,0"]);
+    assert_eq!(code, Some(4), "{stderr}");
+    assert!(stderr.contains("not converged"), "{stderr}");
+    assert!(stderr.contains("NaN or infinite"), "{stderr}");
+    let metrics: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(dir.join("inverted_pendulum.metrics.json")).expect("outputs are written"),
+    )
+    .expect("JSON");
+    assert_eq!(metrics["converged"], false);
+    assert_eq!(metrics["failed"], true);
+    assert_eq!(metrics["initial_state_norm"], 1e160);
+    let help = tsfc().args(["simulate", "--help"]).output().expect("runs");
+    assert!(String::from_utf8_lossy(&help.stdout).contains("4 the run went non-finite"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn simulate_errors_from_the_spec_exit_1_or_3_and_point_into_it() {
+    let dir = tmp_dir("sim-spec");
+    let text = std::fs::read_to_string(fixture("specs/inverted_pendulum.tsf")).expect("spec");
+    // 5e7 steps: accepted by `check`, over the simulator's limit.
+    let long = dir.join("long.tsf");
+    std::fs::write(
+        &long,
+        text.replace("time = 0 .. 5 step 0.001;", "time = 0 .. 50000 step 0.001;"),
+    )
+    .expect("write");
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("simulate {"))
+        .expect("simulate block")
+        + 1;
+    let (code, stderr) = simulate(&long, &dir, &[]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.starts_with("error: cannot simulate"), "{stderr}");
+    assert!(stderr.contains(&format!("long.tsf:{line}:1")), "{stderr}");
+    // ... and a horizon override makes it usable.
+    let (code, stderr) = simulate(&long, &dir, &["--horizon", "0.2"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    // A design that is not certified: exit 3, with the prefix.
+    let tight = dir.join("tight.tsf");
+    std::fs::write(
+        &tight,
+        text.replace(
+            "objective decay_rate >= 0.5;",
+            "objective decay_rate >= 0.5;\nobjective input_norm(u) <= 0.001 for x0 = [1.0, 0];",
+        ),
+    )
+    .expect("write");
+    let (code, stderr) = simulate(&tight, &dir, &[]);
+    assert_eq!(code, Some(3), "{stderr}");
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn simulate_refuses_a_csv_target_that_is_not_a_regular_file() {
+    let dir = tmp_dir("sim-special");
+    let spec = fixture("specs/inverted_pendulum.tsf");
+    let csv = dir.join("inverted_pendulum.csv");
+    let elsewhere = dir.join("elsewhere.txt");
+    std::fs::write(&elsewhere, "keep me\n").expect("write");
+    std::os::unix::fs::symlink(&elsewhere, &csv).expect("symlink");
+    let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.1"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("not a regular file"), "{stderr}");
+    assert!(std::fs::symlink_metadata(&csv)
+        .expect("still there")
+        .file_type()
+        .is_symlink());
+    assert_eq!(
+        std::fs::read_to_string(&elsewhere).expect("read"),
+        "keep me\n"
+    );
+    std::fs::remove_file(&csv).expect("remove link");
+    std::fs::create_dir(&csv).expect("a folder in the way");
+    let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.1"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        names.iter().all(|n| !n.contains(".tmp")),
+        "no temporary file is left: {names:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,12 +1,24 @@
 //! Simulation benchmark: 1000 s of the 7-rule spacecraft (Xu & Huang 2020
 //! spec) at a 1 ms RK4 step with its adaptive event trigger, in closed loop
-//! with the runtime controller. Prints the wall time and the run's figures.
+//! with the runtime controller, the CSV trace formatted and discarded (as
+//! `tsfc simulate` streams it). Prints the wall time and the run's figures.
 //!
 //! `cargo run --release -p tsfc --bin bench-sim [-- SPEC [HORIZON_S]]`
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
+
+/// Prints `e` with an `error:` prefix unless it is a rendered diagnostic.
+fn fail(e: &tsfc::sim::SimError) -> ExitCode {
+    let rendered = e.message.starts_with("error") || e.message.starts_with("warning");
+    eprintln!(
+        "{}{}",
+        if rendered { "" } else { "error: " },
+        e.message.trim_end()
+    );
+    ExitCode::from(e.exit_code())
+}
 
 fn main() -> ExitCode {
     let mut args = std::env::args().skip(1);
@@ -25,10 +37,7 @@ fn main() -> ExitCode {
     let t = Instant::now();
     let prepared = match tsfc::sim::prepare(&spec) {
         Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(e.exit_code());
-        }
+        Err(e) => return fail(&e),
     };
     let compile_s = t.elapsed().as_secs_f64();
     let opts = tsfc::sim::Options {
@@ -36,12 +45,9 @@ fn main() -> ExitCode {
         ..tsfc::sim::Options::default()
     };
     let t = Instant::now();
-    let outcome = match tsfc::sim::simulate(&prepared, &opts) {
+    let outcome = match tsfc::sim::simulate_csv(&prepared, &opts, &mut std::io::sink()) {
         Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(e.exit_code());
-        }
+        Err(e) => return fail(&e),
     };
     let sim_s = t.elapsed().as_secs_f64();
     let m = &outcome.metrics;

@@ -2,6 +2,7 @@
 //! Dormand-Prince 5(4). Both advance exactly from `t0` to `t1` (the caller's
 //! sampling and triggering instants), never stepping over `t1`.
 
+use super::limits::MAX_ADAPTIVE_STEPS;
 use super::SimError;
 
 /// A right-hand side `dy = f(t, y)`.
@@ -107,6 +108,7 @@ impl Rk4 {
 /// Table II.5.2) with local extrapolation and a standard step-size controller:
 /// the scaled RMS error `sqrt(mean((err_i / (atol + rtol max(|y_i|, |y+_i|)))^2))`
 /// must be `<= 1`; the next step is `h * clamp(0.9 err^(-1/5), 0.2, 5)`.
+/// At most `max_trials` trial steps are taken over a run.
 #[derive(Debug, Clone)]
 pub struct Dopri5 {
     /// Relative tolerance.
@@ -125,6 +127,8 @@ pub struct Dopri5 {
     pub rejected: u64,
     /// Right-hand side evaluations so far.
     pub evals: u64,
+    /// Most trial steps (accepted and rejected) over the integrator's life.
+    pub max_trials: u64,
 }
 
 const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
@@ -178,6 +182,7 @@ impl Dopri5 {
             accepted: 0,
             rejected: 0,
             evals: 0,
+            max_trials: MAX_ADAPTIVE_STEPS,
         }
     }
 
@@ -240,6 +245,12 @@ impl Dopri5 {
             if h.is_nan() || h <= 1e-14 * (t.abs() + 1.0) {
                 return Err(SimError::numeric(format!(
                     "dopri5: step size underflow at t = {t} (h = {h:e}); the system is too stiff or not finite"
+                )));
+            }
+            if self.accepted + self.rejected >= self.max_trials {
+                return Err(SimError::numeric(format!(
+                    "dopri5: more than {} steps by t = {t} (h = {h:e}); the system is too stiff for this integrator (try `integrator = rk4` with a small step)",
+                    self.max_trials
                 )));
             }
             let err = self.trial(sys, t, h, y)?;

@@ -1,8 +1,13 @@
 //! The recorded trajectory and the figures of merit computed from it.
 
+use super::limits::{Thinned, MAX_PLOT_POINTS};
+use nalgebra::DMatrix;
 use serde::Serialize;
 
-/// The trajectory at the sampling instants (the command is held until the next row).
+/// The trajectory at the sampling instants, thinned for the plots to at
+/// most [`MAX_PLOT_POINTS`] rows (every `stride`-th sample and the last; see
+/// [`Thinned`]): the full trajectory goes to the CSV as it is computed and
+/// is never held in memory.
 #[derive(Debug, Clone, Default)]
 pub struct Trace {
     /// Column names: states (controller, then extra), inputs.
@@ -17,34 +22,18 @@ pub struct Trace {
     pub u: Vec<Vec<f64>>,
     /// Whether the sample was transmitted (the controller recomputed `u`).
     pub sent: Vec<bool>,
-}
-
-impl Trace {
-    /// The trace as CSV: `t, <states>, <inputs>, transmitted`; numbers in
-    /// Rust's shortest round-trip format, so the text is deterministic.
-    pub fn csv(&self) -> String {
-        let mut out = String::from("t");
-        for name in self.state_names.iter().chain(&self.input_names) {
-            out.push(',');
-            out.push_str(name);
-        }
-        out.push_str(",transmitted\n");
-        for (((t, x), u), sent) in self.t.iter().zip(&self.x).zip(&self.u).zip(&self.sent) {
-            out.push_str(&t.to_string());
-            for v in x.iter().chain(u) {
-                out.push(',');
-                out.push_str(&v.to_string());
-            }
-            out.push_str(if *sent { ",1\n" } else { ",0\n" });
-        }
-        out
-    }
+    /// Transmission instants (thinned separately from the samples).
+    pub events: Vec<f64>,
+    /// `(instant, time since the previous transmission)` at each transmission
+    /// after the first (thinned).
+    pub gaps: Vec<(f64, f64)>,
 }
 
 /// Figures of merit of one run (written as `<controller>.metrics.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Metrics {
-    /// `final_state_norm <= convergence_tolerance` and the run finished.
+    /// `final_state_norm <= convergence_tolerance`, both finite, and the run
+    /// finished.
     pub converged: bool,
     /// The tolerance used: `convergence_rel_tol * ||x0||` (controller states).
     pub convergence_tolerance: f64,
@@ -77,6 +66,23 @@ pub struct Metrics {
     pub saturated_samples: u64,
     /// The time at which the state became NaN or infinite (null if never).
     pub nonfinite_at_s: Option<f64>,
+    /// Transmitted samples at which no rule fired (the runtime used the
+    /// nearest rule's gain alone).
+    pub no_rule_samples: u64,
+    /// Samples whose premise vector lies outside the premise region (the
+    /// product of the premise ranges), where the design guarantees nothing.
+    pub out_of_region_samples: u64,
+    /// The first sampling instant outside the premise region (null if none).
+    pub left_region_at_s: Option<f64>,
+    /// `V(x(t_end)) / V(x0)` for the certificate's Lyapunov function
+    /// `V(x) = x' P x` over the controller's states (null when `x0 = 0` or
+    /// the state is not finite).
+    pub lyapunov_ratio: Option<f64>,
+    /// `lyapunov_ratio > 1`: the run ended with a larger `V` than it began.
+    pub diverged: bool,
+    /// The run went non-finite, diverged or left the premise region
+    /// (`tsfc simulate` exits 4).
+    pub failed: bool,
     /// Time span simulated.
     pub time_s: (f64, f64),
     /// Integrator and its settings.
@@ -96,95 +102,356 @@ pub struct Metrics {
     pub wall_time_s: f64,
 }
 
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|a| a * a).sum::<f64>().sqrt()
+impl Metrics {
+    /// Why the run failed (non-finite state, divergence, leaving the premise
+    /// region), one phrase per reason; empty when it did not.
+    pub fn failures(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(t) = self.nonfinite_at_s {
+            out.push(format!("the state became NaN or infinite at t = {t} s"));
+        }
+        if self.diverged {
+            let ratio = self.lyapunov_ratio.unwrap_or(f64::NAN);
+            out.push(format!(
+                "the run diverged: V(x) = x'Px ended {ratio:.3e} times its initial value"
+            ));
+        }
+        if let Some(t) = self.left_region_at_s {
+            out.push(format!(
+                "the state left the premise region at t = {t} s ({} of {} samples outside)",
+                self.out_of_region_samples, self.samples
+            ));
+        }
+        out
+    }
 }
 
-/// Facts about the run that the trace does not contain.
-pub struct RunFacts {
-    /// Controller states.
-    pub n: usize,
+/// Euclidean norm, without overflow or underflow for finite vectors.
+pub fn norm(v: &[f64]) -> f64 {
+    let s = v.iter().map(|a| a * a).sum::<f64>();
+    if s.is_finite() && s >= f64::MIN_POSITIVE {
+        return s.sqrt();
+    }
+    let scale = v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    if scale == 0.0 || scale.is_infinite() {
+        return if v.iter().any(|a| a.is_nan()) {
+            f64::NAN
+        } else {
+            scale
+        };
+    }
+    scale * v.iter().map(|a| (a / scale).powi(2)).sum::<f64>().sqrt()
+}
+
+/// `V(x1) / V(x0)` with `V(x) = x' P x`, computed on unit vectors so that
+/// large finite states do not overflow; `None` when `V(x0)` is 0 or a value
+/// is not finite.
+pub fn lyapunov_ratio(p: &DMatrix<f64>, x0: &[f64], x1: &[f64]) -> Option<f64> {
+    let unit_v = |x: &[f64]| -> Option<(f64, f64)> {
+        let r = norm(x);
+        if !r.is_finite() || x.len() != p.nrows() || p.nrows() != p.ncols() {
+            return None;
+        }
+        if r == 0.0 {
+            return Some((0.0, 0.0));
+        }
+        let e = DMatrix::from_iterator(x.len(), 1, x.iter().map(|v| v / r));
+        Some((r, (e.transpose() * p * &e)[(0, 0)]))
+    };
+    let (r0, v0) = unit_v(x0)?;
+    let (r1, v1) = unit_v(x1)?;
+    if v0.is_nan() || v0 <= 0.0 {
+        return None;
+    }
+    let ratio = (r1 / r0).powi(2) * v1 / v0;
+    ratio.is_finite().then_some(ratio)
+}
+
+/// Facts about the run that the samples do not contain.
+pub struct RunFacts<'a> {
     /// Saturation levels.
     pub u_max: Vec<f64>,
-    /// Relative convergence tolerance.
-    pub rel_tol: f64,
     /// Final time of the scenario.
     pub t_end: f64,
     /// Saturated samples.
     pub saturated: u64,
     /// Non-finite time.
     pub nonfinite_at: Option<f64>,
+    /// The certificate's Lyapunov matrix (controller states).
+    pub p: &'a DMatrix<f64>,
 }
 
-/// Computes the figures of merit (descriptive fields left for the caller).
-pub fn compute(trace: &Trace, facts: &RunFacts) -> Metrics {
-    let n = facts.n;
-    let xnorm = |x: &Vec<f64>| norm(&x[..n.min(x.len())]);
-    let x0 = trace.x.first().map_or(0.0, xnorm);
-    let tol = facts.rel_tol * x0;
-    let fin = trace.x.last().map_or(f64::NAN, xnorm);
-    let m = trace.input_names.len();
-    let mut max_abs_u = vec![0.0f64; m];
-    for u in &trace.u {
-        for (mx, v) in max_abs_u.iter_mut().zip(u) {
+/// One sampling instant, as the loop records it.
+pub struct Sample<'a> {
+    /// Time.
+    pub t: f64,
+    /// Plant state.
+    pub x: &'a [f64],
+    /// Held command.
+    pub u: &'a [f64],
+    /// Transmitted to the controller.
+    pub sent: bool,
+    /// The controller found no rule firing (transmitted samples only).
+    pub no_rule: bool,
+    /// The premise vector is inside the premise region.
+    pub in_region: bool,
+}
+
+/// The figures of merit and the plotted trace, accumulated sample by sample
+/// in memory independent of the run's length.
+pub struct Tally {
+    n: usize,
+    rel_tol: f64,
+    tol: f64,
+    x0: Vec<f64>,
+    x_last: Vec<f64>,
+    t_first: Option<f64>,
+    max_abs_u: Vec<f64>,
+    energy: f64,
+    /// `(t, ||u||^2)` of the previous sample.
+    prev: Option<(f64, f64)>,
+    transmissions: u64,
+    last_event: Option<f64>,
+    gap_sum: f64,
+    gap_count: u64,
+    gap_min: Option<f64>,
+    gap_max: Option<f64>,
+    last_gap: (f64, f64),
+    settle: Option<f64>,
+    no_rule: u64,
+    out_of_region: u64,
+    left_region_at: Option<f64>,
+    rows: Thinned<(f64, Vec<f64>, Vec<f64>, bool)>,
+    events: Thinned<f64>,
+    gaps: Thinned<(f64, f64)>,
+}
+
+impl Tally {
+    /// A tally for `n` controller states and `m` inputs starting from `x0`,
+    /// with `converged` meaning `||x(t_end)|| <= rel_tol ||x0||`.
+    pub fn new(n: usize, m: usize, x0: &[f64], rel_tol: f64) -> Self {
+        let x0: Vec<f64> = x0[..n.min(x0.len())].to_vec();
+        Tally {
+            n,
+            rel_tol,
+            tol: rel_tol * norm(&x0),
+            x_last: x0.clone(),
+            x0,
+            t_first: None,
+            max_abs_u: vec![0.0; m],
+            energy: 0.0,
+            prev: None,
+            transmissions: 0,
+            last_event: None,
+            gap_sum: 0.0,
+            gap_count: 0,
+            gap_min: None,
+            gap_max: None,
+            last_gap: (0.0, 0.0),
+            settle: None,
+            no_rule: 0,
+            out_of_region: 0,
+            left_region_at: None,
+            rows: Thinned::new(MAX_PLOT_POINTS),
+            events: Thinned::new(MAX_PLOT_POINTS),
+            gaps: Thinned::new(MAX_PLOT_POINTS),
+        }
+    }
+
+    /// Records one sampling instant.
+    pub fn sample(&mut self, s: &Sample) {
+        let xc = &s.x[..self.n.min(s.x.len())];
+        self.t_first.get_or_insert(s.t);
+        self.x_last.clear();
+        self.x_last.extend_from_slice(xc);
+        for (mx, v) in self.max_abs_u.iter_mut().zip(s.u) {
             *mx = mx.max(v.abs());
         }
-    }
-    let mut energy = 0.0;
-    for k in 0..trace.t.len() {
-        let t_next = trace
-            .t
-            .get(k + 1)
-            .copied()
-            .unwrap_or(facts.t_end.max(trace.t[k]));
-        let u2: f64 = trace.u[k].iter().map(|v| v * v).sum();
-        energy += u2 * (t_next - trace.t[k]);
-    }
-    let events: Vec<f64> = trace
-        .t
-        .iter()
-        .zip(&trace.sent)
-        .filter_map(|(t, s)| s.then_some(*t))
-        .collect();
-    let gaps: Vec<f64> = events.windows(2).map(|w| w[1] - w[0]).collect();
-    let mut settle = None;
-    for (t, x) in trace.t.iter().zip(&trace.x).rev() {
-        if xnorm(x) <= tol {
-            settle = Some(*t);
-        } else {
-            break;
+        if let Some((t_prev, u2_prev)) = self.prev {
+            self.energy += u2_prev * (s.t - t_prev);
         }
+        self.prev = Some((s.t, s.u.iter().map(|v| v * v).sum()));
+        if s.sent {
+            self.transmissions += 1;
+            if let Some(last) = self.last_event {
+                let gap = s.t - last;
+                self.gap_sum += gap;
+                self.gap_count += 1;
+                self.gap_min = Some(self.gap_min.map_or(gap, |g| g.min(gap)));
+                self.gap_max = Some(self.gap_max.map_or(gap, |g| g.max(gap)));
+                self.last_gap = (s.t, gap);
+                self.gaps.push(self.last_gap);
+            }
+            self.last_event = Some(s.t);
+            self.events.push(s.t);
+        }
+        let r = norm(xc);
+        if r.is_finite() && self.tol.is_finite() && r <= self.tol {
+            self.settle.get_or_insert(s.t);
+        } else {
+            self.settle = None;
+        }
+        self.no_rule += u64::from(s.no_rule);
+        if !s.in_region {
+            self.out_of_region += 1;
+            self.left_region_at.get_or_insert(s.t);
+        }
+        self.rows
+            .push_with(|| (s.t, s.x.to_vec(), s.u.to_vec(), s.sent));
     }
-    let finished = facts.nonfinite_at.is_none();
-    Metrics {
-        converged: finished && fin <= tol,
-        convergence_tolerance: tol,
-        convergence_rel_tol: facts.rel_tol,
-        final_state_norm: fin,
-        initial_state_norm: x0,
-        max_abs_u,
-        u_max: facts
-            .u_max
-            .iter()
-            .map(|&v| v.is_finite().then_some(v))
-            .collect(),
-        samples: trace.t.len() as u64,
-        transmissions: events.len() as u64,
-        mean_inter_event_s: (!gaps.is_empty())
-            .then(|| gaps.iter().sum::<f64>() / gaps.len() as f64),
-        min_inter_event_s: gaps.iter().copied().reduce(f64::min),
-        max_inter_event_s: gaps.iter().copied().reduce(f64::max),
-        energy,
-        settle_time_s: if finished { settle } else { None },
-        saturated_samples: facts.saturated,
-        nonfinite_at_s: facts.nonfinite_at,
-        time_s: (trace.t.first().copied().unwrap_or(0.0), facts.t_end),
-        integrator: String::new(),
-        rhs_evaluations: 0,
-        trigger: String::new(),
-        final_nu: None,
-        seed: 0,
-        plant: String::new(),
-        wall_time_s: 0.0,
+
+    /// The figures of merit (descriptive fields left for the caller) and the
+    /// thinned trace; `last` is the final sample (always plotted).
+    pub fn finish(self, facts: &RunFacts, last: &Sample, mut trace: Trace) -> (Metrics, Trace) {
+        let samples = self.rows.seen();
+        let mut energy = self.energy;
+        if let Some((t, u2)) = self.prev {
+            energy += u2 * (facts.t_end.max(t) - t);
+        }
+        let fin = if samples == 0 {
+            f64::NAN
+        } else {
+            norm(&self.x_last)
+        };
+        let finished = facts.nonfinite_at.is_none();
+        let lyapunov_ratio = lyapunov_ratio(facts.p, &self.x0, &self.x_last);
+        let diverged = lyapunov_ratio.is_some_and(|r| r > 1.0);
+        let events = self
+            .events
+            .finish_with(|| self.last_event.unwrap_or(last.t));
+        let gaps = self.gaps.finish_with(|| self.last_gap);
+        let rows = self
+            .rows
+            .finish_with(|| (last.t, last.x.to_vec(), last.u.to_vec(), last.sent));
+        for (t, x, u, sent) in rows {
+            trace.t.push(t);
+            trace.x.push(x);
+            trace.u.push(u);
+            trace.sent.push(sent);
+        }
+        trace.events = events;
+        trace.gaps = gaps;
+        let metrics = Metrics {
+            converged: finished && fin.is_finite() && self.tol.is_finite() && fin <= self.tol,
+            convergence_tolerance: self.tol,
+            convergence_rel_tol: self.rel_tol,
+            final_state_norm: fin,
+            initial_state_norm: norm(&self.x0),
+            max_abs_u: self.max_abs_u,
+            u_max: facts
+                .u_max
+                .iter()
+                .map(|&v| v.is_finite().then_some(v))
+                .collect(),
+            samples,
+            transmissions: self.transmissions,
+            mean_inter_event_s: (self.gap_count > 0).then(|| self.gap_sum / self.gap_count as f64),
+            min_inter_event_s: self.gap_min,
+            max_inter_event_s: self.gap_max,
+            energy,
+            settle_time_s: if finished { self.settle } else { None },
+            saturated_samples: facts.saturated,
+            nonfinite_at_s: facts.nonfinite_at,
+            no_rule_samples: self.no_rule,
+            out_of_region_samples: self.out_of_region,
+            left_region_at_s: self.left_region_at,
+            lyapunov_ratio,
+            diverged,
+            failed: !finished || diverged || self.out_of_region > 0,
+            time_s: (self.t_first.unwrap_or(0.0), facts.t_end),
+            integrator: String::new(),
+            rhs_evaluations: 0,
+            trigger: String::new(),
+            final_nu: None,
+            seed: 0,
+            plant: String::new(),
+            wall_time_s: 0.0,
+        };
+        (metrics, trace)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn norms_neither_overflow_nor_underflow() {
+        assert_eq!(norm(&[3.0, 4.0]), 5.0);
+        assert_eq!(norm(&[1e160, 0.0]), 1e160);
+        assert!((norm(&[3e-170, 4e-170]) / 5e-170 - 1.0).abs() < 1e-15);
+        assert_eq!(norm(&[0.0, 0.0]), 0.0);
+        assert_eq!(norm(&[f64::INFINITY, 1.0]), f64::INFINITY);
+        assert!(norm(&[f64::NAN, 1.0]).is_nan());
+        let p = DMatrix::from_row_slice(2, 2, &[2.0, 0.0, 0.0, 1.0]);
+        assert_eq!(lyapunov_ratio(&p, &[1.0, 0.0], &[0.0, 2.0]), Some(2.0));
+        assert_eq!(lyapunov_ratio(&p, &[1e160, 0.0], &[1e160, 0.0]), Some(1.0));
+        assert_eq!(lyapunov_ratio(&p, &[0.0, 0.0], &[1.0, 0.0]), None);
+        assert_eq!(lyapunov_ratio(&p, &[1.0, 0.0], &[f64::NAN, 0.0]), None);
+    }
+
+    fn tally(x0: &[f64], norms: &[f64], sent: &[bool], nonfinite_at: Option<f64>) -> Metrics {
+        let mut t = Tally::new(x0.len(), 1, x0, 0.05);
+        let u = [1.0];
+        let xs: Vec<Vec<f64>> = norms.iter().map(|&r| vec![r, 0.0]).collect();
+        for (k, (x, &s)) in xs.iter().zip(sent).enumerate() {
+            t.sample(&Sample {
+                t: k as f64,
+                x,
+                u: &u,
+                sent: s,
+                no_rule: k == 1,
+                in_region: k != 2,
+            });
+        }
+        let p = DMatrix::identity(2, 2);
+        let k = xs.len() - 1;
+        let last = Sample {
+            t: k as f64,
+            x: &xs[k],
+            u: &u,
+            sent: sent[k],
+            no_rule: false,
+            in_region: true,
+        };
+        let facts = RunFacts {
+            u_max: vec![f64::INFINITY],
+            t_end: 5.0,
+            saturated: 0,
+            nonfinite_at,
+            p: &p,
+        };
+        t.finish(&facts, &last, Trace::default()).0
+    }
+
+    #[test]
+    fn streamed_metrics_follow_their_definitions() {
+        let norms = [1.0, 0.5, 0.01, 0.2, 0.01];
+        let sent = [true, false, true, true, false];
+        let m = tally(&[1.0, 0.0], &norms, &sent, None);
+        assert!(m.converged);
+        assert_eq!(
+            m.settle_time_s,
+            Some(4.0),
+            "the last entry into the tolerance"
+        );
+        assert_eq!(m.energy, 5.0, "|u| = 1 held over 0 .. 5");
+        assert_eq!((m.samples, m.transmissions), (5, 3));
+        assert_eq!(m.mean_inter_event_s, Some(1.5));
+        assert_eq!(
+            (m.min_inter_event_s, m.max_inter_event_s),
+            (Some(1.0), Some(2.0))
+        );
+        assert_eq!((m.no_rule_samples, m.out_of_region_samples), (1, 1));
+        assert_eq!(m.left_region_at_s, Some(2.0));
+        assert!(m.failed, "a sample left the region");
+        assert_eq!(m.lyapunov_ratio, Some(1e-4));
+        // A run that went non-finite is never converged nor settled.
+        let m = tally(&[1.0, 0.0], &norms, &sent, Some(4.5));
+        assert!(!m.converged && m.settle_time_s.is_none() && m.failed);
+        // An infinite tolerance (||x0|| overflows) is never met.
+        let m = tally(&[f64::MAX, f64::MAX], &norms, &sent, None);
+        assert_eq!(m.convergence_tolerance, f64::INFINITY);
+        assert!(!m.converged && m.settle_time_s.is_none());
     }
 }

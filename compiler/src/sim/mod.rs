@@ -7,15 +7,23 @@
 //! with the runtime's trigger state machines ([`trigger`]); the plant is
 //! integrated with RK4 or Dormand-Prince 5(4) between sampling instants
 //! ([`integrator`]) with the command held (zero-order hold). Outputs: a CSV
-//! trace and metrics ([`metrics`]), SVG and PNG plots ([`plot`]).
+//! trace streamed to disk ([`csv`]), metrics ([`metrics`]), SVG and PNG plots
+//! of a thinned trace ([`plot`]); memory does not grow with the run's length,
+//! and the run's size is bounded by [`limits`]. Samples outside the premise
+//! region ([`region`]) are counted; errors caused by a spec item point into
+//! the spec ([`source`]).
 
 pub mod controller;
+pub mod csv;
 pub mod integrator;
+pub mod limits;
 pub mod metrics;
 pub mod plant;
 pub mod plot;
+pub mod region;
 pub mod scenario;
 pub mod signal;
+pub mod source;
 pub mod trigger;
 
 pub use metrics::{Metrics, Trace};
@@ -48,9 +56,10 @@ pub struct Options {
     pub seed: Option<u64>,
     /// Dormand-Prince `(rtol, atol)`.
     pub tolerances: (f64, f64),
-    /// `converged` means `||x(t_end)|| <= convergence_rel_tol * ||x0||`.
+    /// `converged` means `||x(t_end)|| <= convergence_rel_tol * ||x0||` (in `(0, 1]`).
     pub convergence_rel_tol: f64,
-    /// Show a progress bar on stderr (only if it is a terminal and the run is long).
+    /// Show progress on stderr for runs longer than a second: a bar on a
+    /// terminal, else a line every [`limits::PROGRESS_LOG_PERIOD_S`] seconds.
     pub progress: bool,
 }
 
@@ -80,6 +89,8 @@ pub struct Prepared {
     pub p: DMatrix<f64>,
     /// The design's trigger weight, if it has one.
     pub trigger_weight: Option<DMatrix<f64>>,
+    /// The spec's text, for errors that point into it.
+    pub source: source::SpecSource,
 }
 
 /// Reads, checks and compiles the spec at `path`; the design must be certified.
@@ -88,6 +99,10 @@ pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
     let run = crate::pipeline::read(path)?.compile(&crate::synth::Settings::default())?;
     let tables = run.tables()?;
     let design = run.certified()?.0.clone();
+    let source = source::SpecSource {
+        name: run.source.name.clone(),
+        text: run.source.text.clone(),
+    };
     let model = run.model;
     // The synthesized trigger weight Upsilon (two-step method); without one,
     // `weight = synthesize` falls back to P / lambda_max(P) (see
@@ -98,30 +113,54 @@ pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
         tables,
         p: design.p,
         trigger_weight,
+        source,
     })
 }
 
-/// Runs the scenario of a prepared design.
+/// Runs the scenario of a prepared design (no CSV; the outcome's trace is
+/// thinned for plotting).
 pub fn simulate(prepared: &Prepared, opts: &Options) -> Result<Outcome, SimError> {
-    run(
-        &prepared.model,
-        &prepared.tables,
-        &prepared.p,
-        prepared.trigger_weight.as_ref(),
-        opts,
-    )
+    run(prepared, opts, None)
 }
 
-/// Writes `<name>.csv`, `<name>.metrics.json` and the plots
-/// (`<name>.{states,inputs,events}.{svg,png}`) into `dir`, atomically.
+/// Runs the scenario, streaming the CSV trace to `csv` as it is computed.
+pub fn simulate_csv(
+    prepared: &Prepared,
+    opts: &Options,
+    csv: &mut dyn Write,
+) -> Result<Outcome, SimError> {
+    run(prepared, opts, Some(csv))
+}
+
+/// Runs the scenario and writes `<name>.csv` (streamed while the loop runs),
+/// `<name>.metrics.json` and the plots (`<name>.{states,inputs,events}.{svg,png}`)
+/// into `dir`, each atomically: if the run fails, no existing file changes.
+pub fn simulate_to(
+    prepared: &Prepared,
+    opts: &Options,
+    dir: &Path,
+) -> Result<(Outcome, Vec<PathBuf>), SimError> {
+    // Refuse bad settings before touching the folder.
+    let dim = plant::Plant::new(&prepared.model.spec, &prepared.source)?.dim();
+    scenario::plan(prepared, opts, dim)?;
+    let path = dir.join(format!("{}.csv", prepared.model.spec.controller.node));
+    let io_err =
+        |e: std::io::Error| SimError::usage(format!("cannot write `{}`: {e}", path.display()));
+    let mut file = csv::AtomicFile::create(&path).map_err(io_err)?;
+    let outcome = run(prepared, opts, Some(file.writer()))?;
+    file.commit().map_err(io_err)?;
+    let mut written = vec![path.clone()];
+    written.extend(write_outputs(&outcome, dir)?);
+    Ok((outcome, written))
+}
+
+/// Writes `<name>.metrics.json` and the plots of `outcome` into `dir`, atomically.
 pub fn write_outputs(outcome: &Outcome, dir: &Path) -> Result<Vec<PathBuf>, SimError> {
     let name = &outcome.name;
     let json = serde_json::to_string_pretty(&outcome.metrics)
         .map_err(|e| SimError::usage(format!("cannot serialize the metrics: {e}")))?;
-    let mut files: Vec<(String, Vec<u8>)> = vec![
-        (format!("{name}.csv"), outcome.trace.csv().into_bytes()),
-        (format!("{name}.metrics.json"), (json + "\n").into_bytes()),
-    ];
+    let mut files: Vec<(String, Vec<u8>)> =
+        vec![(format!("{name}.metrics.json"), (json + "\n").into_bytes())];
     files.extend(plot::plots(outcome)?);
     let mut written = Vec::new();
     for (file, bytes) in files {
@@ -133,10 +172,12 @@ pub fn write_outputs(outcome: &Outcome, dir: &Path) -> Result<Vec<PathBuf>, SimE
     Ok(written)
 }
 
-/// A hand-written progress bar on stderr, shown only when stderr is a
-/// terminal and the run has taken more than a second.
+/// Progress on stderr for runs longer than a second: a bar redrawn at most
+/// 10 times a second when stderr is a terminal, else a plain line every
+/// [`limits::PROGRESS_LOG_PERIOD_S`] seconds.
 pub struct Progress {
     enabled: bool,
+    terminal: bool,
     started: Instant,
     t0: f64,
     t1: f64,
@@ -144,10 +185,11 @@ pub struct Progress {
 }
 
 impl Progress {
-    /// A bar for simulated time `t0 .. t1`.
+    /// Progress of simulated time `t0 .. t1`.
     pub fn new(enabled: bool, t0: f64, t1: f64) -> Self {
         Progress {
-            enabled: enabled && std::io::stderr().is_terminal(),
+            enabled,
+            terminal: std::io::stderr().is_terminal(),
             started: Instant::now(),
             t0,
             t1,
@@ -155,36 +197,50 @@ impl Progress {
         }
     }
 
-    /// Report simulated time `t` (redraws at most 10 times a second).
+    /// Reports simulated time `t`.
     pub fn update(&mut self, t: f64) {
-        if !self.enabled || self.started.elapsed().as_secs_f64() < 1.0 {
+        if !self.enabled {
             return;
         }
-        if self
+        let elapsed = self.started.elapsed().as_secs_f64();
+        let period = if self.terminal {
+            0.1
+        } else {
+            limits::PROGRESS_LOG_PERIOD_S
+        };
+        let since = self
             .last_draw
-            .is_some_and(|d| d.elapsed().as_millis() < 100)
-        {
+            .map_or(elapsed, |d| d.elapsed().as_secs_f64());
+        if elapsed < 1.0_f64.max(if self.terminal { 0.0 } else { period }) || since < period {
             return;
         }
         self.last_draw = Some(Instant::now());
         let frac = ((t - self.t0) / (self.t1 - self.t0)).clamp(0.0, 1.0);
-        let width = 40;
-        let filled = (frac * width as f64) as usize;
         let mut err = std::io::stderr().lock();
-        let _ = write!(
-            err,
-            "\r  simulating [{}{}] {:5.1}%  t = {t:.3} s  ({:.1} s)",
-            "#".repeat(filled),
-            "-".repeat(width - filled),
-            100.0 * frac,
-            self.started.elapsed().as_secs_f64()
-        );
+        if self.terminal {
+            let width = 40;
+            let filled = (frac * width as f64) as usize;
+            let _ = write!(
+                err,
+                "\r  simulating [{}{}] {:5.1}%  t = {t:.3} s  ({elapsed:.1} s)",
+                "#".repeat(filled),
+                "-".repeat(width - filled),
+                100.0 * frac,
+            );
+        } else {
+            let _ = writeln!(
+                err,
+                "  simulating: {:5.1}% (t = {t:.3} s of {} s), {elapsed:.0} s elapsed",
+                100.0 * frac,
+                self.t1
+            );
+        }
         let _ = err.flush();
     }
 
     /// Clears the bar's line if one was drawn.
     pub fn finish(&mut self) {
-        if self.last_draw.is_some() {
+        if self.terminal && self.last_draw.is_some() {
             let _ = write!(std::io::stderr().lock(), "\r{}\r", " ".repeat(78));
         }
     }

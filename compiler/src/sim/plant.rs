@@ -4,6 +4,7 @@
 //! evaluated with the language's evaluator; constant matrices are evaluated
 //! once.
 
+use super::source::SpecSource;
 use super::SimError;
 use nalgebra::DMatrix;
 use tsf_lang::ast::Expr;
@@ -28,23 +29,21 @@ enum Truth<'a> {
 /// The plant's right-hand side.
 pub struct Plant<'a> {
     spec: &'a Spec,
+    source: &'a SpecSource,
     n: usize,
     extra: usize,
     truth: Truth<'a>,
 }
 
-fn eval_err(what: &str, t: f64, d: tsf_lang::Diagnostic) -> SimError {
-    SimError::spec(format!("{what} at t = {t}: {}", d.message))
-}
-
 impl<'a> Plant<'a> {
     /// The truth plant of `spec`: its `dynamics` block if the scenario has one,
-    /// else the design model.
-    pub fn new(spec: &'a Spec) -> Result<Self, SimError> {
+    /// else the design model. Evaluation errors point into `source`.
+    pub fn new(spec: &'a Spec, source: &'a SpecSource) -> Result<Self, SimError> {
         let n = spec.n();
         if let Some(dynamics) = spec.simulate.as_ref().and_then(|s| s.dynamics.as_ref()) {
             return Ok(Plant {
                 spec,
+                source,
                 n,
                 extra: dynamics.extra_states.iter().map(|s| s.len).sum(),
                 truth: Truth::Dynamics(dynamics),
@@ -57,7 +56,7 @@ impl<'a> Plant<'a> {
             } else {
                 env.eval(&m.expr)
                     .map(Coef::Const)
-                    .map_err(|d| eval_err(name, 0.0, d))
+                    .map_err(|d| source.eval_error(name, 0.0, d))
             }
         };
         let (Some(a), Some(b)) = (&spec.a, &spec.b) else {
@@ -69,6 +68,7 @@ impl<'a> Plant<'a> {
         };
         Ok(Plant {
             spec,
+            source,
             n,
             extra: 0,
             truth: Truth::Model {
@@ -112,7 +112,9 @@ impl<'a> Plant<'a> {
                 let get = |c: &Coef, name: &str| -> Result<DMatrix<f64>, SimError> {
                     match c {
                         Coef::Const(m) => Ok(m.clone()),
-                        Coef::StateDependent(e) => env.eval(e).map_err(|d| eval_err(name, t, d)),
+                        Coef::StateDependent(e) => {
+                            env.eval(e).map_err(|d| self.source.eval_error(name, t, d))
+                        }
                     }
                 };
                 let xv = DMatrix::from_column_slice(x.len(), 1, x);
@@ -144,9 +146,13 @@ impl<'a> Plant<'a> {
                 for (name, e) in &dy.derivatives {
                     let v = env
                         .eval(e)
-                        .map_err(|d| eval_err(&format!("{name}'"), t, d))?;
+                        .map_err(|d| self.source.eval_error(&format!("{name}'"), t, d))?;
                     let dst = ds.get_mut(at..at + v.len()).ok_or_else(|| {
-                        SimError::spec(format!("`{name}'` has more components than the state"))
+                        self.source.error_at(
+                            e.span,
+                            format!("`{name}'` has more components than the state"),
+                            "give one derivative component per state component",
+                        )
                     })?;
                     dst.copy_from_slice(v.as_slice());
                     at += v.len();

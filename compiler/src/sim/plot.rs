@@ -12,6 +12,9 @@
 //! - `events`: top, one stem per transmission instant; bottom, the
 //!   inter-event time (time since the previous transmission) at each
 //!   transmission, with the axis from 0 to the largest gap.
+//!
+//! Every series is the outcome's thinned trace: at most
+//! [`super::limits::MAX_PLOT_POINTS`] points, every `stride`-th one and the last.
 
 use super::scenario::Outcome;
 use super::SimError;
@@ -19,8 +22,6 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 const SIZE: (u32, u32) = (1000, 700);
-/// Plot at most this many points per series (uniform stride, deterministic).
-const MAX_POINTS: usize = 4000;
 
 #[derive(Clone, Copy)]
 enum Figure {
@@ -36,15 +37,6 @@ struct Panel {
     lines: Vec<(Series, RGBColor)>,
     stems: Vec<f64>,
     dots: Series,
-}
-
-fn stride<T: Copy + PartialEq>(v: &[T]) -> Vec<T> {
-    let step = v.len().div_ceil(MAX_POINTS).max(1);
-    let mut out: Vec<T> = v.iter().step_by(step).copied().collect();
-    if let Some(last) = v.last().filter(|&l| out.last() != Some(l)) {
-        out.push(*last);
-    }
-    out
 }
 
 fn colour(i: usize) -> RGBColor {
@@ -65,11 +57,7 @@ fn panels(fig: Figure, o: &Outcome) -> Vec<Panel> {
     let tr = &o.trace;
     let (t0, t1) = o.metrics.time_s;
     let column = |get: &dyn Fn(usize) -> f64| -> Series {
-        stride(
-            &(0..tr.t.len())
-                .map(|k| (tr.t[k], get(k)))
-                .collect::<Vec<_>>(),
-        )
+        (0..tr.t.len()).map(|k| (tr.t[k], get(k))).collect()
     };
     match fig {
         Figure::States => {
@@ -109,26 +97,18 @@ fn panels(fig: Figure, o: &Outcome) -> Vec<Panel> {
                 }
             })
             .collect(),
-        Figure::Events => {
-            let events: Vec<f64> =
-                tr.t.iter()
-                    .zip(&tr.sent)
-                    .filter_map(|(t, s)| s.then_some(*t))
-                    .collect();
-            let gaps: Series = events.windows(2).map(|w| (w[1], w[1] - w[0])).collect();
-            vec![
-                Panel {
-                    lines: Vec::new(),
-                    stems: stride(&events),
-                    dots: Vec::new(),
-                },
-                Panel {
-                    lines: Vec::new(),
-                    stems: Vec::new(),
-                    dots: stride(&gaps),
-                },
-            ]
-        }
+        Figure::Events => vec![
+            Panel {
+                lines: Vec::new(),
+                stems: tr.events.clone(),
+                dots: Vec::new(),
+            },
+            Panel {
+                lines: Vec::new(),
+                stems: Vec::new(),
+                dots: tr.gaps.clone(),
+            },
+        ],
     }
 }
 

@@ -3,16 +3,18 @@
 
 use super::controller::{law, runtime_terms};
 use super::integrator::{Dopri5, Rk4, Stepper};
-use super::metrics::{compute, Metrics, RunFacts, Trace};
+use super::limits::step_count;
+use super::metrics::{Metrics, RunFacts, Sample, Tally, Trace};
 use super::plant::Plant;
+use super::region::Region;
 use super::signal::Signals;
+use super::source::{head, SpecSource};
 use super::trigger::sampler;
-use super::{Options, Progress, SimError};
-use crate::model::TsModel;
-use crate::tables::Tables;
-use nalgebra::DMatrix;
+use super::{Options, Prepared, Progress, SimError};
+use std::io::Write;
 use std::time::Instant;
 use tsf_lang::spec::{Integrator, Trigger};
+use tsf_lang::Span;
 use tsf_runtime::Flags;
 
 /// A finished run.
@@ -20,7 +22,7 @@ use tsf_runtime::Flags;
 pub struct Outcome {
     /// Controller name (file stem of the outputs).
     pub name: String,
-    /// The trajectory at the sampling instants.
+    /// The trajectory at the sampling instants, thinned for the plots.
     pub trace: Trace,
     /// Figures of merit.
     pub metrics: Metrics,
@@ -66,41 +68,118 @@ fn describe_trigger(t: Option<&Trigger>) -> String {
     }
 }
 
-/// Runs the spec's scenario in closed loop with the runtime controller built
-/// from `tables`. `p` is the design's Lyapunov matrix and `design_weight` its
-/// trigger weight, if any (used for `weight = synthesize`).
-pub fn run(
-    model: &TsModel,
-    tables: &Tables,
-    p: &DMatrix<f64>,
-    design_weight: Option<&DMatrix<f64>>,
-    opts: &Options,
-) -> Result<Outcome, SimError> {
-    let started = Instant::now();
-    let spec = &model.spec;
-    let sim = spec
-        .simulate
-        .as_ref()
-        .ok_or_else(|| SimError::spec("the spec has no `simulate { ... }` block"))?;
+/// What a run does, once every setting and override has been validated.
+pub struct Plan<'a> {
+    /// Start time.
+    pub t0: f64,
+    /// End time.
+    pub t1: f64,
+    /// Integration step (RK4) or largest step (Dormand-Prince).
+    pub h: f64,
+    /// Step count ([`step_count`]), at most [`super::limits::MAX_STEPS`].
+    pub steps: u64,
+    /// Initial plant state (controller states, then extra states).
+    pub x0: Vec<f64>,
+    /// Triggering law (`None`: continuous).
+    pub trigger: Option<&'a Trigger>,
+    /// Sampling-pattern seed.
+    pub seed: u64,
+    /// Integrator.
+    pub integrator: Integrator,
+}
+
+/// Where a setting came from: the spec (an error points into it, exit 1) or
+/// an override in [`Options`] (a usage error, exit 2).
+enum Origin<'a> {
+    Spec(&'a SpecSource, Span, &'static str),
+    Override,
+}
+
+impl Origin<'_> {
+    fn error(&self, message: String) -> SimError {
+        match self {
+            Origin::Spec(src, span, help) => src.error_at(*span, message, help),
+            Origin::Override => SimError::usage(message),
+        }
+    }
+}
+
+/// The shortest sampling interval of `trigger` on a grid of step `h`.
+fn shortest_interval(trigger: Option<&Trigger>, h: f64) -> Result<f64, String> {
+    match trigger {
+        Some(Trigger::Aperiodic { sampling, .. } | Trigger::Mixed { sampling, .. }) => {
+            let (lo, hi) = *sampling;
+            if lo > 0.0 && hi >= lo && hi.is_finite() {
+                Ok(lo)
+            } else {
+                Err(format!(
+                    "the sampling interval {lo} .. {hi} s must be positive, finite and increasing"
+                ))
+            }
+        }
+        _ => Ok(h),
+    }
+}
+
+/// Validates the scenario of `prepared` with the overrides of `opts` for a
+/// plant of `dim` states: time span and step count, initial state, trigger,
+/// tolerances. The one gate every entry point goes through.
+pub fn plan<'a>(
+    prepared: &'a Prepared,
+    opts: &'a Options,
+    dim: usize,
+) -> Result<Plan<'a>, SimError> {
+    let spec = &prepared.model.spec;
+    let src = &prepared.source;
     let n = spec.n();
-    let m = spec.m();
+    let sim = spec.simulate.as_ref().ok_or_else(|| {
+        SimError::spec("the spec has no `simulate { ... }` block (add one with `x0` and `time`)")
+    })?;
+    let block = Origin::Spec(
+        src,
+        head(sim.span, "simulate".len()),
+        "raise the `time` step or shorten the span",
+    );
     let (t0, spec_t1, h) = sim.time;
-    let t1 = opts.horizon.map_or(spec_t1, |hz| t0 + hz);
-    if !(h > 0.0 && t1 > t0 && t1.is_finite()) {
-        return Err(SimError::spec(format!(
-            "invalid time span {t0} .. {t1} step {h}"
+    let t1 = match opts.horizon {
+        Some(hz) if hz.is_finite() && hz > 0.0 => t0 + hz,
+        Some(hz) => {
+            return Err(SimError::usage(format!(
+                "the horizon must be a positive number of seconds (got {hz})"
+            )))
+        }
+        None => spec_t1,
+    };
+    let trigger = opts
+        .trigger
+        .as_ref()
+        .or(spec.trigger.as_ref().map(|t| &t.node));
+    let sampling = match (&opts.trigger, &spec.trigger) {
+        (None, Some(t)) => Origin::Spec(src, t.span, "use a positive shortest sampling interval"),
+        _ => Origin::Override,
+    };
+    let shortest = shortest_interval(trigger, h).map_err(|e| sampling.error(e))?;
+    let steps = step_count(t0, t1, h, shortest).map_err(|e| {
+        let origin = if opts.horizon.is_some() || opts.trigger.is_some() {
+            &Origin::Override
+        } else {
+            &block
+        };
+        origin.error(format!("cannot simulate: {e}"))
+    })?;
+    let mut x0 = opts.x0.clone().unwrap_or_else(|| sim.x0.clone());
+    if let Some(bad) = x0.iter().find(|v| !v.is_finite()) {
+        return Err(SimError::usage(format!(
+            "the initial state has a non-finite component ({bad}); every component of x0 must be a finite number"
         )));
     }
-    let plant = Plant::new(spec)?;
-    let dim = plant.dim();
-    let mut x = opts.x0.clone().unwrap_or_else(|| sim.x0.clone());
-    if x.len() == n {
-        x.resize(dim, 0.0);
+    if x0.len() == n {
+        x0.resize(dim, 0.0);
     }
-    if x.len() != dim {
+    if x0.len() != dim {
         return Err(SimError::usage(format!(
             "x0 has {} components; the plant has {n} controller states{}",
-            x.len(),
+            x0.len(),
             if dim > n {
                 format!(
                     " and {} extra states ({n} or {dim} values expected)",
@@ -111,24 +190,65 @@ pub fn run(
             }
         )));
     }
-    let trigger = opts
-        .trigger
-        .as_ref()
-        .or(spec.trigger.as_ref().map(|t| &t.node));
-    let seed = opts.seed.unwrap_or(sim.seed);
-    let mut sampler = sampler(trigger, n, t0, h, seed, design_weight, p)?;
-    let integrator = opts.integrator.unwrap_or(sim.integrator);
+    let rel = opts.convergence_rel_tol;
     let (rtol, atol) = opts.tolerances;
-    let mut stepper = match integrator {
+    let positive = |v: f64| v > 0.0 && v.is_finite();
+    if !(positive(rel) && rel <= 1.0 && positive(rtol) && positive(atol)) {
+        return Err(SimError::usage(format!(
+            "tolerances must be positive and finite, the convergence tolerance at most 1 (got {rel}, rtol {rtol}, atol {atol})"
+        )));
+    }
+    Ok(Plan {
+        t0,
+        t1,
+        h,
+        steps,
+        x0,
+        trigger,
+        seed: opts.seed.unwrap_or(sim.seed),
+        integrator: opts.integrator.unwrap_or(sim.integrator),
+    })
+}
+
+/// Runs the scenario of `prepared` in closed loop with the runtime controller
+/// built from its tables, streaming the CSV rows to `csv` if given; memory
+/// does not grow with the run's length.
+pub fn run(
+    prepared: &Prepared,
+    opts: &Options,
+    mut csv: Option<&mut dyn Write>,
+) -> Result<Outcome, SimError> {
+    let started = Instant::now();
+    let (model, tables) = (&prepared.model, &prepared.tables);
+    let spec = &model.spec;
+    let n = spec.n();
+    let m = spec.m();
+    let plant = Plant::new(spec, &prepared.source)?;
+    let dim = plant.dim();
+    let plan = plan(prepared, opts, dim)?;
+    let (t0, t1, h) = (plan.t0, plan.t1, plan.h);
+    let mut x = plan.x0.clone();
+    let mut sampler = sampler(
+        plan.trigger,
+        n,
+        t0,
+        h,
+        plan.seed,
+        prepared.trigger_weight.as_ref(),
+        &prepared.p,
+    )?;
+    let (rtol, atol) = opts.tolerances;
+    let mut stepper = match plan.integrator {
         Integrator::Rk4 => Stepper::Rk4(Rk4::new(dim, h)),
         Integrator::Dopri5 => Stepper::Dopri5(Dopri5::new(dim, rtol, atol, h)),
     };
     let terms = runtime_terms(tables);
     let controller = law(tables, &terms)?;
-    let signals = Signals::new(spec);
+    let region = Region::new(model, tables);
+    let signals = Signals::new(spec, &prepared.source);
     let mut w = vec![0.0; signals.len()];
     let mut u = vec![0.0; m];
-    let mut trace = Trace {
+    let trace = Trace {
         state_names: tables
             .state_names
             .iter()
@@ -138,25 +258,37 @@ pub fn run(
         input_names: tables.input_names.clone(),
         ..Trace::default()
     };
+    let write_err = |e: std::io::Error| SimError::usage(format!("cannot write the CSV trace: {e}"));
+    if let Some(out) = csv.as_mut() {
+        super::csv::header(*out, &trace.state_names, &trace.input_names).map_err(write_err)?;
+    }
+    let mut tally = Tally::new(n, m, &x, opts.convergence_rel_tol);
     let mut saturated = 0u64;
     let mut nonfinite_at = None;
     let mut progress = Progress::new(opts.progress, t0, t1);
     let mut t = t0;
     let mut k = 0u64;
-    loop {
+    let last_sent = loop {
         let sent = sampler.gate.decide(&x[..n]);
+        let mut no_rule = false;
         if sent {
             let flags = controller.command(&x[..n], &mut u);
-            if flags.contains(Flags::SATURATED) {
-                saturated += 1;
-            }
+            saturated += u64::from(flags.contains(Flags::SATURATED));
+            no_rule = flags.contains(Flags::NO_RULE_FIRED);
         }
-        trace.t.push(t);
-        trace.x.push(x.clone());
-        trace.u.push(u.clone());
-        trace.sent.push(sent);
+        tally.sample(&Sample {
+            t,
+            x: &x,
+            u: &u,
+            sent,
+            no_rule,
+            in_region: region.contains(&x[..n]),
+        });
+        if let Some(out) = csv.as_mut() {
+            super::csv::row(*out, t, &x, &u, sent).map_err(write_err)?;
+        }
         if t >= t1 || nonfinite_at.is_some() {
-            break;
+            break sent;
         }
         let mut t_next = sampler.schedule.next(k, t).min(t1);
         // Snap to the end instead of leaving a sliver of an interval.
@@ -174,19 +306,27 @@ pub fn run(
             nonfinite_at = Some(t);
         }
         progress.update(t);
-    }
+    };
     progress.finish();
-    let mut metrics = compute(
-        &trace,
-        &RunFacts {
-            n,
-            u_max: tables.u_max.clone(),
-            rel_tol: opts.convergence_rel_tol,
-            t_end: t1,
-            saturated,
-            nonfinite_at,
-        },
-    );
+    if let Some(out) = csv.as_mut() {
+        out.flush().map_err(write_err)?;
+    }
+    let last = Sample {
+        t,
+        x: &x,
+        u: &u,
+        sent: last_sent,
+        no_rule: false,
+        in_region: true,
+    };
+    let facts = RunFacts {
+        u_max: tables.u_max.clone(),
+        t_end: t1,
+        saturated,
+        nonfinite_at,
+        p: &prepared.p,
+    };
+    let (mut metrics, trace) = tally.finish(&facts, &last, trace);
     metrics.integrator = match &stepper {
         Stepper::Rk4(s) => format!("rk4, fixed step <= {} s", s.h),
         Stepper::Dopri5(s) => format!(
@@ -195,14 +335,15 @@ pub fn run(
         ),
     };
     metrics.rhs_evaluations = stepper.evals();
-    metrics.trigger = describe_trigger(trigger);
+    metrics.trigger = describe_trigger(plan.trigger);
     if let Some(src) = sampler.weight_source {
         metrics.trigger.push_str("; trigger weight U: ");
         metrics.trigger.push_str(src.describe());
     }
     metrics.final_nu = sampler.gate.nu();
-    metrics.seed = seed;
-    metrics.plant = if dim > n || sim.dynamics.is_some() {
+    metrics.seed = plan.seed;
+    let sim_dynamics = spec.simulate.as_ref().is_some_and(|s| s.dynamics.is_some());
+    metrics.plant = if dim > n || sim_dynamics {
         format!(
             "the spec's dynamics block ({dim} states, {} not seen by the controller)",
             dim - n

@@ -1,6 +1,7 @@
 //! Disturbance signals `name(t) = expr` of the `simulate` block, evaluated
 //! with the language's evaluator and `t` bound.
 
+use super::source::SpecSource;
 use super::SimError;
 use tsf_lang::ast::Expr;
 use tsf_lang::eval::{Env, Mode};
@@ -9,14 +10,15 @@ use tsf_lang::spec::Spec;
 /// The disturbance vector `w(t)` (components without a signal are 0).
 pub struct Signals<'a> {
     spec: &'a Spec,
+    source: &'a SpecSource,
     /// `(offset, len, expr)` per defined signal.
     parts: Vec<(usize, usize, &'a Expr)>,
     q: usize,
 }
 
 impl<'a> Signals<'a> {
-    /// The signals of `spec`'s scenario.
-    pub fn new(spec: &'a Spec) -> Self {
+    /// The signals of `spec`'s scenario (evaluation errors point into `source`).
+    pub fn new(spec: &'a Spec, source: &'a SpecSource) -> Self {
         let parts = spec
             .simulate
             .iter()
@@ -25,6 +27,7 @@ impl<'a> Signals<'a> {
             .collect();
         Signals {
             spec,
+            source,
             parts,
             q: spec.q(),
         }
@@ -54,14 +57,18 @@ impl<'a> Signals<'a> {
             mode: Mode::Exact,
         };
         for &(offset, len, e) in &self.parts {
-            let v = env.eval(e).map_err(|d| {
-                SimError::spec(format!("disturbance signal at t = {t}: {}", d.message))
-            })?;
+            let v = env
+                .eval(e)
+                .map_err(|d| self.source.eval_error("disturbance signal", t, d))?;
             if v.len() != len {
-                return Err(SimError::spec(format!(
-                    "disturbance signal has {} components, expected {len}",
-                    v.len()
-                )));
+                return Err(self.source.error_at(
+                    e.span,
+                    format!(
+                        "disturbance signal has {} components, expected {len}",
+                        v.len()
+                    ),
+                    "give the signal as many components as the disturbance",
+                ));
             }
             if let Some(dst) = w.get_mut(offset..offset + len) {
                 dst.copy_from_slice(v.as_slice());
