@@ -127,6 +127,19 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
             &t.reductions,
         )?);
     }
+    if let Some(s) = &design.sampled {
+        let plan = crate::synth::TriggerPlan {
+            gains: design.gains.clone(),
+            ..s.plan.clone()
+        };
+        let sb = crate::synth::trigger::build(model, &plan, design.eps, false)?;
+        lmis.extend(margins_of(
+            &sb.problem,
+            &sb.nonstrict,
+            &s.values,
+            &s.reductions,
+        )?);
+    }
     let min_margin = lmis
         .iter()
         .filter(|l| l.strict)

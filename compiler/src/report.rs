@@ -117,6 +117,20 @@ pub struct TriggerReport {
     pub weight_eigenvalues: Vec<f64>,
 }
 
+/// The certified sampled loop: every sample transmitted, the command held
+/// (zero-order hold) for intervals in `sampling`.
+#[derive(Debug, Serialize)]
+pub struct SampledReport {
+    /// [h_min, h_max] in s (equal for a periodic trigger).
+    pub sampling: [f64; 2],
+    /// What the certificate covers, in words.
+    pub covers: String,
+    /// P of the sampled loop's functional (n x n rows); under saturation E(P, 1)
+    /// is its region of attraction.
+    #[serde(rename = "P")]
+    pub p: Vec<Vec<f64>>,
+}
+
 /// Why there is no certified design.
 #[derive(Debug, Serialize)]
 pub struct Diagnosis {
@@ -169,6 +183,9 @@ pub struct Report {
     pub region_of_attraction: Option<RegionOfAttraction>,
     /// The synthesized event trigger.
     pub trigger: Option<TriggerReport>,
+    /// The certified sampled loop (periodic trigger, or aperiodic sampling
+    /// without a threshold).
+    pub sampled_loop: Option<SampledReport>,
     /// Solver.
     pub solver: SolverInfo,
     /// Timings.
@@ -317,9 +334,11 @@ pub fn report(
         reductions: design
             .map(|d| {
                 let trigger = d.trigger.iter().flat_map(|t| &t.reductions);
+                let sampled = d.sampled.iter().flat_map(|s| &s.reductions);
                 d.reductions
                     .iter()
                     .chain(trigger)
+                    .chain(sampled)
                     .map(|r| r.to_string())
                     .collect()
             })
@@ -334,7 +353,13 @@ pub fn report(
                         .is_some()
             })
             .map(|d| {
-                let p = d.trigger.as_ref().map_or(&d.p, |t| &t.p);
+                // The region of the loop that ships: event-triggered, sampled
+                // or continuous.
+                let p = match (&d.trigger, &d.sampled) {
+                    (Some(t), _) => &t.p,
+                    (None, Some(s)) => &s.p,
+                    (None, None) => &d.p,
+                };
                 let level = |x0: &[f64]| {
                     let x0 = nalgebra::DVector::from_column_slice(x0);
                     (x0.transpose() * p * &x0)[(0, 0)]
@@ -359,6 +384,14 @@ pub fn report(
             .filter(|_| certified)
             .and_then(|d| d.trigger.as_ref())
             .map(|t| trigger_report(model, t)),
+        sampled_loop: design
+            .filter(|_| certified)
+            .and_then(|d| d.sampled.as_ref())
+            .map(|s| SampledReport {
+                sampling: [s.plan.sampling.0, s.plan.sampling.1],
+                covers: crate::synth::sampling::covers(&s.plan),
+                p: rows(&s.p),
+            }),
         solver: SolverInfo {
             name: "clarabel",
             status: design

@@ -117,6 +117,21 @@ fn shortest_interval(trigger: Option<&Trigger>, h: f64) -> Result<f64, String> {
                 ))
             }
         }
+        Some(Trigger::Periodic { every }) => {
+            let ticks = (every / h).round();
+            if !(every.is_finite() && *every > 0.0) {
+                Err(format!(
+                    "the trigger period {every} s must be positive and finite"
+                ))
+            } else if ticks < 1.0 || (ticks * h - every).abs() > 1e-9 * every {
+                let step = every / (every / h).ceil().max(1.0);
+                Err(format!(
+                    "the trigger period {every} s is not a whole number of time steps ({h} s): the controller would run at another period than the one certified; use a time step that divides it (e.g. step {step:e})"
+                ))
+            } else {
+                Ok(h)
+            }
+        }
         _ => Ok(h),
     }
 }
@@ -155,7 +170,11 @@ pub fn plan<'a>(
         .as_ref()
         .or(spec.trigger.as_ref().map(|t| &t.node));
     let sampling = match (&opts.trigger, &spec.trigger) {
-        (None, Some(t)) => Origin::Spec(src, t.span, "use a positive shortest sampling interval"),
+        (None, Some(t)) => Origin::Spec(
+            src,
+            t.span,
+            "the sampling of the trigger must be positive and fit the time step",
+        ),
         _ => Origin::Override,
     };
     let shortest = shortest_interval(trigger, h).map_err(|e| sampling.error(e))?;

@@ -99,6 +99,23 @@ pub struct Design {
     pub approximate: bool,
     /// The synthesized event trigger (aperiodic trigger with `weight = synthesize`).
     pub trigger: Option<TriggerDesign>,
+    /// The sampled-loop certificate (periodic trigger, or aperiodic sampling
+    /// without a threshold).
+    pub sampled: Option<SampledDesign>,
+}
+
+/// The certificate of the sampled loop for the gains of a [`Design`]: every
+/// sample transmitted, intervals in `plan.sampling`.
+#[derive(Debug, Clone)]
+pub struct SampledDesign {
+    /// The problem data.
+    pub plan: TriggerPlan,
+    /// P of the sampled loop's functional: under saturation the region is E(P, 1).
+    pub p: DMatrix<f64>,
+    /// Values of every variable of the solved problem.
+    pub values: Vec<(String, DMatrix<f64>)>,
+    /// Reductions applied to the solved problem.
+    pub reductions: Vec<Reduction>,
 }
 
 /// A synthesized event trigger for the gains of a [`Design`] (two-step method).
@@ -211,11 +228,20 @@ impl std::fmt::Display for SynthError {
     }
 }
 
-/// Data of the trigger problem (everything but nu is fixed by step 1 and the spec).
+/// Data of the sampled-loop problem (everything but nu is fixed by step 1 and
+/// the spec): the event-triggered loop, or with `event` false a loop that
+/// transmits every sample (periodic or aperiodic sampling without a threshold).
+/// Empty `levels` leave the dead zone out; `linf` false the disturbance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriggerPlan {
     /// Sampling intervals [h_min, h_max].
     pub sampling: (f64, f64),
+    /// Whether an event condition decides transmissions (the error e enters).
+    pub event: bool,
+    /// Whether the L-inf channel (`d`, `c`, `g`, `xi_max`, `tau_bar`) enters.
+    pub linf: bool,
+    /// Initial sets E(P, 1) must contain (named), for a region of attraction.
+    pub contain: Vec<(String, tsf_lang::spec::InitialSet)>,
     /// Threshold nu (bisected).
     pub nu: f64,
     /// phi of V' + phi V - xi tau' tau < 0.

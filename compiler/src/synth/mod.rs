@@ -21,13 +21,14 @@ pub mod reduction;
 pub mod relaxation;
 pub mod relaxations;
 mod sampled;
+pub mod sampling;
 mod search;
 pub mod trigger;
 
 pub use achieved::{Achieved, Quantity};
 pub use blocks::common_b;
 pub use build::{build, Built};
-pub use design::{Design, Settings, SolverLog, SynthError, TriggerDesign};
+pub use design::{Design, SampledDesign, Settings, SolverLog, SynthError, TriggerDesign};
 pub use objective::BuildError;
 pub use plan::{Bound, Goal, Plan};
 pub use reduction::Reduction;
@@ -41,6 +42,9 @@ use search::Runner;
 pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthError> {
     if let Some(e) = experimental::theorem2::synthesize(model, settings) {
         return Err(e);
+    }
+    if let Some(why) = sampling::uncovered(model) {
+        return Err(SynthError::Unsupported(why));
     }
     let (plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
     let mut runner = Runner {
@@ -56,6 +60,11 @@ pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthE
                 let (t, notes) = runner.trigger(&d)?;
                 d.notes.extend(notes);
                 d.trigger = Some(t);
+            }
+            if let Some(h) = sampling::wanted(model) {
+                let (s, note) = runner.sampled(&d, h)?;
+                d.notes.push(note);
+                d.sampled = Some(s);
             }
             d.log = std::mem::take(&mut runner.log);
             Ok(d)

@@ -91,6 +91,7 @@ impl Runner<'_> {
             certify_time: Duration::ZERO,
             approximate,
             trigger: None,
+            sampled: None,
         })))
     }
 

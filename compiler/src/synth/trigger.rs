@@ -31,20 +31,20 @@ use super::search::Runner;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use std::time::Instant;
-use tsf_lang::spec::{Trigger, TriggerSynthesis, Weight};
+use tsf_lang::spec::{InitialSet, Trigger, TriggerSynthesis, Weight};
 use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
 
-/// The variables of the trigger problem.
+/// The variables of the sampled-loop problem (`None`: the part is absent).
 #[derive(Debug, Clone)]
 pub struct TriggerVars {
     /// P of V1 = x' P x.
     pub p: Var,
-    /// Trigger weight Upsilon.
-    pub w: Var,
-    /// L-inf gain gamma.
-    pub gamma: Var,
-    /// xi.
-    pub xi: Var,
+    /// Trigger weight Upsilon (event triggers).
+    pub w: Option<Var>,
+    /// L-inf gain gamma (with the L-inf channel).
+    pub gamma: Option<Var>,
+    /// xi (with the L-inf channel).
+    pub xi: Option<Var>,
 }
 
 /// A built trigger problem.
@@ -66,9 +66,9 @@ struct LoopVars {
     p: Var,
     y: Var,
     l: [Var; 2],
-    w: Var,
-    t: Var,
-    xi: Var,
+    w: Option<Var>,
+    t: Option<Var>,
+    xi: Option<Var>,
 }
 
 /// Selector of rows `at .. at + len` of a vector of length `k`, as a `len x k` matrix.
@@ -76,9 +76,33 @@ fn pick(len: usize, at: usize, k: usize) -> DMatrix<f64> {
     DMatrix::from_fn(len, k, |r, c| if c == at + r { 1.0 } else { 0.0 })
 }
 
+/// Where the parts of psi = [x; x(s); e; dz; tau] sit; absent parts are `None`.
+struct Layout {
+    k: usize,
+    e: Option<usize>,
+    dz: Option<usize>,
+    tau: Option<(usize, usize)>,
+}
+
+impl Layout {
+    fn of(model: &TsModel, plan: &TriggerPlan) -> Self {
+        let mut k = 2 * model.n;
+        let mut take = |len: usize| {
+            let at = k;
+            k += len;
+            at
+        };
+        let e = plan.event.then(|| take(model.n));
+        let dz = (!plan.levels.is_empty()).then(|| take(model.m));
+        let q = plan.d.first().map_or(0, |d| d.ncols());
+        let tau = (plan.linf && q > 0).then(|| (take(q), q));
+        Layout { k, e, dz, tau }
+    }
+}
+
 /// Lambda_{ij r}(h) with the derivative eliminated (gains fixed, so
 /// x' = Phi_ij psi with a constant Phi_ij and every term is linear in the
-/// unknowns). psi = [x; x(s); e; dz; tau] (size 3n + m + q):
+/// unknowns). psi = [x; x(s); e; dz; tau] (the parts the plan has):
 ///
 ///   Xi = He(E_x' P Phi) + phi E_x' P E_x + He([E_x; E_s]' L (E_x - E_s))
 ///        + nu (E_s - E_e)' W (E_s - E_e) - E_e' W E_e
@@ -98,28 +122,47 @@ fn lambda(
     r: u8,
 ) -> Result<Expr, LmiError> {
     let (n, m) = (model.n, model.m);
-    let q = plan.d[i].ncols();
-    let k = 3 * n + m + q;
-    let (ex, es, ee) = (pick(n, 0, k), pick(n, n, k), pick(n, 2 * n, k));
-    let (edz, etau) = (pick(m, 3 * n, k), pick(q, 3 * n + m, k));
+    let lay = Layout::of(model, plan);
+    let k = lay.k;
+    let (ex, es) = (pick(n, 0, k), pick(n, n, k));
     let b = &model.rules[i].b;
-    let bf = b * &plan.gains[j];
-    let phi_m = &model.rules[i].a * &ex + &bf * (&es - &ee) - b * &edz + &plan.d[i] * &etau;
-    let s_e = &es - &ee;
+    // x(t_k) = x(s) - e: the state the controller holds.
+    let xk = match lay.e {
+        Some(at) => &es - pick(n, at, k),
+        None => es.clone(),
+    };
+    let mut phi_m = &model.rules[i].a * &ex + b * &plan.gains[j] * &xk;
+    if let Some(at) = lay.dz {
+        phi_m -= b * pick(m, at, k);
+    }
+    if let Some((at, q)) = lay.tau {
+        phi_m += &plan.d[i] * pick(q, at, k);
+    }
     let exs = &ex - &es;
-    let xi_block = Expr::product(&ex.transpose(), v.p, &phi_m)?
+    let mut xi_block = Expr::product(&ex.transpose(), v.p, &phi_m)?
         .he()?
         .add(Expr::product(&ex.transpose(), v.p, &ex)?.scale(plan.phi)?)?
         .add(
             Expr::product(&ex.transpose(), v.l[0], &exs)?
                 .add(Expr::product(&es.transpose(), v.l[1], &exs)?)?
                 .he()?,
-        )?
-        .add(Expr::product(&s_e.transpose(), v.w, &s_e)?.scale(plan.nu)?)?
-        .sub(Expr::product(&ee.transpose(), v.w, &ee)?)?
-        .add(Expr::product(&edz.transpose(), v.t, &(&plan.sector[j] * &s_e))?.he()?)?
-        .sub(Expr::product(&edz.transpose(), v.t, &edz)?.scale(2.0)?)?
-        .sub(Expr::scaled(v.xi, &(etau.transpose() * &etau))?)?;
+        )?;
+    if let (Some(at), Some(w)) = (lay.e, v.w) {
+        let ee = pick(n, at, k);
+        xi_block = xi_block
+            .add(Expr::product(&xk.transpose(), w, &xk)?.scale(plan.nu)?)?
+            .sub(Expr::product(&ee.transpose(), w, &ee)?)?;
+    }
+    if let (Some(at), Some(t)) = (lay.dz, v.t) {
+        let edz = pick(m, at, k);
+        xi_block = xi_block
+            .add(Expr::product(&edz.transpose(), t, &(&plan.sector[j] * &xk))?.he()?)?
+            .sub(Expr::product(&edz.transpose(), t, &edz)?.scale(2.0)?)?;
+    }
+    if let (Some((at, q)), Some(xi)) = (lay.tau, v.xi) {
+        let etau = pick(q, at, k);
+        xi_block = xi_block.sub(Expr::scaled(xi, &(etau.transpose() * &etau))?)?;
+    }
     if r == 1 {
         return xi_block.add(Expr::product(&phi_m.transpose(), v.y, &phi_m)?.scale(h)?);
     }
@@ -137,8 +180,9 @@ fn lambda(
     ])
 }
 
-/// Builds the trigger LMIs. With `reduce`, the h = h_min vertices are left
-/// out: every Lambda_r(h) is Xi + h Pi_r with Pi_r >= 0, so h_max implies them.
+/// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are
+/// left out: every Lambda_r(h) is Xi + h Pi_r with Pi_r >= 0, so h_max
+/// implies them.
 pub fn build(
     model: &TsModel,
     plan: &TriggerPlan,
@@ -155,24 +199,46 @@ fn build_inner(
     reduce: bool,
 ) -> Result<TriggerBuilt, LmiError> {
     let (n, m, r) = (model.n, model.m, model.r());
-    let q = plan.d.first().map_or(0, |d| d.ncols());
+    let sector = !plan.levels.is_empty();
     let mut problem = Problem::new();
     let p = problem.symmetric("Ptr", n)?;
     let y = problem.symmetric("Ytr", n)?;
-    let w = problem.symmetric("Upsilon", n)?;
+    let w = if plan.event {
+        Some(problem.symmetric("Upsilon", n)?)
+    } else {
+        None
+    };
     let l = [problem.full("L1", n, n)?, problem.full("L2", n, n)?];
-    let t = problem.diagonal("T", m)?;
-    let gamma = problem.scalar("gamma_tr")?;
-    let xi = problem.scalar("xi_tr")?;
+    let t = if sector {
+        Some(problem.diagonal("T", m)?)
+    } else {
+        None
+    };
+    let (gamma, xi) = if plan.linf {
+        (
+            Some(problem.scalar("gamma_tr")?),
+            Some(problem.scalar("xi_tr")?),
+        )
+    } else {
+        (None, None)
+    };
     let mut relaxer = Relaxer::every_pair(model, eps);
     problem.psd("trigger P > 0", Expr::var(p), eps)?;
     problem.psd("trigger Y > 0", Expr::var(y), eps)?;
-    problem.psd("trigger Upsilon > 0", Expr::var(w), eps)?;
-    problem.psd("trigger T > 0", Expr::var(t), eps)?;
+    if let Some(w) = w {
+        problem.psd("trigger Upsilon > 0", Expr::var(w), eps)?;
+    }
+    if let Some(t) = t {
+        problem.psd("trigger T > 0", Expr::var(t), eps)?;
+    }
     let vars = LoopVars { p, y, l, w, t, xi };
     let (h_min, h_max) = plan.sampling;
-    let hs: &[f64] = if reduce { &[h_max] } else { &[h_min, h_max] };
-    if reduce {
+    let hs: &[f64] = if reduce || h_min == h_max {
+        &[h_max]
+    } else {
+        &[h_min, h_max]
+    };
+    if reduce && h_min < h_max {
         relaxer.reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r)));
     }
     for &h in hs {
@@ -185,8 +251,12 @@ fn build_inner(
         }
     }
     // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi.
-    let level = 1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi;
-    for j in 0..r {
+    let level = if plan.linf {
+        1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi
+    } else {
+        1.0
+    };
+    for j in (0..r).filter(|_| sector) {
         let fg = &plan.gains[j] - &plan.sector[j];
         for (s, ub) in plan.levels.iter().enumerate() {
             let row = Expr::constant(&DMatrix::from_iterator(1, n, fg.row(s).iter().copied()))?;
@@ -201,9 +271,52 @@ fn build_inner(
             )?;
         }
     }
-    // Output peak: [phi P, 0, C'; *, (gamma - xi) I, G'; *, *, gamma I] > 0.
+    for (name, e) in &plan.contain {
+        nonstrict_psd(
+            &mut problem,
+            &mut relaxer.nonstrict,
+            &format!("sampled region of attraction: {name}"),
+            contain_block(p, e)?,
+            eps,
+        )?;
+    }
+    if let (Some(gamma), Some(xi)) = (gamma, xi) {
+        peak(&mut problem, plan, p, gamma, xi, eps)?;
+        problem.minimize(Expr::var(gamma))?;
+    }
+    Ok(TriggerBuilt {
+        problem,
+        vars: TriggerVars { p, w, gamma, xi },
+        reductions: relaxer.reductions,
+        nonstrict: relaxer.nonstrict,
+    })
+}
+
+/// `E(P, 1)` contains the initial set: `1 - x0' P x0 >= 0` for a point,
+/// `R - P >= 0` for the ellipsoid `x' R x <= 1`.
+fn contain_block(p: Var, set: &InitialSet) -> Result<Expr, LmiError> {
+    match set {
+        InitialSet::Point(x0) => {
+            let x = DMatrix::from_column_slice(x0.len(), 1, x0);
+            Expr::constant(&DMatrix::identity(1, 1))?.sub(Expr::product(&x.transpose(), p, &x)?)
+        }
+        InitialSet::Ellipsoid(r) => Expr::constant(r)?.sub(Expr::var(p)),
+    }
+}
+
+/// The output peak: [phi P, 0, C'; *, (gamma - xi) I, G'; *, *, gamma I] > 0
+/// and 0 < xi <= xi_max.
+fn peak(
+    problem: &mut Problem,
+    plan: &TriggerPlan,
+    p: Var,
+    gamma: Var,
+    xi: Var,
+    eps: f64,
+) -> Result<(), LmiError> {
+    let q = plan.d.first().map_or(0, |d| d.ncols());
     let pdim = plan.c.nrows();
-    let peak = Expr::sym_blocks(vec![
+    let block = Expr::sym_blocks(vec![
         vec![
             Some(Expr::var(p).scale(plan.phi)?),
             None,
@@ -223,7 +336,7 @@ fn build_inner(
             Some(Expr::scaled(gamma, &DMatrix::identity(pdim, pdim))?),
         ],
     ])?;
-    problem.psd("trigger linf peak", peak, eps)?;
+    problem.psd("trigger linf peak", block, eps)?;
     problem.add_scalar("trigger xi > 0", Expr::var(xi), Relation::Ge, eps)?;
     problem.add_scalar(
         "trigger xi <= xi_max",
@@ -231,13 +344,7 @@ fn build_inner(
         Relation::Le,
         plan.xi_max,
     )?;
-    problem.minimize(Expr::var(gamma))?;
-    Ok(TriggerBuilt {
-        problem,
-        vars: TriggerVars { p, w, gamma, xi },
-        reductions: relaxer.reductions,
-        nonstrict: relaxer.nonstrict,
-    })
+    Ok(())
 }
 
 /// Whether the spec asks for a synthesized trigger weight with the two-step
@@ -288,6 +395,9 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     let xi1 = design.achieved.get(Quantity::LinfXi).unwrap_or(0.0);
     Ok(TriggerPlan {
         sampling: *sampling,
+        event: true,
+        linf: true,
+        contain: Vec::new(),
         nu: 0.0,
         phi: linf.phi,
         xi_max: XI_FACTOR * xi1.max(f64::EPSILON),
@@ -328,6 +438,11 @@ impl Runner<'_> {
                 .cloned()
                 .map_err(|e| SynthError::Internal(format!("{e}")))
         };
+        let need = |v: Option<Var>| {
+            v.ok_or_else(|| {
+                SynthError::Internal("internal error: event-trigger variable missing".into())
+            })
+        };
         let all = built
             .problem
             .vars()
@@ -336,10 +451,10 @@ impl Runner<'_> {
         Ok(Some(TriggerDesign {
             plan: plan.clone(),
             method: "two_step",
-            weight: get(built.vars.w)?,
+            weight: get(need(built.vars.w)?)?,
             p: get(built.vars.p)?,
-            gamma: get(built.vars.gamma)?[(0, 0)],
-            xi: get(built.vars.xi)?[(0, 0)],
+            gamma: get(need(built.vars.gamma)?)?[(0, 0)],
+            xi: get(need(built.vars.xi)?)?[(0, 0)],
             values: all,
             reductions: built.reductions,
         }))

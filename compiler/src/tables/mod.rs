@@ -41,6 +41,10 @@ pub struct Header {
     pub min_margin: f64,
     /// Relaxation used.
     pub relaxation: String,
+    /// Certified sampling intervals [h_min, h_max] in s (equal: a period) of a
+    /// loop that transmits every sample; `None` for a continuous loop or an
+    /// event trigger (its sensor module carries its sampling).
+    pub sampling: Option<(f64, f64)>,
 }
 
 /// Everything a generator needs.
@@ -150,6 +154,7 @@ pub fn tables(
             objectives: achieved_objectives(&design.achieved),
             min_margin: cert.min_margin,
             relaxation: spec.relaxation.node.to_string(),
+            sampling: design.sampled.as_ref().map(|s| s.plan.sampling),
         },
         n: model.n,
         m: model.m,

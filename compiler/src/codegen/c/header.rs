@@ -89,6 +89,16 @@ extern "C" {{
             np = t.p,
             r = t.r,
         );
+        match t.header.sampling {
+            Some((lo, hi)) if lo == hi => {
+                let _ = writeln!(s, "#define {u}SAMPLE_PERIOD {} /* s: the certified sampling period; call step once per period and hold the command (the certificate covers this period only) */", super::lit(hi));
+            }
+            Some((lo, hi)) => {
+                let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MIN {} /* s: shortest certified interval between two steps */", super::lit(lo));
+                let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MAX {} /* s: longest certified interval between two steps */", super::lit(hi));
+            }
+            None => {}
+        }
         for (name, bit, doc) in FLAGS {
             let _ = writeln!(s, "#define {u}FLAG_{name} {bit}u /* {doc} */");
         }

@@ -148,6 +148,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     }
     imports.push(quote!(Rule));
     imports.push(quote!(Term));
+    let sampling = sampling_consts(t.header.sampling);
     let tokens = quote! {
         use tsf_runtime::{#(#imports),*};
 
@@ -159,6 +160,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         pub const P: usize = #p;
         /// Number of rules.
         pub const R: usize = #r;
+        #sampling
 
         #(#statics)*
 
@@ -263,4 +265,31 @@ fn header(t: &Tables) -> String {
         h.min_margin
     ));
     s
+}
+
+/// The certified sampling as constants: `SAMPLE_PERIOD` for a periodic
+/// trigger, `SAMPLE_INTERVAL_MIN` / `_MAX` for aperiodic sampling.
+fn sampling_consts(sampling: Option<(f64, f64)>) -> TokenStream {
+    match sampling {
+        None => TokenStream::new(),
+        Some((lo, hi)) if lo == hi => {
+            let h = Literal::f64_unsuffixed(hi);
+            quote! {
+                /// The certified sampling period in seconds: call `step` once every
+                /// `SAMPLE_PERIOD` and hold its command in between (zero-order hold).
+                /// The certificate covers this period only.
+                pub const SAMPLE_PERIOD: f64 = #h;
+            }
+        }
+        Some((lo, hi)) => {
+            let (lo, hi) = (Literal::f64_unsuffixed(lo), Literal::f64_unsuffixed(hi));
+            quote! {
+                /// Shortest certified interval in seconds between two calls of `step`
+                /// (the command is held in between).
+                pub const SAMPLE_INTERVAL_MIN: f64 = #lo;
+                /// Longest certified interval in seconds between two calls of `step`.
+                pub const SAMPLE_INTERVAL_MAX: f64 = #hi;
+            }
+        }
+    }
 }

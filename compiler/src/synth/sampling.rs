@@ -1,0 +1,243 @@
+//! The sampled loop a spec ships. `trigger periodic { every = h; }` holds the
+//! command for h seconds; `trigger aperiodic` without a threshold holds it for
+//! any interval in [h_min, h_max]. The continuous design's gains F_j (and
+//! sector gains G_j under saturation) are certified for that loop with the
+//! looped functional of [`super::trigger`] (Seuret, "A novel stability analysis
+//! of linear systems under asynchronous samplings", 2012; Xu & Huang 2020) with
+//! every sample transmitted (e = 0), phi = 0: the sampled loop is
+//! asymptotically stable and, under saturation, E(P, 1) is a region of
+//! attraction of it. When the gains are not certified for the spec's
+//! sampling, synthesis is refused with the longest sampling interval that is
+//! (bisection, re-solved at the advised value).
+
+use super::design::{Design, SampledDesign, SynthError, TriggerPlan};
+use super::objectives::Saturation;
+use super::search::Runner;
+use super::trigger::{self, build};
+use crate::model::TsModel;
+use nalgebra::DMatrix;
+use std::time::Instant;
+use tsf_lang::spec::{Trigger, Weight};
+use tsf_lmi::SolveStatus;
+
+/// Sampling intervals [h_min, h_max] of a loop that transmits every sample,
+/// if the spec's trigger is one (periodic, or aperiodic without a threshold
+/// and not designed by the event-trigger synthesis).
+pub fn wanted(model: &TsModel) -> Option<(f64, f64)> {
+    match model.spec.trigger.as_ref().map(|t| &t.node)? {
+        Trigger::Periodic { every } => Some((*every, *every)),
+        Trigger::Aperiodic {
+            sampling,
+            threshold: None,
+            ..
+        } if !trigger::wanted(model) => Some(*sampling),
+        _ => None,
+    }
+}
+
+/// Why the spec's trigger is outside every certificate tsfc can build, if it
+/// is: compile refuses such a design instead of calling it certified.
+pub fn uncovered(model: &TsModel) -> Option<String> {
+    match model.spec.trigger.as_ref().map(|t| &t.node)? {
+        Trigger::Mixed { .. } => Some(
+            "the `trigger mixed` law (||e|| >= beta ||sigma|| + rho) is not covered by a certificate yet: the certificate covers the continuous loop only; use `trigger aperiodic { sampling = ..; threshold nu = ..; weight = synthesize; }` (certified event trigger) or `trigger periodic { every = ..; }`".into(),
+        ),
+        Trigger::Aperiodic {
+            threshold: Some(_),
+            weight: Weight::Given(_),
+            ..
+        } => Some(
+            "an event trigger with a given weight is not covered by a certificate yet: write `weight = synthesize;` (the weight is then designed and certified with the threshold)".into(),
+        ),
+        _ => None,
+    }
+}
+
+/// The sampled-loop problem for the gains of `design` with intervals `sampling`.
+pub fn plan_for(model: &TsModel, design: &Design, sampling: (f64, f64)) -> TriggerPlan {
+    let sat = design.plan.get::<Saturation>();
+    let sector = match sat {
+        Some(_) => (0..model.r())
+            .map(|j| {
+                design
+                    .values
+                    .iter()
+                    .find(|(n, _)| *n == format!("Z{}", j + 1))
+                    .map_or_else(|| DMatrix::zeros(model.m, model.n), |(_, z)| z * &design.p)
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    let contain = sat
+        .and_then(|s| s.contain.clone())
+        .map(|set| ("initial set".to_string(), set))
+        .into_iter()
+        .collect();
+    TriggerPlan {
+        sampling,
+        event: false,
+        linf: false,
+        contain,
+        nu: 0.0,
+        phi: 0.0,
+        xi_max: 0.0,
+        tau_bar: 0.0,
+        levels: sat.map(|s| s.levels.clone()).unwrap_or_default(),
+        gains: design.gains.clone(),
+        sector,
+        d: Vec::new(),
+        c: DMatrix::zeros(0, model.n),
+        g: DMatrix::zeros(0, 0),
+    }
+}
+
+/// What the sampled-loop certificate covers, in words (report and notes).
+pub fn covers(plan: &TriggerPlan) -> String {
+    let (lo, hi) = plan.sampling;
+    let sampling = if lo == hi {
+        format!("sampled every {hi} s (zero-order hold)")
+    } else {
+        format!("sampled at any intervals in [{lo}, {hi}] s (zero-order hold)")
+    };
+    let region = if plan.levels.is_empty() {
+        "asymptotically stable for every state the rules cover".to_string()
+    } else {
+        "asymptotically stable with the saturating actuator from every state of E(P, 1) (P of this certificate)".to_string()
+    };
+    format!("the loop {sampling} is {region}; disturbance and performance bounds are certified for the continuous loop only")
+}
+
+/// Relative width at which the bisection on the sampling interval stops.
+const PERIOD_REL_TOL: f64 = 0.02;
+
+/// The largest value `<= x` with three significant digits.
+pub fn round_down(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return x;
+    }
+    let scale = 10f64.powi(x.log10().floor() as i32 - 2);
+    let r = (x / scale).floor() * scale;
+    // `r` printed shortest must not exceed x.
+    let printed: f64 = format!("{r}").parse().unwrap_or(r);
+    if printed <= x {
+        printed
+    } else {
+        r - scale
+    }
+}
+
+impl Runner<'_> {
+    /// One sampled-loop SDP: the design, or None when not solved.
+    fn sampled_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<SampledDesign>, SynthError> {
+        let t0 = Instant::now();
+        let built = build(self.model, plan, self.settings.eps, true)?;
+        self.log.build_time += t0.elapsed();
+        let sol = self.solve(&built.problem, "sampled-loop problem")?;
+        if sol.status != SolveStatus::Solved {
+            return Ok(None);
+        }
+        let values = sol
+            .assignment()
+            .map_err(|e| SynthError::Internal(format!("{e}")))?;
+        let all = built
+            .problem
+            .vars()
+            .map(|(name, v)| {
+                values
+                    .value(v)
+                    .cloned()
+                    .map(|m| (name.to_string(), m))
+                    .map_err(|e| SynthError::Internal(format!("{e}")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let p = all
+            .iter()
+            .find(|(n, _)| n == "Ptr")
+            .map(|(_, p)| p.clone())
+            .ok_or_else(|| SynthError::Internal("internal error: Ptr missing".into()))?;
+        Ok(Some(SampledDesign {
+            plan: plan.clone(),
+            p,
+            values: all,
+            reductions: built.reductions,
+        }))
+    }
+
+    /// The sampled-loop certificate for the gains of `design` at the spec's
+    /// sampling, or the refusal with the longest sampling that certifies.
+    pub(super) fn sampled(
+        &mut self,
+        design: &Design,
+        sampling: (f64, f64),
+    ) -> Result<(SampledDesign, String), SynthError> {
+        let base = plan_for(self.model, design, sampling);
+        if let Some(d) = self.sampled_attempt(&base)? {
+            let note = format!("sampled loop certified: {}", covers(&base));
+            return Ok((d, note));
+        }
+        // The longest interval that certifies: scale [h_min, h_max] by s in (0, 1).
+        let at = |s: f64| TriggerPlan {
+            sampling: (sampling.0 * s, sampling.1 * s),
+            ..base.clone()
+        };
+        let what = if sampling.0 == sampling.1 {
+            format!("sampling every {} s", sampling.1)
+        } else {
+            format!("sampling intervals in [{}, {}] s", sampling.0, sampling.1)
+        };
+        let (mut lo, mut hi) = (1.0 / 1024.0, 1.0);
+        if self.sampled_attempt(&at(lo))?.is_none() {
+            return Err(SynthError::Infeasible {
+                message: format!("the gains of the continuous design are not certified for {what}, nor for intervals 1024 times shorter"),
+                achievable: vec!["weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger".into()],
+            });
+        }
+        while hi - lo > PERIOD_REL_TOL * hi {
+            let mid = 0.5 * (lo + hi);
+            if self.sampled_attempt(&at(mid))?.is_some() {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        // Advise a short-printed value, re-solved: advice must certify when used.
+        let mut advice = round_down(sampling.1 * lo);
+        for _ in 0..4 {
+            let s = advice / sampling.1;
+            if self.sampled_attempt(&at(s))?.is_some() {
+                break;
+            }
+            advice = round_down(advice * 0.95);
+        }
+        let write = if sampling.0 == sampling.1 {
+            format!("`trigger periodic {{ every = {advice}; }}`")
+        } else {
+            format!(
+                "`sampling = {} .. {advice};`",
+                round_down(sampling.0 * advice / sampling.1)
+            )
+        };
+        Err(SynthError::Infeasible {
+            message: format!("the sampled loop is not certified: the gains of the continuous design are not certified for {what}"),
+            achievable: vec![format!(
+                "the longest certified sampling interval is about {:.4} s: write {write} (certified), or weaken the objectives that set the gains",
+                sampling.1 * lo
+            )],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_down;
+
+    #[test]
+    fn round_down_never_rounds_up_and_prints_short() {
+        for x in [0.0009, 0.000_937_5, 1.5, 0.123_456, 9.999_9, 1e-7 * 3.3333] {
+            let r = round_down(x);
+            assert!(r <= x && r > 0.98 * x, "{x} -> {r}");
+            assert!(format!("{r}").len() <= 12, "{x} -> {r}");
+        }
+        assert_eq!(round_down(0.123_456), 0.123);
+    }
+}

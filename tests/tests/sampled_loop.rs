@@ -1,0 +1,166 @@
+//! The sampled loop a spec ships is inside the certificate (issue: periodic
+//! triggers were certified for the continuous loop only). Checked against an
+//! independent computation: the exact zero-order-hold discretization of every
+//! frozen rule pair (A_i, B_i, F_j), whose spectral radius must be below 1
+//! wherever the looped-functional certificate holds (the frozen pair is a
+//! special case of the blended, sampled loop in the linear region).
+
+mod common;
+
+use nalgebra::DMatrix;
+use tsf_lang::spec::Emit;
+use tsfc::synth::{self, Settings, SynthError};
+
+/// The mass-spring-damper with a hardening spring and an input limit, with
+/// `trigger`.
+fn msd(trigger: &str) -> String {
+    format!(
+        "tsf 1;\ncontroller msd;\nstate x1, x2;\ninput u saturate 0.7;\n\
+         A(x) = [0, 1; -(1 + x1 ^ 2), -0.5];\nB = [0; 1];\n\
+         premise p = x1 ^ 2 range 0 .. 1 {{ small = trap(-1, -1, 0, 1); large = trap(0, 1, 2, 2); }}\n\
+         rule R1: p is small => at(x1 = 0, x2 = 0);\nrule R2: p is large => at(x1 = 1, x2 = 0);\n\
+         objective decay_rate >= 0.5;\nrelaxation basic;\n{trigger}\n\
+         simulate {{ x0 = [0.3, 0]; time = 0 .. 20 step 0.001; }}\n"
+    )
+}
+
+/// (Phi, Gamma) of x_{k+1} = Phi x_k + Gamma u_k for a hold of `h` seconds.
+fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (n, m) = (a.nrows(), b.ncols());
+    let mut big = DMatrix::zeros(n + m, n + m);
+    big.view_mut((0, 0), (n, n)).copy_from(&(a * h));
+    big.view_mut((0, n), (n, m)).copy_from(&(b * h));
+    let e = big.exp();
+    (
+        e.view((0, 0), (n, n)).into_owned(),
+        e.view((0, n), (n, m)).into_owned(),
+    )
+}
+
+fn spectral_radius(m: &DMatrix<f64>) -> f64 {
+    m.complex_eigenvalues()
+        .iter()
+        .map(|l| l.norm())
+        .fold(0.0, f64::max)
+}
+
+/// The largest spectral radius over the frozen rule pairs sampled every `h`.
+fn worst_frozen_radius(model: &tsfc::model::TsModel, gains: &[DMatrix<f64>], h: f64) -> f64 {
+    let mut worst: f64 = 0.0;
+    for rule in &model.rules {
+        let (phi, gamma) = zoh(&rule.a, &rule.b, h);
+        for f in gains {
+            worst = worst.max(spectral_radius(&(&phi + &gamma * f)));
+        }
+    }
+    worst
+}
+
+#[test]
+fn a_period_outside_the_certificate_is_refused_with_a_period_that_certifies() {
+    let model = common::model_of("msd.tsf", &msd("trigger periodic { every = 1.5; }"));
+    let err = synth::synthesize(&model, &Settings::default()).expect_err("1.5 s is refused");
+    let SynthError::Infeasible {
+        message,
+        achievable,
+    } = &err
+    else {
+        panic!("{err}");
+    };
+    assert!(message.contains("every 1.5 s"), "{message}");
+    // The advice is a value, and that value certifies when written.
+    let advice = &achievable[0];
+    let at = advice.find("every = ").expect("advised period") + "every = ".len();
+    let h: f64 = advice[at..]
+        .split(';')
+        .next()
+        .and_then(|s| s.trim().parse().ok())
+        .expect("a number");
+    assert!(h > 0.01 && h < 1.5, "{advice}");
+    let text = msd(&format!("trigger periodic {{ every = {h}; }}"));
+    let model = common::model_of("msd.tsf", &text);
+    let d = synth::synthesize(&model, &Settings::default()).expect("the advised period certifies");
+    let sampled = d.sampled.as_ref().expect("a sampled-loop certificate");
+    assert_eq!(sampled.plan.sampling, (h, h));
+    let cert = tsfc::certify::certify(&model, &d).expect("certify");
+    assert!(cert.ok, "{}", cert.worst);
+    assert!(
+        cert.lmis
+            .iter()
+            .any(|l| l.name.starts_with("trigger r=2 h=")),
+        "the certificate re-checks the sampled-loop LMIs"
+    );
+    // Independent: every frozen pair sampled at the certified period is stable.
+    let rho = worst_frozen_radius(&model, &d.gains, h);
+    assert!(rho < 1.0, "spectral radius {rho} at h = {h}");
+}
+
+#[test]
+fn the_certified_period_ships_in_the_generated_code_and_the_loop_converges() {
+    let dir = std::env::temp_dir().join(format!("tsfc-sampled-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("msd.tsf");
+    std::fs::write(&path, msd("trigger periodic { every = 0.25; }")).expect("write");
+    let run = tsfc::pipeline::read(&path)
+        .expect("read")
+        .compile(&Settings::default())
+        .expect("compile");
+    assert_eq!(run.exit_code(), 0);
+    let files = run.generate(&[Emit::Rust, Emit::C]).expect("generate");
+    let text = |suffix: &str| {
+        files
+            .iter()
+            .find(|f| f.name.ends_with(suffix))
+            .map(|f| f.text.clone())
+            .unwrap_or_else(|| panic!("no {suffix}"))
+    };
+    assert!(
+        text(".rs").contains("pub const SAMPLE_PERIOD: f64 = 0.25;"),
+        "Rust constant"
+    );
+    assert!(
+        text("msd.h").contains("#define MSD_SAMPLE_PERIOD 0.25 "),
+        "C constant"
+    );
+    let (design, _) = run.certified().expect("certified");
+    let rho = worst_frozen_radius(&run.model, &design.gains, 0.25);
+    assert!(rho < 1.0, "{rho}");
+    // The simulated loop holds the command for the same 0.25 s and converges.
+    let prepared = tsfc::sim::prepare(&path).expect("prepare");
+    let out = tsfc::sim::simulate(&prepared, &tsfc::sim::Options::default()).expect("simulate");
+    assert!(out.metrics.converged && !out.metrics.failed);
+    assert_eq!(
+        out.metrics.transmissions, 81,
+        "20 s / 0.25 s + the first sample"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_period_that_is_not_a_whole_number_of_steps_is_not_simulated() {
+    let dir = std::env::temp_dir().join(format!("tsfc-sampled-odd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("msd.tsf");
+    std::fs::write(&path, msd("trigger periodic { every = 0.0125; }")).expect("write");
+    let prepared = tsfc::sim::prepare(&path).expect("prepare");
+    let err = tsfc::sim::simulate(&prepared, &tsfc::sim::Options::default())
+        .expect_err("0.0125 s is 12.5 steps of 1 ms");
+    assert!(
+        err.to_string().contains("not a whole number of time steps"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn triggers_outside_every_certificate_are_refused() {
+    let model = common::model_of(
+        "msd.tsf",
+        &msd("trigger mixed { sampling = 0.01 .. 0.1; beta = 0.5; rho = 1e-4; }"),
+    );
+    let err = synth::synthesize(&model, &Settings::default()).expect_err("refused");
+    assert!(
+        err.to_string().contains("not covered by a certificate"),
+        "{err}"
+    );
+}
