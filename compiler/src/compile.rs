@@ -3,7 +3,7 @@
 use crate::certify::{certify, Certificate};
 use crate::model::TsModel;
 use crate::report::{report, Report, SpecInfo, Timings};
-use crate::synth::{synthesize, Design, Settings, SynthError};
+use crate::synth::{synthesize_logged, Design, Settings, SolverLog, SynthError};
 use std::time::{Duration, Instant};
 
 /// How a compile ended.
@@ -39,10 +39,10 @@ pub fn compile(
 ) -> Compiled {
     let t0 = Instant::now();
     let mut settings = settings.clone();
-    let mut outcome = run(model, &settings);
+    let (mut outcome, mut log) = run(model, &settings);
     if matches!(&outcome, Ok((_, c)) if !c.ok) {
         settings.eps *= 100.0;
-        let retry = run(model, &settings);
+        let (retry, retry_log) = run(model, &settings);
         if let (Ok((d, c)), Ok(_)) = (&retry, &outcome) {
             if c.ok {
                 let mut d = d.clone();
@@ -52,6 +52,7 @@ pub fn compile(
                     settings.eps
                 ));
                 outcome = Ok((d, c.clone()));
+                log = retry_log;
             }
         }
     }
@@ -60,10 +61,7 @@ pub fn compile(
         Err(SynthError::Infeasible { .. }) => Status::Infeasible,
         _ => Status::Refused,
     };
-    let (solve, build, cert) = match &outcome {
-        Ok((d, _)) => (d.log.solve_time, d.log.build_time, Duration::ZERO),
-        Err(_) => (Duration::ZERO, Duration::ZERO, Duration::ZERO),
-    };
+    let (solve, build, cert) = (log.solve_time, log.build_time, Duration::ZERO);
     let total = front.0 + front.1 + t0.elapsed();
     let timings = Timings {
         parse: front.0.as_secs_f64(),
@@ -73,7 +71,7 @@ pub fn compile(
         certify: cert.as_secs_f64(),
         total: total.as_secs_f64(),
     };
-    let mut report = report(model, spec, &outcome, timings);
+    let mut report = report(model, spec, &outcome, &log, timings);
     if let Ok((d, _)) = &outcome {
         report.timings_s.certify = d.certify_time.as_secs_f64();
     }
@@ -84,10 +82,17 @@ pub fn compile(
     }
 }
 
-fn run(model: &TsModel, settings: &Settings) -> Result<(Design, Certificate), SynthError> {
-    let mut design = synthesize(model, settings)?;
-    let t = Instant::now();
-    let cert = certify(model, &design)?;
-    design.certify_time = t.elapsed();
-    Ok((design, cert))
+/// Synthesizes and certifies; the solver log also when synthesis fails.
+fn run(
+    model: &TsModel,
+    settings: &Settings,
+) -> (Result<(Design, Certificate), SynthError>, SolverLog) {
+    let (design, log) = synthesize_logged(model, settings);
+    let out = design.and_then(|mut design| {
+        let t = Instant::now();
+        let cert = certify(model, &design)?;
+        design.certify_time = t.elapsed();
+        Ok((design, cert))
+    });
+    (out, log)
 }

@@ -2,7 +2,7 @@
 
 use crate::certify::Certificate;
 use crate::model::TsModel;
-use crate::synth::{Design, SynthError};
+use crate::synth::{Design, SolverLog, SynthError};
 use nalgebra::DMatrix;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
@@ -230,6 +230,7 @@ pub fn report(
     model: &TsModel,
     spec: SpecInfo,
     outcome: &Result<(Design, Certificate), SynthError>,
+    log: &SolverLog,
     timings: Timings,
 ) -> Report {
     let (status, design, cert, diagnosis) = match outcome {
@@ -280,7 +281,7 @@ pub fn report(
     };
     let certified = status == "certified";
     let mut problem = BTreeMap::new();
-    if let Some(s) = design.and_then(|d| d.log.stats.as_ref()) {
+    if let Some(s) = &log.stats {
         let largest = s.psd_cones.iter().copied().max().unwrap_or(0);
         for (k, v) in [
             ("variables", s.variables),
@@ -294,12 +295,10 @@ pub fn report(
         ] {
             problem.insert(k.to_string(), serde_json::json!(v));
         }
-        if let Some(d) = design {
-            problem.insert(
-                "memory_estimate_bytes".into(),
-                serde_json::json!(d.log.memory_estimate),
-            );
-        }
+        problem.insert(
+            "memory_estimate_bytes".into(),
+            serde_json::json!(log.memory_estimate),
+        );
     }
     Report {
         tsfc_version: env!("CARGO_PKG_VERSION"),
@@ -394,11 +393,15 @@ pub fn report(
             }),
         solver: SolverInfo {
             name: "clarabel",
-            status: design
-                .and_then(|d| d.log.status)
-                .map_or_else(|| "none".to_string(), |s| format!("{s:?}")),
-            iterations: design.map_or(0, |d| d.log.iterations),
-            solves: design.map_or(0, |d| d.log.solves),
+            // A failed synthesis ends on its last SDP; a design on the kept one.
+            status: if design.is_some() {
+                log.status
+            } else {
+                log.last_status
+            }
+            .map_or_else(|| "none".to_string(), |s| format!("{s:?}")),
+            iterations: log.iterations,
+            solves: log.solves,
             problem,
         },
         timings_s: timings,

@@ -166,3 +166,58 @@ fn declared_saturation_is_always_inside_the_certificate() {
     let err = synth::synthesize(&model, &Settings::default()).expect_err("refused");
     assert!(err.to_string().contains("outside the certificate"), "{err}");
 }
+
+/// The mass-spring-damper without an input limit, with `objectives`.
+fn msd_free(objectives: &str) -> String {
+    msd(objectives).replace("input u saturate 0.7;", "input u;")
+}
+
+/// The value a diagnosis line advises (`write <kind> <= v`).
+fn advised(line: &str) -> f64 {
+    let at = line.rfind("<= ").expect("an advised bound") + 3;
+    line[at..].trim().parse().expect("a number")
+}
+
+#[test]
+fn a_conflict_through_the_shared_p_is_named_and_the_advice_certifies() {
+    let text = msd_free(
+        "objective hinf(w -> z) <= 0.05;\nobjective input_norm(u) <= 0.05 for x0 = [1, 0];",
+    );
+    let model = common::model_of("msd.tsf", &text);
+    // Each alone is feasible ...
+    for alone in [
+        "objective hinf(w -> z) <= 0.05;",
+        "objective input_norm(u) <= 0.05 for x0 = [1, 0];",
+    ] {
+        let m = common::model_of("msd.tsf", &msd_free(alone));
+        synth::synthesize(&m, &Settings::default()).expect(alone);
+    }
+    // ... together they are not, and the diagnosis says why.
+    let Err(synth::SynthError::Infeasible { achievable, .. }) =
+        synth::synthesize(&model, &Settings::default())
+    else {
+        panic!("infeasible together");
+    };
+    assert!(
+        achievable
+            .iter()
+            .any(|l| l.contains("feasible on its own") && l.contains("x0' P x0 <= 1")),
+        "{achievable:?}"
+    );
+    assert!(
+        !achievable
+            .iter()
+            .any(|l| l.contains("conflict on their own")),
+        "{achievable:?}"
+    );
+    // The advised input bound certifies when written.
+    let line = achievable
+        .iter()
+        .find(|l| l.contains("smallest feasible bound") && l.contains("input_norm"))
+        .expect("advice for input_norm");
+    let v = advised(line);
+    let fixed = text.replace("input_norm(u) <= 0.05", &format!("input_norm(u) <= {v}"));
+    let model = common::model_of("msd.tsf", &fixed);
+    let d = synth::synthesize(&model, &Settings::default()).expect("the advice certifies");
+    assert!(tsfc::certify::certify(&model, &d).expect("certify").ok);
+}

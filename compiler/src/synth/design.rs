@@ -67,6 +67,8 @@ pub struct SolverLog {
     pub stats: Option<ProblemStats>,
     /// Estimated solver memory of the largest SDP solved, in bytes.
     pub memory_estimate: u64,
+    /// Status of the last SDP solved (what a failed synthesis ended on).
+    pub last_status: Option<SolveStatus>,
 }
 
 /// A synthesized (not yet certified) design.

@@ -1,10 +1,12 @@
 //! Explains an infeasible plan: which fixed bounds conflict, and the best
 //! value of each one when the others are kept.
 
+use super::advice::{round_down, round_up};
 use super::design::SynthError;
 use super::plan::Goal;
 use super::plan::Plan;
 use super::search::Runner;
+use tsf_lang::spec::ObjectiveKind;
 
 /// The diagnosis of `plan`, which was found infeasible (or gave no verdict).
 pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
@@ -41,16 +43,17 @@ pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
                     .filter(|_| search == Goal::MaxDecay)
                     .or_else(|| headline.and_then(|q| d.achieved.get(q)));
                 match best {
-                    Some(b) if search == Goal::MaxDecay => format!("infeasible with {bound}; the largest feasible decay rate with the other objectives is {b:.6}{approx}"),
-                    Some(b) => format!("infeasible with {bound}; the smallest feasible bound with the other objectives is {b:.6}{approx}"),
+                    Some(b) if search == Goal::MaxDecay => format!("infeasible with {bound}; the largest feasible decay rate with the other objectives is {b:.6}{approx}: write {}", describe(kind, round_down(b))),
+                    Some(b) => format!("infeasible with {bound}; the smallest feasible bound with the other objectives is {b:.6}{approx}: write {}", describe(kind, round_up(b))),
                     None => format!("{kind}: no value found"),
                 }
             }
-            Ok(None) => format!(
-                "{kind}: infeasible whatever its value (the other objectives conflict on their own)"
-            ),
+            Ok(None) => format!("{kind}: infeasible whatever its value together with the others"),
             Err(e) => format!("{kind}: could not be optimized ({e})"),
         };
+        achievable.push(line);
+    }
+    if let Some(line) = coupling(runner, plan) {
         achievable.push(line);
     }
     let message = if fixed.is_empty() {
@@ -62,4 +65,47 @@ pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
         message,
         achievable,
     }
+}
+
+/// Objectives that put an initial set inside E(P, 1) (x0' P x0 <= 1).
+const WITH_INITIAL_SET: [ObjectiveKind; 3] = [
+    ObjectiveKind::InputNorm,
+    ObjectiveKind::OutputNorm,
+    ObjectiveKind::SaturationRegion,
+];
+
+/// When every objective of `plan` is feasible alone but not together, the
+/// cause is the one Lyapunov matrix they share: names it (and the initial-set
+/// condition that fixes its scale, if any).
+fn coupling(runner: &mut Runner<'_>, plan: &Plan) -> Option<String> {
+    let all: Vec<_> = plan.objectives().map(|o| o.clone_box()).collect();
+    if all.len() < 2 {
+        return None;
+    }
+    let mut names = Vec::new();
+    for o in &all {
+        let alone = Plan::new(vec![o.clone_box()]);
+        match runner.run(&alone, alone.goal()) {
+            Ok(Some(_)) => names.push(o.kind().to_string()),
+            _ => return None,
+        }
+    }
+    let anchored: Vec<String> = all
+        .iter()
+        .map(|o| o.kind())
+        .filter(|k| WITH_INITIAL_SET.contains(k))
+        .map(|k| k.to_string())
+        .collect();
+    let why = if anchored.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; {} put(s) the initial state inside E(P, 1) (x0' P x0 <= 1), which fixes the scale of P that the other objectives' LMIs need",
+            anchored.join(", ")
+        )
+    };
+    Some(format!(
+        "each objective is feasible on its own ({}), not together: all are certified with one common Lyapunov matrix P (X = P^-1){why}; relax one of them, or certify them in separate designs",
+        names.join(", ")
+    ))
 }

@@ -9,6 +9,7 @@
 //! `tsf_lmi`.
 
 pub mod achieved;
+mod advice;
 mod blocks;
 pub mod build;
 mod design;
@@ -40,6 +41,34 @@ use search::Runner;
 
 /// Synthesizes gains for `model`'s objectives.
 pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthError> {
+    synthesize_logged(model, settings).0
+}
+
+/// [`synthesize`], with the solver log also when synthesis fails (how many
+/// SDPs were solved and what the last one ended on).
+pub fn synthesize_logged(
+    model: &TsModel,
+    settings: &Settings,
+) -> (Result<Design, SynthError>, SolverLog) {
+    let mut runner = Runner {
+        model,
+        settings,
+        log: SolverLog::default(),
+        accept_almost: false,
+    };
+    let out = synthesize_with(&mut runner);
+    let log = std::mem::take(&mut runner.log);
+    (
+        out.map(|mut d| {
+            d.log = log.clone();
+            d
+        }),
+        log,
+    )
+}
+
+fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
+    let (model, settings) = (runner.model, runner.settings);
     if let Some(e) = experimental::theorem2::synthesize(model, settings) {
         return Err(e);
     }
@@ -47,12 +76,6 @@ pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthE
         return Err(SynthError::Unsupported(why));
     }
     let (plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
-    let mut runner = Runner {
-        model,
-        settings,
-        log: SolverLog::default(),
-        accept_almost: false,
-    };
     match runner.run(&plan, goal) {
         Ok(Some(mut d)) => {
             saturation_covered(model, &mut d)?;
@@ -66,13 +89,12 @@ pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthE
                 d.notes.push(note);
                 d.sampled = Some(s);
             }
-            d.log = std::mem::take(&mut runner.log);
             Ok(d)
         }
-        Ok(None) => Err(diagnose::diagnose(&mut runner, &plan)),
+        Ok(None) => Err(diagnose::diagnose(runner, &plan)),
         Err(SynthError::Solver { status, .. }) => {
             // No verdict: still say what relaxing each bound achieves.
-            let achievable = match diagnose::diagnose(&mut runner, &plan) {
+            let achievable = match diagnose::diagnose(runner, &plan) {
                 SynthError::Infeasible { achievable, .. } => achievable,
                 _ => Vec::new(),
             };

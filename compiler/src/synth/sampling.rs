@@ -10,6 +10,7 @@
 //! sampling, synthesis is refused with the longest sampling interval that is
 //! (bisection, re-solved at the advised value).
 
+use super::advice::round_down;
 use super::design::{Design, SampledDesign, SynthError, TriggerPlan};
 use super::objectives::Saturation;
 use super::search::Runner;
@@ -110,22 +111,6 @@ pub fn covers(plan: &TriggerPlan) -> String {
 /// Relative width at which the bisection on the sampling interval stops.
 const PERIOD_REL_TOL: f64 = 0.02;
 
-/// The largest value `<= x` with three significant digits.
-pub fn round_down(x: f64) -> f64 {
-    if !(x.is_finite() && x > 0.0) {
-        return x;
-    }
-    let scale = 10f64.powi(x.log10().floor() as i32 - 2);
-    let r = (x / scale).floor() * scale;
-    // `r` printed shortest must not exceed x.
-    let printed: f64 = format!("{r}").parse().unwrap_or(r);
-    if printed <= x {
-        printed
-    } else {
-        r - scale
-    }
-}
-
 impl Runner<'_> {
     /// One sampled-loop SDP: the design, or None when not solved.
     fn sampled_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<SampledDesign>, SynthError> {
@@ -224,20 +209,5 @@ impl Runner<'_> {
                 sampling.1 * lo
             )],
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::round_down;
-
-    #[test]
-    fn round_down_never_rounds_up_and_prints_short() {
-        for x in [0.0009, 0.000_937_5, 1.5, 0.123_456, 9.999_9, 1e-7 * 3.3333] {
-            let r = round_down(x);
-            assert!(r <= x && r > 0.98 * x, "{x} -> {r}");
-            assert!(format!("{r}").len() <= 12, "{x} -> {r}");
-        }
-        assert_eq!(round_down(0.123_456), 0.123);
     }
 }

@@ -19,6 +19,7 @@
 //! an infeasible threshold.
 
 use super::achieved::Quantity;
+use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
 pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
@@ -504,12 +505,30 @@ impl Runner<'_> {
                 hi = mid;
             }
         }
+        // Advise a short value below the certified one, re-solved at exactly
+        // that value: the advice certifies when written.
+        let mut advice = round_down(lo);
+        let mut verified = false;
+        for _ in 0..4 {
+            if advice > 0.0 && self.trigger_attempt(&with(advice))?.is_some() {
+                verified = true;
+                break;
+            }
+            advice = round_down(advice * 0.9);
+        }
+        let write = if verified {
+            format!(
+                "write `threshold nu = {advice}` (or `adaptive(.., max = {advice})`), certified"
+            )
+        } else {
+            "no short threshold value re-solved as certified: lower nu further".to_string()
+        };
         Err(SynthError::Infeasible {
             message: format!(
                 "event trigger: threshold nu = {target} is not certified for the gains with {sampling}"
             ),
             achievable: vec![format!(
-                "the largest certified threshold is in [{lo:.4}, {hi:.4}]: write `threshold nu = {lo:.4}` (or `adaptive(.., max = {lo:.4})`)"
+                "the largest certified threshold is about {lo:.4e}: {write}"
             )],
         })
     }

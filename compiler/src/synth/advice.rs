@@ -1,0 +1,66 @@
+//! Values advised to the user: short to write, and never beyond what was
+//! certified (rounded toward the certified side, then re-solved by the caller).
+
+/// `k * 10^e`, parsed from its decimal spelling (so it prints short).
+fn decimal(k: i64, e: i32) -> f64 {
+    format!("{k}e{e}").parse().unwrap_or(f64::NAN)
+}
+
+/// The largest value `<= x` with three significant digits.
+pub fn round_down(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return x;
+    }
+    let e = x.log10().floor() as i32 - 2;
+    let mut k = (x / 10f64.powi(e)).floor() as i64;
+    while k > 0 && decimal(k, e) > x {
+        k -= 1;
+    }
+    decimal(k, e)
+}
+
+/// The smallest value `>= x` with three significant digits.
+pub fn round_up(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return x;
+    }
+    let e = x.log10().floor() as i32 - 2;
+    let mut k = (x / 10f64.powi(e)).ceil() as i64;
+    while decimal(k, e) < x {
+        k += 1;
+    }
+    decimal(k, e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{round_down, round_up};
+
+    #[test]
+    fn round_down_never_rounds_up_and_prints_short() {
+        for x in [0.0009, 0.000_937_5, 1.5, 0.123_456, 9.999_9, 1e-7 * 3.3333] {
+            let r = round_down(x);
+            assert!(r <= x && r > 0.98 * x, "{x} -> {r}");
+            assert!(format!("{r}").len() <= 12, "{x} -> {r}");
+        }
+        assert_eq!(round_down(0.123_456), 0.123);
+        assert_eq!(round_down(0.099_999_9), 0.0999);
+    }
+
+    #[test]
+    fn round_up_never_rounds_down_and_prints_short() {
+        for x in [
+            42.258_042,
+            0.000_937_5,
+            1.5,
+            0.123_456,
+            9.999_9,
+            330.047_301,
+        ] {
+            let r = round_up(x);
+            assert!(r >= x && r < 1.02 * x, "{x} -> {r}");
+            assert!(format!("{r}").len() <= 12, "{x} -> {r}");
+        }
+        assert_eq!(round_up(42.258_042), 42.3);
+    }
+}
