@@ -117,6 +117,30 @@ pub struct TriggerReport {
     pub weight_eigenvalues: Vec<f64>,
 }
 
+/// How far the model the rules blend, sum_i h_i(z(x)) M_i, is from the
+/// state-dependent M(x) (M = A, B) on a grid over the rules' operating points,
+/// relative to the largest local model (Frobenius norms). The certificate
+/// covers the blended model; an exact sector model gives 0.
+#[derive(Debug, Serialize)]
+pub struct ConsistencyReport {
+    /// States compared (inside the premise region).
+    pub points: usize,
+    /// Worst relative mismatch.
+    pub worst_relative_mismatch: f64,
+    /// The matrix it is in (`A` or `B`).
+    pub matrix: &'static str,
+    /// The state where it is.
+    pub at_state: Vec<f64>,
+    /// Rules firing there (normalized weight above 1 %).
+    pub rules_firing: Vec<String>,
+    /// Their normalized weights.
+    pub weights: Vec<f64>,
+    /// The warning threshold.
+    pub tolerance: f64,
+    /// Whether the worst mismatch is within it.
+    pub within_tolerance: bool,
+}
+
 /// The certified sampled loop: every sample transmitted, the command held
 /// (zero-order hold) for intervals in `sampling`.
 #[derive(Debug, Serialize)]
@@ -181,6 +205,8 @@ pub struct Report {
     /// Estimated region of attraction E(P, 1) under actuator saturation (with
     /// a synthesized trigger: P of the event-triggered loop's functional).
     pub region_of_attraction: Option<RegionOfAttraction>,
+    /// The blended T-S model against the state-dependent A(x), B(x).
+    pub model_consistency: Option<ConsistencyReport>,
     /// The synthesized event trigger.
     pub trigger: Option<TriggerReport>,
     /// The certified sampled loop (periodic trigger, or aperiodic sampling
@@ -344,6 +370,16 @@ pub fn report(
             .unwrap_or_default(),
         notes: design.map(|d| d.notes.clone()).unwrap_or_default(),
         diagnosis,
+        model_consistency: model.consistency.as_ref().map(|c| ConsistencyReport {
+            points: c.points,
+            worst_relative_mismatch: c.worst,
+            matrix: c.matrix,
+            at_state: c.at.clone(),
+            rules_firing: c.firing.iter().map(|(r, _)| r.clone()).collect(),
+            weights: c.firing.iter().map(|(_, h)| *h).collect(),
+            tolerance: crate::model::MISMATCH_TOLERANCE,
+            within_tolerance: c.worst <= crate::model::MISMATCH_TOLERANCE,
+        }),
         region_of_attraction: design
             .filter(|d| {
                 certified

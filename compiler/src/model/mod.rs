@@ -1,11 +1,13 @@
 //! The model stage: a checked [`Spec`] becomes a [`TsModel`]: local linear
 //! models per rule, the premise layout, the rule premises as runtime terms,
-//! and the coverage check.
+//! the coverage check and the consistency of the blended model with A(x), B(x).
 
+mod consistency;
 mod coverage;
 mod local;
 mod premise;
 
+pub use consistency::{Consistency, MISMATCH_TOLERANCE};
 pub use coverage::{check_coverage, Coverage};
 pub use premise::{PremiseLayout, PremiseSlot, TermSpec};
 
@@ -49,6 +51,8 @@ pub struct TsModel {
     pub centers: Vec<Vec<f64>>,
     /// Result of the coverage check.
     pub coverage: Coverage,
+    /// The blended model against A(x), B(x) (`None`: neither depends on x).
+    pub consistency: Option<Consistency>,
 }
 
 impl TsModel {
@@ -98,7 +102,9 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
             return None;
         }
     }
+    let consistency = consistency::check(&spec, &rules, &premises, &terms, diags);
     Some(TsModel {
+        consistency,
         n: spec.n(),
         m: spec.m(),
         q: spec.q(),
