@@ -221,3 +221,20 @@ fn a_conflict_through_the_shared_p_is_named_and_the_advice_certifies() {
     let d = synth::synthesize(&model, &Settings::default()).expect("the advice certifies");
     assert!(tsfc::certify::certify(&model, &d).expect("certify").ok);
 }
+
+#[test]
+fn gains_far_above_the_input_limit_are_warned_about() {
+    let warned = |d: &synth::Design| d.notes.iter().any(|n| n.starts_with("warning: the gain"));
+    // Operating points at ||x|| <= 1 and a 0.7 limit: the warning needs a
+    // gain norm above 100 * 0.7 / 1 = 70 (the Euclidean norm of the 1 x 2 row).
+    for (alpha, expect) in [(0.5, false), (5.0, true)] {
+        let model = common::model_of(
+            "msd.tsf",
+            &msd(&format!("objective decay_rate >= {alpha};")),
+        );
+        let d = synth::synthesize(&model, &Settings::default()).expect("certifiable");
+        let largest = d.gains.iter().map(|f| f.norm()).fold(0.0, f64::max);
+        assert_eq!(largest > 70.0, expect, "alpha {alpha}: ||F|| = {largest}");
+        assert_eq!(warned(&d), expect, "alpha {alpha}: {:?}", d.notes);
+    }
+}

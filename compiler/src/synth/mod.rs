@@ -79,6 +79,9 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
     match runner.run(&plan, goal) {
         Ok(Some(mut d)) => {
             saturation_covered(model, &mut d)?;
+            if let Some(w) = gain_warning(model, &d) {
+                d.notes.push(w);
+            }
             if trigger::wanted(model) {
                 let (t, notes) = runner.trigger(&d)?;
                 d.notes.extend(notes);
@@ -136,4 +139,40 @@ fn saturation_covered(model: &TsModel, d: &mut Design) -> Result<(), SynthError>
             mu.map_or_else(|| "missing".to_string(), |m| format!("{m:.6}"))
         ))),
     }
+}
+
+/// Gains this many times above what the smallest `saturate` level allows at
+/// the edge of the modelled region draw a warning.
+pub const GAIN_WARNING_FACTOR: f64 = 100.0;
+
+/// A warning when max_j ||F_j||_2 r, with r the largest operating-point norm
+/// (the edge of the region the rules model), exceeds the smallest `saturate`
+/// level by [`GAIN_WARNING_FACTOR`]: the actuator then saturates on almost
+/// every sample (certified or not, such a loop is rarely what was meant).
+fn gain_warning(model: &TsModel, d: &Design) -> Option<String> {
+    let levels = model.spec.saturation.as_ref()?;
+    let level = levels.iter().copied().fold(f64::INFINITY, f64::min);
+    let r = model
+        .rules
+        .iter()
+        .filter_map(|rule| rule.at.as_ref())
+        .map(|x| x.iter().map(|v| v * v).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    let (j, gain) = d
+        .gains
+        .iter()
+        .map(|f| f.clone().svd(false, false).singular_values.max())
+        .enumerate()
+        .fold(
+            (0, 0.0),
+            |best, (j, g)| if g > best.1 { (j, g) } else { best },
+        );
+    let demand = gain * r;
+    (r > 0.0 && demand > GAIN_WARNING_FACTOR * level).then(|| {
+        format!(
+            "warning: the gain of rule {} (||F|| = {gain:.3e}) asks for |u| up to {demand:.3e} at the edge of the modelled region (||x|| = {r:.3}), {:.0} times the `saturate` level {level}: the actuator saturates on almost every sample; bound the input (`objective input_norm(u) <= ..`) or the gains",
+            model.rules[j].name,
+            demand / level
+        )
+    })
 }
