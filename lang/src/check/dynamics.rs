@@ -97,7 +97,7 @@ impl Checker<'_> {
                 continue;
             };
             let env = self.state_env(Mode::Shapes, &locals, &[Kind::Input, Kind::Disturbance]);
-            match env.eval(e) {
+            match self.evaluate(&env, e) {
                 Ok(v) if v.nrows() == sig.len && v.ncols() == 1 => {
                     out.push((name.clone(), e.clone()))
                 }

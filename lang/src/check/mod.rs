@@ -30,7 +30,7 @@ pub use generatable::GENERATABLE_FUNCTIONS;
 
 use crate::ast::*;
 use crate::diag::Diagnostic;
-use crate::eval::{FnDef, Mat, BUILTINS};
+use crate::eval::{Budget, FnDef, Mat, BUILTINS};
 use crate::span::{Span, Spanned};
 use crate::spec::*;
 use std::collections::{HashMap, HashSet};
@@ -80,10 +80,18 @@ struct Checker<'a> {
     disturbances: Vec<Signal>,
     /// Names whose definitions failed: uses of them are not reported again.
     poisoned: HashSet<String>,
+    /// Functions using a poisoned name (through any chain of calls).
+    tainted: HashSet<String>,
+    /// For each name, the functions whose bodies use it.
+    users: HashMap<String, Vec<String>>,
     /// First words of items that failed to parse.
     broken_keywords: HashSet<String>,
     /// `paper = ...` of the L-inf objective (a source's reported gamma).
     linf_paper: Option<f64>,
+    /// The evaluation work left for the whole check.
+    budget: Budget,
+    /// Whether running out of it was reported (it is reported once).
+    budget_reported: bool,
 }
 
 /// What the pass over the model, objective and setting items collects.
@@ -126,8 +134,12 @@ pub fn check(file: &File) -> (Option<Spec>, Vec<Diagnostic>) {
             .iter()
             .flat_map(|b| b.names.iter().cloned())
             .collect(),
+        tainted: HashSet::new(),
+        users: HashMap::new(),
         broken_keywords: file.broken.iter().map(|b| b.keyword.clone()).collect(),
         linf_paper: None,
+        budget: Budget::check(),
+        budget_reported: false,
     };
     let spec = c.run();
     let has_error = c.diags.iter().any(Diagnostic::is_error);
@@ -141,6 +153,7 @@ impl<'a> Checker<'a> {
         let items = &file.items;
         let controller = self.header(items);
         self.functions(items);
+        self.index_function_uses();
         let limits = self.declarations(items);
         self.check_fn_bodies();
         self.require_signals();
@@ -225,6 +238,13 @@ impl<'a> Checker<'a> {
     }
 
     fn err(&mut self, d: Diagnostic) {
+        if self.budget.is_spent() {
+            // Every evaluation after the check ran out of work fails the same way.
+            if self.budget_reported {
+                return;
+            }
+            self.budget_reported = true;
+        }
         self.diags.push(d);
     }
 

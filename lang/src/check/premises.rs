@@ -38,7 +38,7 @@ impl Checker<'_> {
         if self.poisoned(&bound) {
             return;
         }
-        let r = self.state_env(Mode::Shapes, &[], &[]).eval(&bound);
+        let r = self.evaluate(&self.state_env(Mode::Shapes, &[], &[]), &bound);
         let v = match r {
             Ok(v) => v,
             Err(d) => {
@@ -177,7 +177,7 @@ impl Checker<'_> {
                 }),
                 None => {
                     for n in names {
-                        self.poisoned.insert(format!("{}.{}", n.node, s.name.node));
+                        self.poison(format!("{}.{}", n.node, s.name.node));
                     }
                 }
             }

@@ -13,7 +13,7 @@ impl Checker<'_> {
         if self.poisoned(e) {
             return None;
         }
-        let r = self.const_env().eval(e);
+        let r = self.evaluate(&self.const_env(), e);
         match r {
             Ok(v) if v.iter().all(|x| x.is_finite()) => Some(v),
             Ok(_) => {
