@@ -64,13 +64,21 @@ fn nesting_at_the_limit_is_checked_and_one_more_level_is_an_error() {
             e[0].message,
             format!("nesting deeper than {MAX_NESTING} levels")
         );
-        assert!(e[0].help.as_deref().is_some_and(|h| h.contains("MAX_NESTING")));
+        assert!(e[0]
+            .help
+            .as_deref()
+            .is_some_and(|h| h.contains("MAX_NESTING")));
     }
 }
 
 #[test]
 fn thousands_of_levels_are_one_error_at_the_first_level_too_many() {
-    for (open, close, level) in [("(", ")", '('), ("[", "]", '['), ("abs(", ")", '('), ("-", "", '-')] {
+    for (open, close, level) in [
+        ("(", ")", '('),
+        ("[", "]", '['),
+        ("abs(", ")", '('),
+        ("-", "", '-'),
+    ] {
         let item = format!("const k = {};", nest(open, "1", close, 10_000));
         let e = errors(item.clone());
         assert_eq!(e.len(), 1, "{open}: {e:#?}");
@@ -92,7 +100,10 @@ fn a_flat_chain_past_the_depth_limit_is_an_error_not_a_crash() {
             e[0].message,
             format!("expression nested too deeply: more than {MAX_EXPR_DEPTH} levels")
         );
-        assert!(e[0].help.as_deref().is_some_and(|h| h.contains("MAX_EXPR_DEPTH")));
+        assert!(e[0]
+            .help
+            .as_deref()
+            .is_some_and(|h| h.contains("MAX_EXPR_DEPTH")));
         // The whole expression is marked.
         assert_eq!(e[0].span.end - e[0].span.start, sum(n).len());
     }
@@ -113,7 +124,10 @@ fn an_expression_past_the_size_limit_is_an_error() {
         e[0].message,
         format!("expression too large: more than {MAX_EXPR_NODES} terms")
     );
-    assert!(e[0].help.as_deref().is_some_and(|h| h.contains("MAX_EXPR_NODES")));
+    assert!(e[0]
+        .help
+        .as_deref()
+        .is_some_and(|h| h.contains("MAX_EXPR_NODES")));
 }
 
 #[test]
@@ -122,7 +136,10 @@ fn evaluation_through_functions_stays_within_the_depth_limit() {
     let chain = |arg: &str| format!("{arg}{}", " + 1".repeat(39));
     let mut fns = format!("fn f0(a) = {};\n", chain("a"));
     for i in 1..10 {
-        fns.push_str(&format!("fn f{i}(a) = {};\n", chain(&format!("f{}(a)", i - 1))));
+        fns.push_str(&format!(
+            "fn f{i}(a) = {};\n",
+            chain(&format!("f{}(a)", i - 1))
+        ));
     }
     let e = errors(format!("{fns}const k = f9(1);"));
     assert_eq!(e.len(), 1, "{e:#?}");

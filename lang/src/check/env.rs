@@ -2,8 +2,8 @@
 
 use super::{Checker, Kind};
 use crate::ast::{Expr, ExprKind, IndexArg, ItemKind, VarDecl};
-use crate::eval::{Env, Mat, Mode};
 use crate::diag::Diagnostic;
+use crate::eval::{Env, Mat, Mode};
 use crate::span::Span;
 use std::collections::HashMap;
 

@@ -76,7 +76,9 @@ pub(crate) fn excerpt(text: &str) -> Cow<'_, str> {
     }
     let head = MAX_ECHO_CHARS * 2 / 3;
     let tail = MAX_ECHO_CHARS - head - 3;
-    text.chars().take(head).for_each(|c| push_shown(&mut out, c));
+    text.chars()
+        .take(head)
+        .for_each(|c| push_shown(&mut out, c));
     out.push_str("...");
     text.chars()
         .skip(count - tail)

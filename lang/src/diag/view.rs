@@ -429,7 +429,12 @@ impl<'f> Files<'f> for Snippet<'_> {
             })
     }
 
-    fn column_number(&'f self, (): (), line_index: usize, byte_index: usize) -> Result<usize, Error> {
+    fn column_number(
+        &'f self,
+        (): (),
+        line_index: usize,
+        byte_index: usize,
+    ) -> Result<usize, Error> {
         let line = self.shown.get(line_index).ok_or(Error::LineTooLarge {
             given: line_index,
             max: self.shown.len(),

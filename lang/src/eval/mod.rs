@@ -122,7 +122,10 @@ impl Run<'_> {
         }
         self.budget.pay(NODE_WORK, span)?;
         Ok(Run {
-            depth: Depth { levels, ..self.depth },
+            depth: Depth {
+                levels,
+                ..self.depth
+            },
             ..self
         })
     }

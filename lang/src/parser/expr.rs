@@ -157,24 +157,21 @@ impl Cx {
 
     /// One index of `e[...]`, with the size of its expressions.
     fn index_arg(&self, p: Pair<Rule>, span: Span) -> Built<IndexArg> {
-        let a = first(p, span)?;
-        match a.as_rule() {
-            Rule::full_range => Ok((IndexArg::Full, Size::default())),
-            Rule::slice => {
-                let mut parts = a.into_inner();
-                let (lo, l) = self.built(next(&mut parts, span)?)?;
-                let (hi, h) = self.built(next(&mut parts, span)?)?;
-                let size = Size {
-                    height: l.height.max(h.height),
-                    nodes: l.nodes + h.nodes,
-                };
-                Ok((IndexArg::Range(lo, hi), size))
-            }
-            _ => {
-                let (e, size) = self.built(a)?;
-                Ok((IndexArg::One(e), size))
-            }
+        let mut parts = p.into_inner();
+        let a = next(&mut parts, span)?;
+        if a.as_rule() == Rule::full_range {
+            return Ok((IndexArg::Full, Size::default()));
         }
+        let (lo, l) = self.built(a)?;
+        let Some(slice) = parts.next() else {
+            return Ok((IndexArg::One(lo), l));
+        };
+        let (hi, h) = self.built(first(slice, span)?)?;
+        let size = Size {
+            height: l.height.max(h.height),
+            nodes: l.nodes + h.nodes,
+        };
+        Ok((IndexArg::Range(lo, hi), size))
     }
 
     fn primary(&self, p: Pair<Rule>) -> Built<Expr> {
