@@ -1,7 +1,7 @@
 //! The environments expressions are checked in, and which names they may use.
 
 use super::{Checker, Kind};
-use crate::ast::{Expr, ExprKind, IndexArg, ItemKind, VarDecl};
+use crate::ast::{Expr, ExprKind, IndexArg};
 use crate::diag::Diagnostic;
 use crate::eval::{Env, Mat, Mode};
 use crate::span::Span;
@@ -10,38 +10,20 @@ use std::collections::HashMap;
 impl Checker<'_> {
     /// Constants and functions only: every signal is named but unavailable.
     pub(super) fn const_env(&self) -> Env<'_> {
-        let mut unavailable = Vec::new();
-        for (n, (k, _)) in &self.names {
-            if matches!(
-                k,
-                Kind::State | Kind::Input | Kind::Disturbance | Kind::Output | Kind::Premise
-            ) {
-                unavailable.push((
-                    n.clone(),
-                    format!(
-                        "a {} is not a constant; only constants may appear here",
-                        k.word()
-                    ),
-                ));
-            }
-        }
-        for it in &self.file.items {
-            let (vars, kind): (&[VarDecl], Kind) = match &it.kind {
-                ItemKind::State(v) => (v, Kind::State),
-                ItemKind::Input(v, _) => (v, Kind::Input),
-                ItemKind::Disturbance(v, _) => (v, Kind::Disturbance),
-                _ => continue,
-            };
-            for v in vars {
-                if !self.names.contains_key(&v.name.node) {
-                    unavailable.push((
-                        v.name.node.clone(),
-                        format!(
-                            "a {} is not a constant; only constants may appear here",
-                            kind.word()
-                        ),
-                    ));
-                }
+        let not_constant = |k: Kind| {
+            format!(
+                "a {} is not a constant; only constants may appear here",
+                k.word()
+            )
+        };
+        let mut unavailable: Vec<(String, String)> = self
+            .signal_names
+            .iter()
+            .map(|(n, k)| (n.clone(), not_constant(*k)))
+            .collect();
+        for (n, k) in &self.signal_items {
+            if !self.names.contains_key(n) {
+                unavailable.push((n.clone(), not_constant(*k)));
             }
         }
         unavailable.push((
@@ -77,7 +59,7 @@ impl Checker<'_> {
                 || k == Some(Kind::State)
                 || k.is_some_and(|k| allowed_signals.contains(&k)))
         });
-        for (name, (k, _)) in &self.names {
+        for (name, k) in &self.signal_names {
             if matches!(k, Kind::Input | Kind::Disturbance) && !allowed_signals.contains(k) {
                 if let Some(u) = env.unavailable.iter_mut().find(|(n, _)| n == name) {
                     u.1 = format!(

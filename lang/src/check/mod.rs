@@ -59,6 +59,26 @@ impl Kind {
             Kind::Premise => "premise",
         }
     }
+
+    /// Whether a name of this kind is a signal (not a constant or function).
+    fn is_signal(self) -> bool {
+        !matches!(self, Kind::Const | Kind::Fn)
+    }
+}
+
+/// The names of the state, input and disturbance items of `file`.
+fn signal_items(file: &File) -> Vec<(String, Kind)> {
+    let mut out = Vec::new();
+    for it in &file.items {
+        let (vars, kind): (&[VarDecl], Kind) = match &it.kind {
+            ItemKind::State(v) => (v, Kind::State),
+            ItemKind::Input(v, _) => (v, Kind::Input),
+            ItemKind::Disturbance(v, _) => (v, Kind::Disturbance),
+            _ => continue,
+        };
+        out.extend(vars.iter().map(|v| (v.name.node.clone(), kind)));
+    }
+    out
 }
 
 /// The signal dimensions: states n, inputs m, disturbances q.
@@ -73,6 +93,13 @@ struct Checker<'a> {
     file: &'a File,
     diags: Vec<Diagnostic>,
     names: HashMap<String, (Kind, Span)>,
+    /// The declared names that are signals (states, inputs, disturbances,
+    /// outputs, premises), kept beside `names` so that building an
+    /// environment does not go through every constant.
+    signal_names: Vec<(String, Kind)>,
+    /// The names of every state, input and disturbance item of the file,
+    /// declared or not.
+    signal_items: Vec<(String, Kind)>,
     consts: HashMap<String, Mat>,
     fns: HashMap<String, FnDef>,
     states: Vec<Signal>,
@@ -124,6 +151,8 @@ pub fn check(file: &File) -> (Option<Spec>, Vec<Diagnostic>) {
         file,
         diags: Vec::new(),
         names: HashMap::new(),
+        signal_names: Vec::new(),
+        signal_items: signal_items(file),
         consts: HashMap::new(),
         fns: HashMap::new(),
         states: Vec::new(),
@@ -280,12 +309,27 @@ impl<'a> Checker<'a> {
             return false;
         }
         self.names.insert(name.node.clone(), (kind, name.span));
+        if kind.is_signal() {
+            self.signal_names.push((name.node.clone(), kind));
+        }
         true
     }
 
     /// Whether a missing-declaration error would only repeat a syntax error.
     fn broken(&self, keyword: &str) -> bool {
         self.broken_keywords.contains(keyword)
+    }
+
+    /// Reports `d`, a value of the wrong size for the declared dimensions,
+    /// unless a state, input or disturbance item failed to parse: the
+    /// dimensions are unknown then, and the error would repeat that one.
+    fn shape_err(&mut self, d: Diagnostic) {
+        if !["state", "input", "disturbance"]
+            .iter()
+            .any(|k| self.broken(k))
+        {
+            self.err(d);
+        }
     }
 
     fn singleton(&mut self, found: &mut Option<Span>, span: Span, what: &str) -> bool {

@@ -168,7 +168,7 @@ impl Checker<'_> {
         match r {
             Ok(v) if v.nrows() == rows && v.ncols() == cols => {}
             Ok(v) => {
-                self.err(
+                self.shape_err(
                     Diagnostic::error(
                         mm.expr.span,
                         format!(
