@@ -28,11 +28,17 @@ fn breaks(bytes: &[u8]) -> usize {
     lf + cr - crlf
 }
 
-/// Line and column lookups in the original source.
+/// Line and column lookups in the original source. Each lookup starts from
+/// the last one where it can, so that many diagnostics on one long line (or
+/// far down a long file) cost one pass over it, not one each.
 pub(crate) struct Lines<'s> {
     src: &'s str,
     /// The last position counted, with the line breaks before it.
     counted: Cell<(usize, usize)>,
+    /// The start and content end of the last line looked up.
+    line: Cell<(usize, usize)>,
+    /// The last position whose column was counted, with that column.
+    columned: Cell<(usize, usize)>,
 }
 
 impl<'s> Lines<'s> {
@@ -40,7 +46,28 @@ impl<'s> Lines<'s> {
         Lines {
             src,
             counted: Cell::new((0, 0)),
+            line: Cell::new((usize::MAX, 0)),
+            columned: Cell::new((usize::MAX, 0)),
         }
+    }
+
+    /// The start and content end of the line holding `at` (normalized).
+    fn bounds(&self, at: usize) -> (usize, usize) {
+        let (s, e) = self.line.get();
+        if s <= at && at <= e {
+            return (s, e);
+        }
+        let b = self.src.as_bytes();
+        let mut s = at;
+        while s > 0 && !is_line_end(b[s - 1]) {
+            s -= 1;
+        }
+        let mut e = at;
+        while e < b.len() && !is_line_end(b[e]) {
+            e += 1;
+        }
+        self.line.set((s, e));
+        (s, e)
     }
 
     /// `at` clamped into the text, onto a char boundary, and out of a `\r\n` pair.
@@ -58,22 +85,12 @@ impl<'s> Lines<'s> {
 
     /// Start of the line holding `at` (normalized).
     fn start(&self, at: usize) -> usize {
-        let b = self.src.as_bytes();
-        let mut i = at;
-        while i > 0 && !is_line_end(b[i - 1]) {
-            i -= 1;
-        }
-        i
+        self.bounds(at).0
     }
 
     /// End of the content of the line holding `at` (before its line break).
     fn end(&self, at: usize) -> usize {
-        let b = self.src.as_bytes();
-        let mut i = at;
-        while i < b.len() && !is_line_end(b[i]) {
-            i += 1;
-        }
-        i
+        self.bounds(at).1
     }
 
     /// Start of the line after the one holding `at`, if there is one.
@@ -115,7 +132,13 @@ impl<'s> Lines<'s> {
     fn column(&self, at: usize) -> usize {
         let s = self.start(at);
         let bom = usize::from(s == 0 && at >= 3 && self.src.starts_with('\u{feff}'));
-        self.src[s..at].chars().count() + 1 - bom
+        let (from, chars) = match self.columned.get() {
+            (p, c) if s <= p && p <= at => (p, c),
+            _ => (s, 0),
+        };
+        let chars = chars + self.src[from..at].chars().count();
+        self.columned.set((at, chars));
+        chars + 1 - bom
     }
 
     /// 1-based line and column of byte `at`.
