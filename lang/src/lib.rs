@@ -12,6 +12,7 @@ mod check;
 pub mod diag;
 mod display;
 pub mod eval;
+pub mod limits;
 mod parser;
 pub mod span;
 pub mod spec;
@@ -23,14 +24,17 @@ pub use diag::{Diagnostic, Severity};
 pub use span::Span;
 pub use spec::Spec;
 
-/// Parses and checks a source text: the spec (if valid) and all diagnostics.
+/// Parses and checks a source text: the spec (if valid) and the diagnostics,
+/// sorted by position: at most [`limits::MAX_DIAGNOSTICS`], then one line
+/// counting the others.
 pub fn check_source(source: &str) -> (Option<Spec>, Vec<Diagnostic>) {
-    let (file, mut diags) = parser::parse_file(source);
+    let (file, mut diags, omitted) = parser::parse_file(source);
     let (spec, more) = check::check(&file);
     diags.extend(more);
     diags.sort_by_key(|d| (d.span.start, d.span.end));
     // The same mistake reached twice (e.g. through two uses) is reported once.
     diags.dedup_by(|a, b| a.span == b.span && a.message == b.message);
-    let has_error = diags.iter().any(Diagnostic::is_error);
+    let has_error = omitted > 0 || diags.iter().any(Diagnostic::is_error);
+    diag::cap(&mut diags, omitted);
     (if has_error { None } else { spec }, diags)
 }

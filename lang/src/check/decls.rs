@@ -111,7 +111,7 @@ impl<'a> Checker<'a> {
                             }
                             // Later uses are not reported again.
                             None => {
-                                self.poisoned.insert(name.node.clone());
+                                self.poison(name.node.clone());
                             }
                         }
                     }

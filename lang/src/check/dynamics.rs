@@ -85,6 +85,10 @@ impl Checker<'_> {
         let mut out = Vec::new();
         for (name, e, dspan) in &ders {
             let Some(sig) = all.iter().find(|s| s.name == *name) else {
+                ok = false;
+                if self.poisoned.contains(name) {
+                    continue;
+                }
                 let mut d = Diagnostic::error(*dspan, format!("`{name}` is not a state"))
                     .with_label("a derivative needs a state");
                 if let Some(c) = suggest(name, all.iter().map(|s| s.name.as_str())) {
@@ -93,11 +97,10 @@ impl Checker<'_> {
                     d = d.with_help(format!("declare it in the block: `state {name};`"));
                 }
                 self.err(d);
-                ok = false;
                 continue;
             };
             let env = self.state_env(Mode::Shapes, &locals, &[Kind::Input, Kind::Disturbance]);
-            match env.eval(e) {
+            match self.evaluate(&env, e) {
                 Ok(v) if v.nrows() == sig.len && v.ncols() == 1 => {
                     out.push((name.clone(), e.clone()))
                 }

@@ -1,45 +1,29 @@
 //! The environments expressions are checked in, and which names they may use.
 
 use super::{Checker, Kind};
-use crate::ast::{Expr, ExprKind, IndexArg, ItemKind, VarDecl};
+use crate::ast::{Expr, ExprKind, IndexArg};
+use crate::diag::Diagnostic;
 use crate::eval::{Env, Mat, Mode};
 use crate::span::Span;
+use std::collections::HashMap;
 
 impl Checker<'_> {
     /// Constants and functions only: every signal is named but unavailable.
     pub(super) fn const_env(&self) -> Env<'_> {
-        let mut unavailable = Vec::new();
-        for (n, (k, _)) in &self.names {
-            if matches!(
-                k,
-                Kind::State | Kind::Input | Kind::Disturbance | Kind::Output | Kind::Premise
-            ) {
-                unavailable.push((
-                    n.clone(),
-                    format!(
-                        "a {} is not a constant; only constants may appear here",
-                        k.word()
-                    ),
-                ));
-            }
-        }
-        for it in &self.file.items {
-            let (vars, kind): (&[VarDecl], Kind) = match &it.kind {
-                ItemKind::State(v) => (v, Kind::State),
-                ItemKind::Input(v, _) => (v, Kind::Input),
-                ItemKind::Disturbance(v, _) => (v, Kind::Disturbance),
-                _ => continue,
-            };
-            for v in vars {
-                if !self.names.contains_key(&v.name.node) {
-                    unavailable.push((
-                        v.name.node.clone(),
-                        format!(
-                            "a {} is not a constant; only constants may appear here",
-                            kind.word()
-                        ),
-                    ));
-                }
+        let not_constant = |k: Kind| {
+            format!(
+                "a {} is not a constant; only constants may appear here",
+                k.word()
+            )
+        };
+        let mut unavailable: Vec<(String, String)> = self
+            .signal_names
+            .iter()
+            .map(|(n, k)| (n.clone(), not_constant(*k)))
+            .collect();
+        for (n, k) in &self.signal_items {
+            if !self.names.contains_key(n) {
+                unavailable.push((n.clone(), not_constant(*k)));
             }
         }
         unavailable.push((
@@ -75,7 +59,7 @@ impl Checker<'_> {
                 || k == Some(Kind::State)
                 || k.is_some_and(|k| allowed_signals.contains(&k)))
         });
-        for (name, (k, _)) in &self.names {
+        for (name, k) in &self.signal_names {
             if matches!(k, Kind::Input | Kind::Disturbance) && !allowed_signals.contains(k) {
                 if let Some(u) = env.unavailable.iter_mut().find(|(n, _)| n == name) {
                     u.1 = format!(
@@ -93,27 +77,53 @@ impl Checker<'_> {
         env
     }
 
-    /// Whether `e` uses a name whose definition failed (errors already reported).
-    pub(super) fn poisoned(&self, e: &Expr) -> bool {
-        self.poisoned_depth(e, 0)
+    /// Evaluates `e` in `env`, paying from the check's work budget.
+    pub(super) fn evaluate(&self, env: &Env, e: &Expr) -> Result<Mat, Diagnostic> {
+        let part = self.budget.part();
+        let r = env.eval_with(e, &part);
+        self.budget.settle(&part);
+        r
     }
 
-    fn poisoned_depth(&self, e: &Expr, depth: usize) -> bool {
+    /// Whether `e` uses a name whose definition failed, directly or through
+    /// the functions it calls (the errors were reported already).
+    pub(super) fn poisoned(&self, e: &Expr) -> bool {
         let mut hit = false;
-        let mut called = Vec::new();
         walk_names(e, &mut |n, _, is_call| {
-            hit |= self.poisoned.contains(n);
-            if is_call {
-                called.push(n.to_string());
-            }
+            hit |= self.poisoned.contains(n) || (is_call && self.tainted.contains(n));
         });
-        // Through user functions too (a function using a failed constant).
-        hit || (depth < 16
-            && called.iter().any(|f| {
-                self.fns
-                    .get(f)
-                    .is_some_and(|d| self.poisoned_depth(&d.body, depth + 1))
-            }))
+        hit
+    }
+
+    /// Records which functions use each name, and taints the functions that
+    /// use the names poisoned so far (call once the functions are declared).
+    pub(super) fn index_function_uses(&mut self) {
+        let mut users: HashMap<String, Vec<String>> = HashMap::new();
+        for (f, def) in &self.fns {
+            walk_names(&def.body, &mut |n, _, _| {
+                let list = users.entry(n.to_string()).or_default();
+                if list.last() != Some(f) {
+                    list.push(f.clone());
+                }
+            });
+        }
+        self.users = users;
+        let names: Vec<String> = self.poisoned.iter().cloned().collect();
+        names.into_iter().for_each(|n| self.poison(n));
+    }
+
+    /// Marks `name` as failed, with every function that uses it through any
+    /// chain of calls: later uses are not reported again.
+    pub(super) fn poison(&mut self, name: String) {
+        let mut queue = vec![name.clone()];
+        self.poisoned.insert(name);
+        while let Some(n) = queue.pop() {
+            for f in self.users.get(&n).into_iter().flatten() {
+                if self.tainted.insert(f.clone()) {
+                    queue.push(f.clone());
+                }
+            }
+        }
     }
 }
 
@@ -174,7 +184,7 @@ mod tests {
 
     #[test]
     fn walk_names_sees_names_calls_and_indices() {
-        let (file, d) = crate::parser::parse_file("const y = f(x1[k])' + g;");
+        let (file, d, _) = crate::parser::parse_file("const y = f(x1[k])' + g;");
         assert!(d.is_empty(), "{d:?}");
         let crate::ast::ItemKind::Const(_, e) = &file.items[0].kind else {
             panic!("not a constant");

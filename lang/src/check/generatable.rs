@@ -98,7 +98,7 @@ impl Checker<'_> {
     /// needs a scalar base with a constant whole exponent from 0 to 16 (or a
     /// constant base and exponent), and constant indices.
     fn unsupported_operations(&self, e: &Expr, found: &mut Vec<Diagnostic>) {
-        let constant = |x: &Expr| self.const_env().eval(x).ok();
+        let constant = |x: &Expr| self.evaluate(&self.const_env(), x).ok();
         match &e.kind {
             ExprKind::Number(_) | ExprKind::Name(_) => {}
             ExprKind::Matrix(rows) => rows
@@ -115,7 +115,7 @@ impl Checker<'_> {
                 if *op != BinOp::Pow {
                     return;
                 }
-                let base = self.state_env(Mode::Shapes, &[], &[]).eval(a);
+                let base = self.evaluate(&self.state_env(Mode::Shapes, &[], &[]), a);
                 if let Ok(v) = &base {
                     if v.nrows() != 1 || v.ncols() != 1 {
                         found.push(

@@ -30,7 +30,7 @@ pub use generatable::GENERATABLE_FUNCTIONS;
 
 use crate::ast::*;
 use crate::diag::Diagnostic;
-use crate::eval::{FnDef, Mat, BUILTINS};
+use crate::eval::{Budget, FnDef, Mat, BUILTINS};
 use crate::span::{Span, Spanned};
 use crate::spec::*;
 use std::collections::{HashMap, HashSet};
@@ -59,6 +59,26 @@ impl Kind {
             Kind::Premise => "premise",
         }
     }
+
+    /// Whether a name of this kind is a signal (not a constant or function).
+    fn is_signal(self) -> bool {
+        !matches!(self, Kind::Const | Kind::Fn)
+    }
+}
+
+/// The names of the state, input and disturbance items of `file`.
+fn signal_items(file: &File) -> Vec<(String, Kind)> {
+    let mut out = Vec::new();
+    for it in &file.items {
+        let (vars, kind): (&[VarDecl], Kind) = match &it.kind {
+            ItemKind::State(v) => (v, Kind::State),
+            ItemKind::Input(v, _) => (v, Kind::Input),
+            ItemKind::Disturbance(v, _) => (v, Kind::Disturbance),
+            _ => continue,
+        };
+        out.extend(vars.iter().map(|v| (v.name.node.clone(), kind)));
+    }
+    out
 }
 
 /// The signal dimensions: states n, inputs m, disturbances q.
@@ -73,6 +93,13 @@ struct Checker<'a> {
     file: &'a File,
     diags: Vec<Diagnostic>,
     names: HashMap<String, (Kind, Span)>,
+    /// The declared names that are signals (states, inputs, disturbances,
+    /// outputs, premises), kept beside `names` so that building an
+    /// environment does not go through every constant.
+    signal_names: Vec<(String, Kind)>,
+    /// The names of every state, input and disturbance item of the file,
+    /// declared or not.
+    signal_items: Vec<(String, Kind)>,
     consts: HashMap<String, Mat>,
     fns: HashMap<String, FnDef>,
     states: Vec<Signal>,
@@ -80,10 +107,18 @@ struct Checker<'a> {
     disturbances: Vec<Signal>,
     /// Names whose definitions failed: uses of them are not reported again.
     poisoned: HashSet<String>,
+    /// Functions using a poisoned name (through any chain of calls).
+    tainted: HashSet<String>,
+    /// For each name, the functions whose bodies use it.
+    users: HashMap<String, Vec<String>>,
     /// First words of items that failed to parse.
     broken_keywords: HashSet<String>,
     /// `paper = ...` of the L-inf objective (a source's reported gamma).
     linf_paper: Option<f64>,
+    /// The evaluation work left for the whole check.
+    budget: Budget,
+    /// Whether running out of it was reported (it is reported once).
+    budget_reported: bool,
 }
 
 /// What the pass over the model, objective and setting items collects.
@@ -116,6 +151,8 @@ pub fn check(file: &File) -> (Option<Spec>, Vec<Diagnostic>) {
         file,
         diags: Vec::new(),
         names: HashMap::new(),
+        signal_names: Vec::new(),
+        signal_items: signal_items(file),
         consts: HashMap::new(),
         fns: HashMap::new(),
         states: Vec::new(),
@@ -126,8 +163,12 @@ pub fn check(file: &File) -> (Option<Spec>, Vec<Diagnostic>) {
             .iter()
             .flat_map(|b| b.names.iter().cloned())
             .collect(),
+        tainted: HashSet::new(),
+        users: HashMap::new(),
         broken_keywords: file.broken.iter().map(|b| b.keyword.clone()).collect(),
         linf_paper: None,
+        budget: Budget::check(),
+        budget_reported: false,
     };
     let spec = c.run();
     let has_error = c.diags.iter().any(Diagnostic::is_error);
@@ -141,6 +182,7 @@ impl<'a> Checker<'a> {
         let items = &file.items;
         let controller = self.header(items);
         self.functions(items);
+        self.index_function_uses();
         let limits = self.declarations(items);
         self.check_fn_bodies();
         self.require_signals();
@@ -225,6 +267,13 @@ impl<'a> Checker<'a> {
     }
 
     fn err(&mut self, d: Diagnostic) {
+        if self.budget.is_spent() {
+            // Every evaluation after the check ran out of work fails the same way.
+            if self.budget_reported {
+                return;
+            }
+            self.budget_reported = true;
+        }
         self.diags.push(d);
     }
 
@@ -260,12 +309,27 @@ impl<'a> Checker<'a> {
             return false;
         }
         self.names.insert(name.node.clone(), (kind, name.span));
+        if kind.is_signal() {
+            self.signal_names.push((name.node.clone(), kind));
+        }
         true
     }
 
     /// Whether a missing-declaration error would only repeat a syntax error.
     fn broken(&self, keyword: &str) -> bool {
         self.broken_keywords.contains(keyword)
+    }
+
+    /// Reports `d`, a value of the wrong size for the declared dimensions,
+    /// unless a state, input or disturbance item failed to parse: the
+    /// dimensions are unknown then, and the error would repeat that one.
+    fn shape_err(&mut self, d: Diagnostic) {
+        if !["state", "input", "disturbance"]
+            .iter()
+            .any(|k| self.broken(k))
+        {
+            self.err(d);
+        }
     }
 
     fn singleton(&mut self, found: &mut Option<Span>, span: Span, what: &str) -> bool {

@@ -17,7 +17,7 @@ impl Checker<'_> {
         match self.output(name, e, dims) {
             Some(o) => draft.outputs.push(o),
             None => {
-                self.poisoned.insert(name.node.clone());
+                self.poison(name.node.clone());
             }
         }
     }
@@ -78,7 +78,7 @@ impl Checker<'_> {
                     }
                 }
                 None => {
-                    self.poisoned.insert(name.node.clone());
+                    self.poison(name.node.clone());
                     return;
                 }
             }
@@ -164,11 +164,11 @@ impl Checker<'_> {
         } else {
             self.state_env(Mode::Exact, &[], &[])
         };
-        let r = env.eval(&mm.expr);
+        let r = self.evaluate(&env, &mm.expr);
         match r {
             Ok(v) if v.nrows() == rows && v.ncols() == cols => {}
             Ok(v) => {
-                self.err(
+                self.shape_err(
                     Diagnostic::error(
                         mm.expr.span,
                         format!(
@@ -228,7 +228,7 @@ impl Checker<'_> {
                 env.locals[i + 1].1 =
                     Mat::from_column_slice(s.len, 1, &v[s.offset..s.offset + s.len]);
             }
-            env.eval(e)
+            this.evaluate(&env, e)
         };
         if self.poisoned(e) {
             return None;

@@ -20,8 +20,23 @@ impl Checker<'_> {
         out
     }
 
-    /// `premise names [= expr] [range lo .. hi] [sigma s] { sets }`: one premise per name.
+    /// `premise names [= expr] [range lo .. hi] [sigma s] { sets }`: one premise
+    /// per name. When the item fails, its names (those not declared otherwise,
+    /// as states) are poisoned: the rules using them are not reported again.
     fn premise_item(&mut self, it: &Item, out: &mut Vec<Premise>) {
+        let ItemKind::Premise { names, .. } = &it.kind else {
+            return;
+        };
+        if self.checked_premise_item(it, out).is_none() {
+            for n in names {
+                if !self.names.contains_key(&n.node) {
+                    self.poison(n.node.clone());
+                }
+            }
+        }
+    }
+
+    fn checked_premise_item(&mut self, it: &Item, out: &mut Vec<Premise>) -> Option<()> {
         let ItemKind::Premise {
             names,
             expr,
@@ -30,20 +45,18 @@ impl Checker<'_> {
             sets,
         } = &it.kind
         else {
-            return;
+            return Some(());
         };
-        let Some(bound) = self.premise_expr(it, names, expr.as_ref()) else {
-            return;
-        };
+        let bound = self.premise_expr(it, names, expr.as_ref())?;
         if self.poisoned(&bound) {
-            return;
+            return None;
         }
-        let r = self.state_env(Mode::Shapes, &[], &[]).eval(&bound);
+        let r = self.evaluate(&self.state_env(Mode::Shapes, &[], &[]), &bound);
         let v = match r {
             Ok(v) => v,
             Err(d) => {
                 self.err(d);
-                return;
+                return None;
             }
         };
         if v.ncols() != 1 {
@@ -51,7 +64,7 @@ impl Checker<'_> {
                 Diagnostic::error(bound.span, "a premise must be a scalar or a vector")
                     .with_label(format!("this is {}x{}", v.nrows(), v.ncols())),
             );
-            return;
+            return None;
         }
         let len = v.nrows();
         if names.len() > 1 && names.len() != len {
@@ -65,7 +78,7 @@ impl Checker<'_> {
                 )
                 .with_label(format!("a {len}-vector")),
             );
-            return;
+            return None;
         }
         self.check_generatable(&bound, names);
         let range = match range {
@@ -90,6 +103,7 @@ impl Checker<'_> {
                 span: name.span,
             });
         }
+        Some(())
     }
 
     /// The expression the premise names are bound to: `= expr`, or the state of that name.
@@ -113,6 +127,9 @@ impl Checker<'_> {
             return None;
         }
         if !self.states.iter().any(|s| s.name == first.node) {
+            if self.poisoned.contains(&first.node) {
+                return None;
+            }
             let mut d = Diagnostic::error(
                 first.span,
                 format!("premise `{}` is not a state", first.node),
@@ -177,7 +194,7 @@ impl Checker<'_> {
                 }),
                 None => {
                     for n in names {
-                        self.poisoned.insert(format!("{}.{}", n.node, s.name.node));
+                        self.poison(format!("{}.{}", n.node, s.name.node));
                     }
                 }
             }

@@ -4,6 +4,7 @@
 use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Ident, Item, NamedArg};
 use crate::diag::Diagnostic;
+use crate::display::Num;
 use crate::span::{Span, Spanned};
 use crate::spec::{Relaxation, RuleSpec};
 
@@ -73,7 +74,7 @@ impl Checker<'_> {
                 if s.fract() != 0.0 || s < 1.0 {
                     self.err(Diagnostic::error(
                         span,
-                        format!("`s` must be a whole number >= 1, found {s}"),
+                        format!("`s` must be a whole number >= 1, found {}", Num(s)),
                     ));
                     return None;
                 }
@@ -85,7 +86,7 @@ impl Checker<'_> {
                 if !(0.0..1.0).contains(&kappa) {
                     self.err(Diagnostic::error(
                         span,
-                        format!("`kappa` must be in [0, 1), found {kappa}"),
+                        format!("`kappa` must be in [0, 1), found {}", Num(kappa)),
                     ));
                     return None;
                 }

@@ -4,10 +4,36 @@
 use super::{Checker, Dims};
 use crate::ast::{Clause, Ident, Item, ItemKind, NamedArg, SetRef};
 use crate::diag::Diagnostic;
+use crate::display::Num;
 use crate::eval::Mat;
 use crate::span::Span;
 use crate::spec::{ClauseSet, Premise, RuleClause, RuleSpec};
 use crate::suggest::suggest;
+use std::collections::HashMap;
+
+/// One clause of a rule's premise, comparable and hashable: the premise's
+/// index and the set's index or the bits of its `about` point.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
+enum ClauseKey {
+    Named(usize, usize),
+    About(usize, Vec<u64>),
+}
+
+/// A rule's premise in canonical form (clauses sorted): two rules have the
+/// same premise exactly when their keys are equal.
+fn premise_key(clauses: &[RuleClause]) -> Vec<ClauseKey> {
+    let mut key: Vec<ClauseKey> = clauses
+        .iter()
+        .map(|c| match &c.set {
+            ClauseSet::Named(s) => ClauseKey::Named(c.premise, *s),
+            ClauseSet::About(p) => {
+                ClauseKey::About(c.premise, p.iter().map(|v| v.to_bits()).collect())
+            }
+        })
+        .collect();
+    key.sort_unstable();
+    key
+}
 
 impl Checker<'_> {
     /// The rules, each with a unique name and premise; "no rules" if there are none.
@@ -18,6 +44,9 @@ impl Checker<'_> {
         dims: Dims,
     ) -> Vec<RuleSpec> {
         let mut out: Vec<RuleSpec> = Vec::new();
+        // Each rule name and premise seen so far, with the rule's index in `out`.
+        let mut by_name: HashMap<String, usize> = HashMap::new();
+        let mut by_premise: HashMap<Vec<ClauseKey>, usize> = HashMap::new();
         for it in items {
             let ItemKind::Rule {
                 name,
@@ -28,7 +57,7 @@ impl Checker<'_> {
             else {
                 continue;
             };
-            if let Some(prev) = out.iter().find(|r| r.name == name.node) {
+            if let Some(prev) = by_name.get(&name.node).map(|&i| &out[i]) {
                 let d =
                     Diagnostic::error(name.span, format!("rule `{}` is defined twice", name.node))
                         .with_secondary(prev.span, "first definition here")
@@ -48,17 +77,11 @@ impl Checker<'_> {
                 continue;
             }
             // Duplicate premise combination.
-            let key = |r: &[RuleClause]| {
-                let mut k: Vec<String> = r
-                    .iter()
-                    .map(|c| format!("{}:{:?}", c.premise, c.set))
-                    .collect();
-                k.sort();
-                k
-            };
-            if let Some(prev) = out
-                .iter()
-                .find(|r| !rc.is_empty() && key(&r.clauses) == key(&rc))
+            let key = premise_key(&rc);
+            if let Some(prev) = by_premise
+                .get(&key)
+                .filter(|_| !rc.is_empty())
+                .map(|&i| &out[i])
             {
                 let d = Diagnostic::error(name.span, format!("rule `{}` has the same premise as rule `{}`", name.node, prev.name))
                     .with_secondary(prev.span, "same premise here")
@@ -66,6 +89,8 @@ impl Checker<'_> {
                 self.err(d);
                 continue;
             }
+            by_name.insert(name.node.clone(), out.len());
+            by_premise.insert(key, out.len());
             out.push(RuleSpec {
                 name: name.node.clone(),
                 clauses: rc,
@@ -198,12 +223,15 @@ impl Checker<'_> {
         let mut seen: Vec<&str> = Vec::new();
         for a in args {
             let Some(s) = self.states.iter().find(|s| s.name == a.name.node).cloned() else {
+                good = false;
+                if self.poisoned.contains(&a.name.node) {
+                    continue;
+                }
                 let mut d =
                     Diagnostic::error(a.name.span, format!("`{}` is not a state", a.name.node))
                         .with_label("`at(...)` sets states");
                 d = d.with_suggestion(&a.name.node, self.states.iter().map(|s| s.name.as_str()));
                 self.err(d);
-                good = false;
                 continue;
             };
             if seen.contains(&a.name.node.as_str()) {
@@ -227,7 +255,7 @@ impl Checker<'_> {
                         name.node,
                         s.name,
                         if v.len() == 1 {
-                            format!("{}", v[(0, 0)])
+                            Num(v[(0, 0)]).to_string()
                         } else {
                             format!("a {}x{} value", v.nrows(), v.ncols())
                         },
@@ -248,7 +276,7 @@ impl Checker<'_> {
                     d = d.with_help(format!(
                         "give every component, e.g. `{} = {} * ones({})`",
                         s.name,
-                        v[(0, 0)],
+                        Num(v[(0, 0)]),
                         s.len
                     ));
                 }
@@ -295,7 +323,7 @@ impl Checker<'_> {
                 continue;
             };
             if v.nrows() != rows || v.ncols() != cols {
-                self.err(
+                self.shape_err(
                     Diagnostic::error(
                         mat.value.span,
                         format!(

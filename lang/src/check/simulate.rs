@@ -183,7 +183,7 @@ impl Checker<'_> {
         let mut env = self.const_env();
         env.unavailable.retain(|(n, _)| n != "t");
         env.locals.push(("t".into(), Mat::zeros(1, 1)));
-        match env.eval(value) {
+        match self.evaluate(&env, value) {
             Ok(v) if v.nrows() == len && v.ncols() == 1 => Some((di, value.clone())),
             Ok(v) => {
                 self.err(Diagnostic::error(

@@ -127,8 +127,8 @@ impl Checker<'_> {
             _ => {
                 let s = require(self, "sampling")?;
                 let (lo, hi, _) = self.range_setting(s)?;
-                let beta = require(self, "beta").and_then(|s| self.setting_scalar(s));
-                let rho = require(self, "rho").and_then(|s| self.setting_scalar(s));
+                let beta = require(self, "beta").and_then(|s| self.setting_nonnegative(s));
+                let rho = require(self, "rho").and_then(|s| self.setting_nonnegative(s));
                 Some(Trigger::Mixed {
                     sampling: (lo, hi),
                     beta: beta?,
@@ -210,7 +210,7 @@ impl Checker<'_> {
             Value::Expr(e) => {
                 let w = self.eval_const(e)?;
                 if w.nrows() != n || w.ncols() != n {
-                    self.err(
+                    self.shape_err(
                         Diagnostic::error(e.span, format!("the trigger weight must be {n}x{n}"))
                             .with_label(format!("this is {}x{}", w.nrows(), w.ncols())),
                     );

@@ -4,6 +4,7 @@
 use super::Checker;
 use crate::ast::{Expr, NamedArg, Setting, Value};
 use crate::diag::Diagnostic;
+use crate::display::Num;
 use crate::eval::Mat;
 use std::collections::HashMap;
 
@@ -13,7 +14,7 @@ impl Checker<'_> {
         if self.poisoned(e) {
             return None;
         }
-        let r = self.const_env().eval(e);
+        let r = self.evaluate(&self.const_env(), e);
         match r {
             Ok(v) if v.iter().all(|x| x.is_finite()) => Some(v),
             Ok(_) => {
@@ -55,7 +56,21 @@ impl Checker<'_> {
         } else {
             self.err(
                 Diagnostic::error(e.span, format!("{what} must be positive"))
-                    .with_label(format!("this is {v}")),
+                    .with_label(format!("this is {}", Num(v))),
+            );
+            None
+        }
+    }
+
+    /// A constant scalar >= 0.
+    pub(super) fn nonnegative(&mut self, e: &Expr, what: &str) -> Option<f64> {
+        let v = self.scalar(e, what)?;
+        if v >= 0.0 {
+            Some(v)
+        } else {
+            self.err(
+                Diagnostic::error(e.span, format!("{what} must not be negative"))
+                    .with_label(format!("this is {}", Num(v))),
             );
             None
         }
@@ -67,7 +82,7 @@ impl Checker<'_> {
         if v.len() == len && (v.ncols() == 1 || v.nrows() == 1) {
             Some(v.iter().copied().collect())
         } else {
-            self.err(
+            self.shape_err(
                 Diagnostic::error(
                     e.span,
                     format!(
@@ -118,7 +133,12 @@ impl Checker<'_> {
                 if l >= h || l.is_nan() || h.is_nan() || l < 0.0 {
                     self.err(Diagnostic::error(
                         s.span,
-                        format!("`{}` needs 0 <= lo < hi, found {l} .. {h}", s.key.node),
+                        format!(
+                            "`{}` needs 0 <= lo < hi, found {} .. {}",
+                            s.key.node,
+                            Num(l),
+                            Num(h)
+                        ),
                     ));
                     return None;
                 }
@@ -140,8 +160,22 @@ impl Checker<'_> {
 
     /// A setting with one scalar value.
     pub(super) fn setting_scalar(&mut self, s: &Setting) -> Option<f64> {
+        self.setting_value(s, Self::scalar)
+    }
+
+    /// A setting with one scalar value >= 0.
+    pub(super) fn setting_nonnegative(&mut self, s: &Setting) -> Option<f64> {
+        self.setting_value(s, Self::nonnegative)
+    }
+
+    /// A setting with one value, read by `read`.
+    fn setting_value(
+        &mut self,
+        s: &Setting,
+        read: fn(&mut Self, &Expr, &str) -> Option<f64>,
+    ) -> Option<f64> {
         match &s.value {
-            Value::Expr(e) => self.scalar(e, &format!("`{}`", s.key.node)),
+            Value::Expr(e) => read(self, e, &format!("`{}`", s.key.node)),
             Value::Range(..) => {
                 self.err(Diagnostic::error(
                     s.span,

@@ -1,11 +1,20 @@
 //! Diagnostics: a message, a labelled primary span, optional secondary labels,
 //! notes and a help line; rendered like rustc's or as JSON for editors.
+//!
+//! Every text a diagnostic carries is made safe to print when it is set
+//! ([`text`]), and the source under it is shown through a [`view`], so no
+//! control character of the spec reaches a terminal and no long line or
+//! number is repeated in full.
 
+mod text;
+mod view;
+
+use crate::limits::MAX_DIAGNOSTICS;
 use crate::span::Span;
 use codespan_reporting::diagnostic::{Diagnostic as CsDiagnostic, Label as CsLabel};
-use codespan_reporting::files::SimpleFile;
 use codespan_reporting::term::{self, Config};
 use serde::Serialize;
+use view::{Lines, Snippet};
 
 /// How serious a diagnostic is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -43,6 +52,15 @@ pub struct Diagnostic {
     pub notes: Vec<String>,
     /// How to fix it, where there is a known way.
     pub help: Option<String>,
+    /// For the summary line that stands for diagnostics left out (past
+    /// [`MAX_DIAGNOSTICS`]): how many; 0 for every other diagnostic. A summary
+    /// has no place in the source.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub omitted: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl Diagnostic {
@@ -50,12 +68,22 @@ impl Diagnostic {
     pub fn error(span: Span, message: impl Into<String>) -> Self {
         Diagnostic {
             severity: Severity::Error,
-            message: message.into(),
+            message: text::clean(message.into()),
             span,
             label: String::new(),
             secondary: Vec::new(),
             notes: Vec::new(),
             help: None,
+            omitted: 0,
+        }
+    }
+
+    /// The summary line standing for `count` diagnostics left out.
+    pub fn omitted(count: usize, all_errors: bool) -> Self {
+        let what = if all_errors { "errors" } else { "diagnostics" };
+        Diagnostic {
+            omitted: count,
+            ..Diagnostic::error(Span::default(), format!("{count} more {what} not shown"))
         }
     }
 
@@ -69,7 +97,7 @@ impl Diagnostic {
 
     /// Sets the primary label.
     pub fn with_label(mut self, label: impl Into<String>) -> Self {
-        self.label = label.into();
+        self.label = text::clean(label.into());
         self
     }
 
@@ -77,20 +105,20 @@ impl Diagnostic {
     pub fn with_secondary(mut self, span: Span, message: impl Into<String>) -> Self {
         self.secondary.push(Label {
             span,
-            message: message.into(),
+            message: text::clean(message.into()),
         });
         self
     }
 
     /// Adds a note.
     pub fn with_note(mut self, note: impl Into<String>) -> Self {
-        self.notes.push(note.into());
+        self.notes.push(text::clean(note.into()));
         self
     }
 
     /// Sets the help line.
     pub fn with_help(mut self, help: impl Into<String>) -> Self {
-        self.help = Some(help.into());
+        self.help = Some(text::clean(help.into()));
         self
     }
 
@@ -132,28 +160,56 @@ fn clamp(span: Span, source: &str) -> Span {
     Span::new(fix(span.start), fix(span.end))
 }
 
-/// 1-based line and column (in characters) of byte offset `at`.
-fn line_col(source: &str, at: usize) -> (usize, usize) {
-    let at = clamp(Span::new(at, at), source).start;
-    let before = &source[..at];
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    let col = source[line_start..at].chars().count() + 1;
-    (line, col)
+/// Diagnostics collected in source order, keeping the first [`MAX_DIAGNOSTICS`]
+/// and counting the others (which are then never built).
+#[derive(Debug, Default)]
+pub(crate) struct Capped {
+    /// The diagnostics kept.
+    pub kept: Vec<Diagnostic>,
+    /// How many were left out.
+    pub omitted: usize,
+}
+
+impl Capped {
+    /// Adds the diagnostic `make` builds, if there is room for it.
+    pub fn push_with(&mut self, make: impl FnOnce() -> Diagnostic) {
+        if self.kept.len() < MAX_DIAGNOSTICS {
+            self.kept.push(make());
+        } else {
+            self.omitted += 1;
+        }
+    }
+}
+
+/// Keeps the first [`MAX_DIAGNOSTICS`] of `diags` (sorted by position) and
+/// replaces the rest, with the `omitted` left out before, by one summary line.
+pub(crate) fn cap(diags: &mut Vec<Diagnostic>, omitted: usize) {
+    let cut = diags.len().saturating_sub(MAX_DIAGNOSTICS);
+    let all_errors = diags[MAX_DIAGNOSTICS.min(diags.len())..]
+        .iter()
+        .all(Diagnostic::is_error);
+    diags.truncate(MAX_DIAGNOSTICS);
+    if cut + omitted > 0 {
+        diags.push(Diagnostic::omitted(cut + omitted, all_errors));
+    }
 }
 
 /// Renders diagnostics like rustc does (`error: ...`, `--> file:line:col`,
 /// the source line, carets under the span, `= help: ...`). `color` adds ANSI colours.
 pub fn render(file_name: &str, source: &str, diagnostics: &[Diagnostic], color: bool) -> String {
-    let file = SimpleFile::new(file_name, source);
+    let lines = Lines::new(source);
     let config = Config {
         chars: codespan_reporting::term::Chars::ascii(),
         ..Config::default()
     };
     let mut out: Vec<u8> = Vec::new();
     for d in diagnostics {
-        let d = d.clone().clamped(source);
-        let cs = to_codespan(&d);
+        let mut spans = vec![d.span];
+        if d.omitted == 0 {
+            spans.extend(d.secondary.iter().map(|l| l.span));
+        }
+        let file = Snippet::new(file_name, &lines, if d.omitted == 0 { &spans } else { &[] });
+        let cs = to_codespan(d, &file);
         let result = if color {
             let mut w = term::termcolor::Ansi::new(&mut out);
             term::emit_to_write_style(&mut w, &config, &file, &cs)
@@ -163,7 +219,7 @@ pub fn render(file_name: &str, source: &str, diagnostics: &[Diagnostic], color: 
         };
         if result.is_err() {
             // Fall back to a plain line: rendering must never lose a diagnostic.
-            let (l, c) = line_col(source, d.span.start);
+            let (l, c) = lines.line_col(d.span.start);
             out.extend_from_slice(
                 format!("error: {}\n --> {file_name}:{l}:{c}\n", d.message).as_bytes(),
             );
@@ -172,14 +228,18 @@ pub fn render(file_name: &str, source: &str, diagnostics: &[Diagnostic], color: 
     String::from_utf8_lossy(&out).into_owned()
 }
 
-fn to_codespan(d: &Diagnostic) -> CsDiagnostic<()> {
+fn to_codespan(d: &Diagnostic, file: &Snippet) -> CsDiagnostic<()> {
     let base = match d.severity {
         Severity::Error => CsDiagnostic::error(),
         Severity::Warning => CsDiagnostic::warning(),
     };
-    let mut labels = vec![CsLabel::primary((), d.span.start..d.span.end).with_message(&d.label)];
-    for l in &d.secondary {
-        labels.push(CsLabel::secondary((), l.span.start..l.span.end).with_message(&l.message));
+    let range = |s: Span| file.map(s.start)..file.map(s.end);
+    let mut labels = Vec::new();
+    if d.omitted == 0 {
+        labels.push(CsLabel::primary((), range(d.span)).with_message(&d.label));
+        for l in &d.secondary {
+            labels.push(CsLabel::secondary((), range(l.span)).with_message(&l.message));
+        }
     }
     let mut notes = d.notes.clone();
     if let Some(h) = &d.help {
@@ -221,8 +281,9 @@ pub struct JsonDiagnostic<'a> {
 
 /// The JSON view of `d` for `file`.
 pub fn to_json<'a>(file: &'a str, source: &str, d: &'a Diagnostic) -> JsonDiagnostic<'a> {
-    let (line, column) = line_col(source, d.span.start);
-    let (end_line, end_column) = line_col(source, d.span.end);
+    let lines = Lines::new(source);
+    let (line, column) = lines.line_col(d.span.start);
+    let (end_line, end_column) = lines.line_col(d.span.end);
     JsonDiagnostic {
         file,
         severity: d.severity,

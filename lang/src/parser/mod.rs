@@ -4,12 +4,15 @@
 //! syntax errors are reported and left out, the others form the [`File`].
 
 use crate::ast::*;
-use crate::diag::Diagnostic;
+use crate::diag::{Capped, Diagnostic};
 use crate::span::{Span, Spanned};
 use crate::split::split_items;
+
+mod expr;
 use pest::iterators::Pair;
 use pest::pratt_parser::{Assoc, Op, PrattParser};
 use pest::Parser as _;
+use std::collections::HashSet;
 use std::sync::OnceLock;
 
 #[derive(pest_derive::Parser)]
@@ -30,15 +33,25 @@ fn pratt() -> &'static PrattParser<Rule> {
     })
 }
 
-/// Parses a whole file: the items that parsed, and the syntax errors.
-pub fn parse_file(source: &str) -> (File, Vec<Diagnostic>) {
-    let mut diags = Vec::new();
-    let chunks = split_items(source, &mut diags);
+/// Parses a whole file: the items that parsed, the syntax errors (the first
+/// [`MAX_DIAGNOSTICS`](crate::limits::MAX_DIAGNOSTICS) of each kind, in source
+/// order) and how many more there were.
+pub fn parse_file(source: &str) -> (File, Vec<Diagnostic>, usize) {
+    let mut split = Capped::default();
+    let chunks = split_items(source, &mut split);
+    let mut diags = Capped::default();
     let mut file = File::default();
+    let mut broken = HashSet::new();
+    let mut note_broken = |file: &mut File, b: BrokenItem| {
+        // What a broken item declares matters, not how often: keep each once.
+        if broken.insert((b.keyword.clone(), b.names.clone())) {
+            file.broken.push(b);
+        }
+    };
     for chunk in chunks {
         let text = &source[chunk.span.start..chunk.span.end];
         if chunk.broken {
-            file.broken.push(broken_item(text, chunk.span));
+            note_broken(&mut file, broken_item(text, chunk.span));
             continue;
         }
         match TsfParser::parse(Rule::item, text) {
@@ -50,19 +63,22 @@ pub fn parse_file(source: &str) -> (File, Vec<Diagnostic>) {
                     match cx.item(item) {
                         Ok(it) => file.items.push(it),
                         Err(d) => {
-                            diags.push(d);
-                            file.broken.push(broken_item(text, chunk.span));
+                            diags.push_with(|| d);
+                            note_broken(&mut file, broken_item(text, chunk.span));
                         }
                     }
                 }
             }
             Err(e) => {
-                diags.push(syntax_error(&e, chunk.span.start, text));
-                file.broken.push(broken_item(text, chunk.span));
+                diags.push_with(|| syntax_error(&e, chunk.span.start, text));
+                note_broken(&mut file, broken_item(text, chunk.span));
             }
         }
     }
-    (file, diags)
+    let omitted = split.omitted + diags.omitted;
+    let mut all = split.kept;
+    all.extend(diags.kept);
+    (file, all, omitted)
 }
 
 /// What a broken item seems to declare: its first word and the names after it.
@@ -73,7 +89,7 @@ fn broken_item(text: &str, span: Span) -> BrokenItem {
     let mut prev = ' ';
     for ch in text.chars() {
         if in_comment {
-            in_comment = ch != '\n';
+            in_comment = ch != '\n' && ch != '\r';
             continue;
         }
         if ch == '/' && prev == '/' {
@@ -600,131 +616,6 @@ impl Cx {
                 Ok(SimStmt::Dynamics(stmts, dspan))
             }
         }
-    }
-
-    fn named_arg(&self, p: Pair<Rule>) -> PResult<NamedArg> {
-        let span = self.span(&p);
-        let mut parts = p.into_inner();
-        let name = self.ident(next(&mut parts, span)?);
-        let value = self.expr(next(&mut parts, span)?)?;
-        Ok(NamedArg { name, value })
-    }
-
-    fn arg(&self, p: Pair<Rule>) -> PResult<Arg> {
-        if p.as_rule() == Rule::named_arg {
-            let na = self.named_arg(p)?;
-            Ok(Arg {
-                name: Some(na.name),
-                value: na.value,
-            })
-        } else {
-            Ok(Arg {
-                name: None,
-                value: self.expr(p)?,
-            })
-        }
-    }
-
-    fn expr(&self, p: Pair<Rule>) -> PResult<Expr> {
-        let span = self.span(&p);
-        pratt()
-            .map_primary(|q| self.primary(q))
-            .map_prefix(|op, rhs| {
-                let rhs = rhs?;
-                let s = self.span(&op).join(rhs.span);
-                Ok(match op.as_rule() {
-                    Rule::neg => Expr {
-                        kind: ExprKind::Neg(Box::new(rhs)),
-                        span: s,
-                    },
-                    _ => rhs,
-                })
-            })
-            .map_postfix(|lhs, op| {
-                let lhs = lhs?;
-                let s = lhs.span.join(self.span(&op));
-                Ok(match op.as_rule() {
-                    Rule::transpose => Expr {
-                        kind: ExprKind::Transpose(Box::new(lhs)),
-                        span: s,
-                    },
-                    _ => {
-                        let args = op
-                            .into_inner()
-                            .map(|a| self.index_arg(a, s))
-                            .collect::<PResult<_>>()?;
-                        Expr {
-                            kind: ExprKind::Index(Box::new(lhs), args),
-                            span: s,
-                        }
-                    }
-                })
-            })
-            .map_infix(|lhs, op, rhs| {
-                let (lhs, rhs) = (lhs?, rhs?);
-                let bop = match op.as_rule() {
-                    Rule::add => BinOp::Add,
-                    Rule::sub => BinOp::Sub,
-                    Rule::mul => BinOp::Mul,
-                    Rule::emul => BinOp::EMul,
-                    Rule::div => BinOp::Div,
-                    _ => BinOp::Pow,
-                };
-                let s = lhs.span.join(rhs.span);
-                Ok(Expr {
-                    kind: ExprKind::Binary(bop, Box::new(lhs), Box::new(rhs)),
-                    span: s,
-                })
-            })
-            .parse(p.into_inner())
-            .map_err(|d: Diagnostic| {
-                if d.span == Span::default() {
-                    Diagnostic { span, ..d }
-                } else {
-                    d
-                }
-            })
-    }
-
-    fn index_arg(&self, p: Pair<Rule>, span: Span) -> PResult<IndexArg> {
-        let a = first(p, span)?;
-        match a.as_rule() {
-            Rule::full_range => Ok(IndexArg::Full),
-            Rule::slice => {
-                let mut parts = a.into_inner();
-                let lo = self.expr(next(&mut parts, span)?)?;
-                let hi = self.expr(next(&mut parts, span)?)?;
-                Ok(IndexArg::Range(lo, hi))
-            }
-            _ => Ok(IndexArg::One(self.expr(a)?)),
-        }
-    }
-
-    fn primary(&self, p: Pair<Rule>) -> PResult<Expr> {
-        let span = self.span(&p);
-        let kind = match p.as_rule() {
-            Rule::number => ExprKind::Number(self.number(&p)?),
-            Rule::ident => ExprKind::Name(p.as_str().to_string()),
-            Rule::paren => return self.expr(first(p, span)?),
-            Rule::call => {
-                let mut parts = p.into_inner();
-                let name = self.ident(next(&mut parts, span)?);
-                let args = parts.map(|a| self.arg(a)).collect::<PResult<_>>()?;
-                ExprKind::Call(name, args)
-            }
-            _ => {
-                let rows = p
-                    .into_inner()
-                    .map(|row| {
-                        row.into_inner()
-                            .map(|e| self.expr(e))
-                            .collect::<PResult<Vec<_>>>()
-                    })
-                    .collect::<PResult<Vec<_>>>()?;
-                ExprKind::Matrix(rows)
-            }
-        };
-        Ok(Expr { kind, span })
     }
 }
 

@@ -1,0 +1,42 @@
+//! The limits of the front end. Each is a spec error past it (with the span
+//! of the offending text and a help line naming the limit), never a crash or
+//! an unbounded run; `docs/limits.md` lists them with what the user sees.
+
+/// Deepest nesting inside one item: brackets `( [ {`, call parentheses,
+/// unary signs and `^` chains each open a level. Checked on the raw text
+/// before parsing, because the parser recurses once per level.
+pub const MAX_NESTING: usize = 64;
+
+/// Deepest expression tree, and deepest evaluation through function calls.
+/// Every operator of a chain `a + b + c + ...` adds a level, so this also
+/// bounds the length of a flat chain of operators.
+pub const MAX_EXPR_DEPTH: usize = 256;
+
+/// Most nodes (numbers, names, operators, calls, matrix elements) in one expression.
+pub const MAX_EXPR_NODES: usize = 100_000;
+
+/// Most work one evaluation may do, in elementary operations: each visited
+/// node counts [`NODE_WORK`], each created matrix element or multiply-add one.
+/// User functions are expanded at every call, so this bounds functions that
+/// call each other many times.
+pub const MAX_EVAL_WORK: u64 = 50_000_000;
+
+/// Most evaluation work for checking a whole spec (all its expressions together).
+pub const MAX_CHECK_WORK: u64 = 200_000_000;
+
+/// What visiting one expression node counts towards [`MAX_EVAL_WORK`].
+pub const NODE_WORK: u64 = 50;
+
+/// Largest exponent of a matrix power `M ^ k`.
+pub const MAX_MATRIX_POWER: f64 = 1e6;
+
+/// Most diagnostics reported for one spec; the rest are counted in one line.
+pub const MAX_DIAGNOSTICS: usize = 200;
+
+/// Longest piece of source text repeated inside a message (longer ones are
+/// shortened around `...`).
+pub const MAX_ECHO_CHARS: usize = 40;
+
+/// Longest source line shown under a diagnostic (longer lines are shown
+/// around the marked places, with `...` for the rest).
+pub const MAX_SHOWN_LINE: usize = 120;
