@@ -113,32 +113,25 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
         &design.values,
         &design.reductions,
     )?;
-    if let Some(t) = &design.trigger {
-        // The gains checked are the design's (the ones emitted), not a copy.
+    // The sampled loops (event-triggered, or every sample transmitted): the
+    // gains checked are the design's (the ones emitted), not a copy.
+    let looped = design
+        .trigger
+        .iter()
+        .map(|t| (&t.plan, &t.values, &t.reductions))
+        .chain(
+            design
+                .sampled
+                .iter()
+                .map(|s| (&s.plan, &s.values, &s.reductions)),
+        );
+    for (plan, values, reductions) in looped {
         let plan = crate::synth::TriggerPlan {
             gains: design.gains.clone(),
-            ..t.plan.clone()
+            ..plan.clone()
         };
         let tb = crate::synth::trigger::build(model, &plan, design.eps, false)?;
-        lmis.extend(margins_of(
-            &tb.problem,
-            &tb.nonstrict,
-            &t.values,
-            &t.reductions,
-        )?);
-    }
-    if let Some(s) = &design.sampled {
-        let plan = crate::synth::TriggerPlan {
-            gains: design.gains.clone(),
-            ..s.plan.clone()
-        };
-        let sb = crate::synth::trigger::build(model, &plan, design.eps, false)?;
-        lmis.extend(margins_of(
-            &sb.problem,
-            &sb.nonstrict,
-            &s.values,
-            &s.reductions,
-        )?);
+        lmis.extend(margins_of(&tb.problem, &tb.nonstrict, values, reductions)?);
     }
     let min_margin = lmis
         .iter()

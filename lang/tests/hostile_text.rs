@@ -2,21 +2,11 @@
 //! a byte-order mark, CR-only line ends, control bytes, one broken
 //! declaration, and values whose messages must stay short and exact.
 
+mod common;
+
+use common::{errors, SPEC};
+use tsf_lang::check_source;
 use tsf_lang::diag::render;
-use tsf_lang::{check_source, Diagnostic};
-
-/// A valid spec, one item per line.
-const SPEC: &str = "tsf 1; controller c; state x1; input u; A = -1; B = 1;\n\
-    premise x1 range -1 .. 1 { all = trap(-1, -1, 1, 1); }\n\
-    rule R: x1 is all => A = -2;\n";
-
-/// The errors of `src`.
-fn errors(src: &str) -> Vec<Diagnostic> {
-    let (spec, diags) = check_source(src);
-    let errors: Vec<_> = diags.into_iter().filter(Diagnostic::is_error).collect();
-    assert_eq!(spec.is_none(), !errors.is_empty());
-    errors
-}
 
 /// The rendered errors of `src` (as `tsfc check` prints them).
 fn shown(src: &str) -> String {

@@ -3,22 +3,12 @@
 //! used to take minutes or never finish; the tests check the answers, and the
 //! counts (diagnostics, work) that bound the time, never the time itself.
 
+mod common;
+
+use common::{errors, SPEC};
+use tsf_lang::check_source;
 use tsf_lang::diag::render;
 use tsf_lang::limits::{MAX_DIAGNOSTICS, MAX_ECHO_CHARS, MAX_EVAL_WORK, MAX_MATRIX_POWER};
-use tsf_lang::{check_source, Diagnostic};
-
-/// A valid spec to which items are appended.
-const SPEC: &str = "tsf 1; controller c; state x1; input u; A = -1; B = 1;\n\
-    premise x1 range -1 .. 1 { all = trap(-1, -1, 1, 1); }\n\
-    rule R: x1 is all => A = -2;\n";
-
-/// The errors of `src`.
-fn errors(src: &str) -> Vec<Diagnostic> {
-    let (spec, diags) = check_source(src);
-    let errors: Vec<_> = diags.into_iter().filter(Diagnostic::is_error).collect();
-    assert_eq!(spec.is_none(), !errors.is_empty());
-    errors
-}
 
 /// `n` states with three sets each, and one rule per combination of sets
 /// (`3^n` rules), each clause list rotated by the rule's number.

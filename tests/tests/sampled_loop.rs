@@ -24,6 +24,15 @@ fn msd(trigger: &str) -> String {
     )
 }
 
+/// The spec with `trigger` written to a fresh folder: (folder, file).
+fn spec_file(tag: &str, trigger: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!("tsfc-sampled-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("msd.tsf");
+    std::fs::write(&path, msd(trigger)).expect("write");
+    (dir, path)
+}
+
 /// (Phi, Gamma) of x_{k+1} = Phi x_k + Gamma u_k for a hold of `h` seconds.
 fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64) -> (DMatrix<f64>, DMatrix<f64>) {
     let (n, m) = (a.nrows(), b.ncols());
@@ -97,10 +106,7 @@ fn a_period_outside_the_certificate_is_refused_with_a_period_that_certifies() {
 
 #[test]
 fn the_certified_period_ships_in_the_generated_code_and_the_loop_converges() {
-    let dir = std::env::temp_dir().join(format!("tsfc-sampled-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
-    let path = dir.join("msd.tsf");
-    std::fs::write(&path, msd("trigger periodic { every = 0.25; }")).expect("write");
+    let (dir, path) = spec_file("every-0.25", "trigger periodic { every = 0.25; }");
     let run = tsfc::pipeline::read(&path)
         .expect("read")
         .compile(&Settings::default())
@@ -138,10 +144,7 @@ fn the_certified_period_ships_in_the_generated_code_and_the_loop_converges() {
 
 #[test]
 fn a_period_that_is_not_a_whole_number_of_steps_is_not_simulated() {
-    let dir = std::env::temp_dir().join(format!("tsfc-sampled-odd-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
-    let path = dir.join("msd.tsf");
-    std::fs::write(&path, msd("trigger periodic { every = 0.0125; }")).expect("write");
+    let (dir, path) = spec_file("every-0.0125", "trigger periodic { every = 0.0125; }");
     let prepared = tsfc::sim::prepare(&path).expect("prepare");
     let err = tsfc::sim::simulate(&prepared, &tsfc::sim::Options::default())
         .expect_err("0.0125 s is 12.5 steps of 1 ms");

@@ -14,12 +14,10 @@ use super::advice::round_down;
 use super::design::{Design, SampledDesign, SynthError, TriggerPlan};
 use super::objectives::Saturation;
 use super::search::Runner;
-use super::trigger::{self, build};
+use super::trigger::{self, named};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
-use std::time::Instant;
 use tsf_lang::spec::{Trigger, Weight};
-use tsf_lmi::SolveStatus;
 
 /// Sampling intervals [h_min, h_max] of a loop that transmits every sample,
 /// if the spec's trigger is one (periodic, or aperiodic without a threshold
@@ -114,35 +112,12 @@ const PERIOD_REL_TOL: f64 = 0.02;
 impl Runner<'_> {
     /// One sampled-loop SDP: the design, or None when not solved.
     fn sampled_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<SampledDesign>, SynthError> {
-        let t0 = Instant::now();
-        let built = build(self.model, plan, self.settings.eps, true)?;
-        self.log.build_time += t0.elapsed();
-        let sol = self.solve(&built.problem, "sampled-loop problem")?;
-        if sol.status != SolveStatus::Solved {
+        let Some((built, all)) = self.solve_looped(plan, "sampled-loop problem")? else {
             return Ok(None);
-        }
-        let values = sol
-            .assignment()
-            .map_err(|e| SynthError::Internal(format!("{e}")))?;
-        let all = built
-            .problem
-            .vars()
-            .map(|(name, v)| {
-                values
-                    .value(v)
-                    .cloned()
-                    .map(|m| (name.to_string(), m))
-                    .map_err(|e| SynthError::Internal(format!("{e}")))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let p = all
-            .iter()
-            .find(|(n, _)| n == "Ptr")
-            .map(|(_, p)| p.clone())
-            .ok_or_else(|| SynthError::Internal("internal error: Ptr missing".into()))?;
+        };
         Ok(Some(SampledDesign {
             plan: plan.clone(),
-            p,
+            p: named(&all, "Ptr")?,
             values: all,
             reductions: built.reductions,
         }))

@@ -61,6 +61,9 @@ pub struct TriggerBuilt {
     pub nonstrict: Vec<String>,
 }
 
+/// A solved looped-functional problem: the problem and every variable's value.
+pub(super) type Solved = (TriggerBuilt, Vec<(String, DMatrix<f64>)>);
+
 /// The unknowns entering Lambda_{ij r}(h).
 #[derive(Debug, Clone, Copy)]
 struct LoopVars {
@@ -421,41 +424,48 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
 pub const XI_FACTOR: f64 = 4.0;
 
 impl Runner<'_> {
-    /// One trigger SDP at threshold `nu`: the design, or None when not solved.
-    fn trigger_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<TriggerDesign>, SynthError> {
+    /// Builds and solves the looped-functional problem of `plan` (reduced):
+    /// the built problem and every variable's value, or None when not solved.
+    pub(super) fn solve_looped(
+        &mut self,
+        plan: &TriggerPlan,
+        what: &str,
+    ) -> Result<Option<Solved>, SynthError> {
         let t0 = Instant::now();
         let built = build(self.model, plan, self.settings.eps, true)?;
         self.log.build_time += t0.elapsed();
-        let sol = self.solve(&built.problem, "trigger problem")?;
+        let sol = self.solve(&built.problem, what)?;
         if sol.status != SolveStatus::Solved {
             return Ok(None);
         }
-        let values = sol
-            .assignment()
-            .map_err(|e| SynthError::Internal(format!("{e}")))?;
-        let get = |v: Var| {
-            values
-                .value(v)
-                .cloned()
-                .map_err(|e| SynthError::Internal(format!("{e}")))
-        };
-        let need = |v: Option<Var>| {
-            v.ok_or_else(|| {
-                SynthError::Internal("internal error: event-trigger variable missing".into())
-            })
-        };
+        let internal = |e: LmiError| SynthError::Internal(format!("{e}"));
+        let values = sol.assignment().map_err(internal)?;
         let all = built
             .problem
             .vars()
-            .map(|(name, v)| get(v).map(|m| (name.to_string(), m)))
+            .map(|(name, v)| {
+                values
+                    .value(v)
+                    .cloned()
+                    .map(|m| (name.to_string(), m))
+                    .map_err(internal)
+            })
             .collect::<Result<Vec<_>, _>>()?;
+        Ok(Some((built, all)))
+    }
+
+    /// One trigger SDP at threshold `nu`: the design, or None when not solved.
+    fn trigger_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<TriggerDesign>, SynthError> {
+        let Some((built, all)) = self.solve_looped(plan, "trigger problem")? else {
+            return Ok(None);
+        };
         Ok(Some(TriggerDesign {
             plan: plan.clone(),
             method: "two_step",
-            weight: get(need(built.vars.w)?)?,
-            p: get(built.vars.p)?,
-            gamma: get(need(built.vars.gamma)?)?[(0, 0)],
-            xi: get(need(built.vars.xi)?)?[(0, 0)],
+            weight: named(&all, "Upsilon")?,
+            p: named(&all, "Ptr")?,
+            gamma: named(&all, "gamma_tr")?[(0, 0)],
+            xi: named(&all, "xi_tr")?[(0, 0)],
             values: all,
             reductions: built.reductions,
         }))
@@ -556,4 +566,16 @@ pub fn certified_threshold(model: &TsModel) -> f64 {
         }) => t.ceiling(),
         _ => 0.0,
     }
+}
+
+/// The value of the variable `name` of a solved problem.
+pub(super) fn named(
+    values: &[(String, DMatrix<f64>)],
+    name: &str,
+) -> Result<DMatrix<f64>, SynthError> {
+    values
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, v)| v.clone())
+        .ok_or_else(|| SynthError::Internal(format!("internal error: `{name}` has no value")))
 }
