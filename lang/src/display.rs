@@ -66,6 +66,7 @@ impl Display for Relaxation {
             Relaxation::Basic => f.write_str("basic"),
             Relaxation::Tanaka { s } => write!(f, "tanaka(s = {s})"),
             Relaxation::Tuan => f.write_str("tuan"),
+            Relaxation::Polya { d } => write!(f, "polya(d = {d})"),
             Relaxation::MembershipMismatch { kappa } => {
                 write!(f, "membership_mismatch(kappa = {})", Num(*kappa))
             }
@@ -229,6 +230,7 @@ mod tests {
             (Relaxation::Basic, "basic"),
             (Relaxation::Tanaka { s: 1 }, "tanaka(s = 1)"),
             (Relaxation::Tuan, "tuan"),
+            (Relaxation::Polya { d: 2 }, "polya(d = 2)"),
             (
                 Relaxation::MembershipMismatch { kappa: 0.12 },
                 "membership_mismatch(kappa = 0.12)",

@@ -40,3 +40,21 @@ pub const MAX_ECHO_CHARS: usize = 40;
 /// Longest source line shown under a diagnostic (longer lines are shown
 /// around the marked places, with `...` for the rest).
 pub const MAX_SHOWN_LINE: usize = 120;
+
+/// Largest degree d of `relaxation polya(d = ..)`.
+pub const MAX_POLYA_DEGREE: usize = 4;
+
+/// Most coefficient LMIs per objective family under `polya`:
+/// (r + d + 1 choose d + 2) for r rules.
+pub const MAX_POLYA_LMIS: usize = 5_000;
+
+/// (r + d + 1 choose d + 2): the coefficients of Polya's relaxation of degree
+/// d for r rules (saturating; `None` past `usize`).
+pub fn polya_lmis(r: usize, d: usize) -> Option<usize> {
+    let (n, k) = (r + d + 1, d + 2);
+    let mut c: usize = 1;
+    for i in 0..k.min(n) {
+        c = c.checked_mul(n - i)? / (i + 1);
+    }
+    Some(if k > n { 0 } else { c })
+}

@@ -310,6 +310,12 @@ pub enum Relaxation {
     },
     /// Tuan et al. 2001.
     Tuan,
+    /// Polya's theorem (Sala & Arino 2007): the double sum times (sum_k h_k)^d
+    /// has every coefficient negative definite (d = 0 is `basic`).
+    Polya {
+        /// Degree d of the multiplier.
+        d: usize,
+    },
     /// Controller memberships evaluated at sampling instants.
     MembershipMismatch {
         /// Mismatch bound.

@@ -1,10 +1,11 @@
 //! The double-sum relaxation: `relaxation basic | tanaka(s = ..) | tuan |
-//! membership_mismatch(kappa = ..);` (default `basic`).
+//! polya(d = ..) | membership_mismatch(kappa = ..);` (default `basic`).
 
 use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Ident, Item, NamedArg};
 use crate::diag::Diagnostic;
 use crate::display::Num;
+use crate::limits::{polya_lmis, MAX_POLYA_DEGREE, MAX_POLYA_LMIS};
 use crate::span::{Span, Spanned};
 use crate::spec::{Relaxation, RuleSpec};
 
@@ -45,11 +46,27 @@ impl Checker<'_> {
                 );
             }
         }
+        if let Relaxation::Polya { d } = relaxation.node {
+            let count = polya_lmis(rules.len(), d);
+            if count.is_none_or(|c| c > MAX_POLYA_LMIS) {
+                self.err(
+                    Diagnostic::error(
+                        relaxation.span,
+                        format!(
+                            "polya(d = {d}) with {} rules needs {} LMIs per objective, over the limit of {MAX_POLYA_LMIS}",
+                            rules.len(),
+                            count.map_or_else(|| "too many".to_string(), |c| c.to_string())
+                        ),
+                    )
+                    .with_help("lower d, or use `tuan` or `tanaka(s = ..)` for many rules"),
+                );
+            }
+        }
         relaxation
     }
 
     fn relaxation(&mut self, name: &Ident, args: &[NamedArg], span: Span) -> Option<Relaxation> {
-        let kinds = ["basic", "tanaka", "tuan", "membership_mismatch"];
+        let kinds = ["basic", "tanaka", "tuan", "polya", "membership_mismatch"];
         match name.node.as_str() {
             "basic" | "tuan" => {
                 self.named(args, &[], &format!("relaxation `{}`", name.node))?;
@@ -79,6 +96,24 @@ impl Checker<'_> {
                     return None;
                 }
                 Some(Relaxation::Tanaka { s: s as usize })
+            }
+            "polya" => {
+                let p = self.named(args, &["d"], "relaxation `polya`")?;
+                let d = p.get("d").copied().unwrap_or(1.0);
+                if d.fract() != 0.0 || !(0.0..=MAX_POLYA_DEGREE as f64).contains(&d) {
+                    self.err(
+                        Diagnostic::error(
+                            span,
+                            format!(
+                                "`d` must be a whole number in 0 ..= {MAX_POLYA_DEGREE}, found {}",
+                                Num(d)
+                            ),
+                        )
+                        .with_help("the number of LMIs grows as (r + d + 1 choose d + 2); d = 1 or 2 is usual"),
+                    );
+                    return None;
+                }
+                Some(Relaxation::Polya { d: d as usize })
             }
             "membership_mismatch" => {
                 let p = self.named(args, &["kappa"], "relaxation `membership_mismatch`")?;
@@ -137,6 +172,11 @@ mod tests {
         assert_eq!(at, "relaxation tanaka(s = 4);");
         let (m, _) = only_error("relaxation tanaka;");
         assert_eq!(m, "`tanaka` needs `s`, the most rules that fire at once");
+        let (m, _) = only_error("relaxation polya(d = 7);");
+        assert!(
+            m.starts_with("`d` must be a whole number in 0 ..= 4"),
+            "{m}"
+        );
         let (m, _) = only_error("relaxation membership_mismatch(kappa = 1);");
         assert_eq!(m, "`kappa` must be in [0, 1), found 1");
         let (m, at) = only_error("relaxation basic(s = 1);");

@@ -6,6 +6,7 @@
 
 mod basic;
 mod mismatch;
+mod polya;
 mod tanaka;
 mod tuan;
 
@@ -21,6 +22,7 @@ fn double_sum(r: Relaxation) -> Box<dyn DoubleSum> {
         Relaxation::Basic => Box::new(basic::Basic),
         Relaxation::Tanaka { s } => Box::new(tanaka::Tanaka { s }),
         Relaxation::Tuan => Box::new(tuan::Tuan),
+        Relaxation::Polya { d } => Box::new(polya::Polya { d }),
         // kappa does not relax these conditions (see mismatch.rs).
         Relaxation::MembershipMismatch { .. } => Box::new(mismatch::Mismatch),
     }
