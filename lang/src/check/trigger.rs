@@ -105,11 +105,7 @@ impl Checker<'_> {
             }
             "aperiodic" => {
                 let s = require(self, "sampling")?;
-                let (lo, hi, _) = self.range_setting(s)?;
-                if lo <= 0.0 {
-                    self.err(Diagnostic::error(s.span, "h_min must be positive"));
-                    return None;
-                }
+                let (lo, hi) = self.sampling(s)?;
                 let threshold = match get.get("threshold") {
                     Some(s) => Some(self.threshold(s)?),
                     None => None,
@@ -126,7 +122,7 @@ impl Checker<'_> {
             }
             _ => {
                 let s = require(self, "sampling")?;
-                let (lo, hi, _) = self.range_setting(s)?;
+                let (lo, hi) = self.sampling(s)?;
                 let beta = require(self, "beta").and_then(|s| self.setting_nonnegative(s));
                 let rho = require(self, "rho").and_then(|s| self.setting_nonnegative(s));
                 Some(Trigger::Mixed {
@@ -141,6 +137,16 @@ impl Checker<'_> {
         } else {
             None
         }
+    }
+
+    /// `sampling = h_min .. h_max;` with h_min > 0.
+    fn sampling(&mut self, s: &Setting) -> Option<(f64, f64)> {
+        let (lo, hi, _) = self.range_setting(s)?;
+        if lo <= 0.0 {
+            self.err(Diagnostic::error(s.span, "h_min must be positive"));
+            return None;
+        }
+        Some((lo, hi))
     }
 
     /// `threshold nu = v [adaptive(mu1 = .., mu2 = .., mu3 = .. [, max = ..])];`
@@ -332,6 +338,11 @@ mod tests {
         assert_eq!(at, "periodic");
         let (m, _) = only_error("trigger periodic { every = 1; every = 2; }");
         assert_eq!(m, "setting `every` is given twice");
+        let (m, at) = only_error("trigger mixed { sampling = 0 .. 0.1; beta = 0.1; rho = 0; }");
+        assert_eq!(
+            (m.as_str(), at.as_str()),
+            ("h_min must be positive", "sampling = 0 .. 0.1;")
+        );
         let (m, at) = only_error("trigger aperiodic { sampling = 0 .. 0.1; weight = 1; }");
         assert_eq!(m, "h_min must be positive");
         assert_eq!(at, "sampling = 0 .. 0.1;");
