@@ -3,26 +3,12 @@
 //! `tanaka(s = 4)` or `membership_mismatch(kappa = 0.12)`, never Rust's Debug form.
 
 use crate::eval::Mat;
+use crate::num::Num;
 use crate::spec::{
     Emit, InitialSet, Integrator, Precision, Relaxation, SetShape, Threshold, Trigger,
     TriggerSynthesis, Weight,
 };
 use std::fmt::{self, Display, Formatter};
-
-/// A number as a spec would write it: shortest round-trip form, with an
-/// exponent only for very small or very large magnitudes.
-pub(crate) struct Num(pub f64);
-
-impl Display for Num {
-    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
-        let v = self.0;
-        if v != 0.0 && v.is_finite() && !(1e-4..1e16).contains(&v.abs()) {
-            write!(f, "{v:e}")
-        } else {
-            write!(f, "{v}")
-        }
-    }
-}
 
 /// A matrix literal: `[a, b; c, d]`, a plain number when 1x1.
 struct Literal<'m>(&'m Mat);

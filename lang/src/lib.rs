@@ -13,6 +13,7 @@ pub mod diag;
 mod display;
 pub mod eval;
 pub mod limits;
+mod num;
 mod parser;
 pub mod span;
 pub mod spec;

@@ -4,8 +4,8 @@
 use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Ident, Item, NamedArg};
 use crate::diag::Diagnostic;
-use crate::display::Num;
 use crate::limits::{polya_lmis, MAX_POLYA_DEGREE, MAX_POLYA_LMIS};
+use crate::num::Num;
 use crate::span::{Span, Spanned};
 use crate::spec::{Relaxation, RuleSpec};
 

@@ -4,8 +4,8 @@
 use super::{Checker, Dims};
 use crate::ast::{Clause, Ident, Item, ItemKind, NamedArg, SetRef};
 use crate::diag::Diagnostic;
-use crate::display::Num;
 use crate::eval::Mat;
+use crate::num::Num;
 use crate::span::Span;
 use crate::spec::{ClauseSet, Premise, RuleClause, RuleSpec};
 use crate::suggest::suggest;

@@ -4,8 +4,8 @@
 use super::Checker;
 use crate::ast::{Expr, NamedArg, Setting, Value};
 use crate::diag::Diagnostic;
-use crate::display::Num;
 use crate::eval::Mat;
+use crate::num::Num;
 use std::collections::HashMap;
 
 impl Checker<'_> {

@@ -2,7 +2,7 @@
 
 use super::{is_scalar, scalar, shape, Mat, Mode, R};
 use crate::diag::Diagnostic;
-use crate::display::Num;
+use crate::num::Num;
 use crate::span::Span;
 use nalgebra::DMatrix;
 

@@ -20,8 +20,8 @@ pub(crate) use builtins::BUILTINS;
 
 use crate::ast::{Arg, Expr, ExprKind, IndexArg};
 use crate::diag::Diagnostic;
-use crate::display::Num;
 use crate::limits::{MAX_EXPR_DEPTH, NODE_WORK};
+use crate::num::Num;
 use crate::span::Span;
 use crate::suggest::suggest;
 use nalgebra::DMatrix;

@@ -3,8 +3,8 @@
 use super::{is_scalar, scalar, shape, Mat, Mode, R};
 use crate::ast::BinOp;
 use crate::diag::Diagnostic;
-use crate::display::Num;
 use crate::limits::MAX_MATRIX_POWER;
+use crate::num::Num;
 use crate::span::Span;
 use nalgebra::DMatrix;
 
