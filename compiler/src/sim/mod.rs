@@ -3,7 +3,9 @@
 //! The controller in the loop is `tsf_runtime::Controller` with the design's
 //! gain tables ([`controller`]); the truth plant is the design model or the
 //! spec's `dynamics` block ([`plant`]); disturbances are the scenario's
-//! signals ([`signal`]); sampling and transmission follow the triggering law
+//! signals ([`signal`]); the plant, the signals and the premise vector
+//! ([`premise`]) run as straight-line code compiled once per run ([`tape`]),
+//! or through the language's evaluator ([`Evaluator`]); sampling and transmission follow the triggering law
 //! with the runtime's trigger state machines ([`trigger`]); the plant is
 //! integrated with RK4 or Dormand-Prince 5(4) between sampling instants
 //! ([`integrator`]) with the command held (zero-order hold). Outputs: a CSV
@@ -20,10 +22,12 @@ pub mod limits;
 pub mod metrics;
 pub mod plant;
 pub mod plot;
+pub mod premise;
 pub mod region;
 pub mod scenario;
 pub mod signal;
 pub mod source;
+pub mod tape;
 pub mod trigger;
 
 pub use metrics::{Metrics, Trace};
@@ -40,6 +44,19 @@ use tsf_lang::spec::{Integrator, Trigger};
 /// A simulation failure: the pipeline's error (its kind decides the exit code).
 pub type SimError = crate::error::Error;
 pub use crate::error::ErrorKind;
+
+/// How the plant, the disturbance signals and the premise vector are evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Evaluator {
+    /// Compiled once into straight-line code ([`tape`]); an expression the
+    /// tape cannot express, and any evaluation that divides by zero, goes
+    /// to the interpreter.
+    #[default]
+    Compiled,
+    /// The language's evaluator at every call (the reference path the
+    /// compiled code is tested against).
+    Interpreter,
+}
 
 /// Overrides of the spec's scenario.
 #[derive(Debug, Clone)]
@@ -61,6 +78,8 @@ pub struct Options {
     /// Show progress on stderr for runs longer than a second: a bar on a
     /// terminal, else a line every [`limits::PROGRESS_LOG_PERIOD_S`] seconds.
     pub progress: bool,
+    /// How expressions are evaluated.
+    pub evaluator: Evaluator,
 }
 
 impl Default for Options {
@@ -74,6 +93,7 @@ impl Default for Options {
             tolerances: (1e-6, 1e-9),
             convergence_rel_tol: 0.05,
             progress: false,
+            evaluator: Evaluator::Compiled,
         }
     }
 }
@@ -141,7 +161,8 @@ pub fn simulate_to(
     dir: &Path,
 ) -> Result<(Outcome, Vec<PathBuf>), SimError> {
     // Refuse bad settings before touching the folder.
-    let dim = plant::Plant::new(&prepared.model.spec, &prepared.source)?.dim();
+    let dim = plant::Plant::new(&prepared.model.spec, &prepared.source, Evaluator::Interpreter)?
+        .dim();
     scenario::plan(prepared, opts, dim)?;
     let path = dir.join(format!("{}.csv", prepared.model.spec.controller.node));
     let io_err =

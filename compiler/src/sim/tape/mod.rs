@@ -1,0 +1,267 @@
+//! Straight-line code for the simulator's hot paths: the plant's right-hand
+//! side, the disturbance signals and the premise vector, compiled once per run
+//! from the spec's expressions into a [`Tape`] of scalar instructions over a
+//! flat register file.
+//!
+//! A tape is built by a [`Builder`] (a hash-consed expression graph: common
+//! subexpressions are shared, constants folded, products with a constant 0
+//! dropped) from the language's matrix expressions by [`lower`]. Constant
+//! subexpressions are evaluated by the language's evaluator itself, so their
+//! values are the interpreter's to the bit; the remaining scalar operations
+//! run in the interpreter's order (left-to-right sums like nalgebra's small
+//! products), so a tape and the interpreter agree to rounding.
+//!
+//! Evaluation allocates nothing: the caller owns the register file
+//! ([`Tape::registers`]), writes the inputs into its first slots, runs the
+//! tape and reads the outputs. A division by a value that is 0 at run time
+//! is a [`Fault`], never an infinity: the caller then re-evaluates with the
+//! interpreter, which reports the error with its span (or computes the value,
+//! should it succeed). Divisions are kept even where their value is unused
+//! (multiplied by 0), as the interpreter evaluates every subexpression.
+
+mod build;
+pub mod lower;
+
+pub use build::{Builder, Id};
+
+/// A scalar function of one argument.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Unary {
+    /// `-v`
+    Neg,
+    /// `sqrt`
+    Sqrt,
+    /// `sin`
+    Sin,
+    /// `cos`
+    Cos,
+    /// `tan`
+    Tan,
+    /// `atan`
+    Atan,
+    /// `exp`
+    Exp,
+    /// `log` (natural)
+    Ln,
+    /// `abs`
+    Abs,
+    /// `sign` (0 at 0 and NaN, like the language's)
+    Sign,
+    /// The runtime's `sinc`.
+    Sinc,
+}
+
+impl Unary {
+    /// The function, with the language evaluator's definition.
+    pub fn apply(self, v: f64) -> f64 {
+        match self {
+            Unary::Neg => -v,
+            Unary::Sqrt => v.sqrt(),
+            Unary::Sin => v.sin(),
+            Unary::Cos => v.cos(),
+            Unary::Tan => v.tan(),
+            Unary::Atan => v.atan(),
+            Unary::Exp => v.exp(),
+            Unary::Ln => v.ln(),
+            Unary::Abs => v.abs(),
+            Unary::Sign => {
+                if v > 0.0 {
+                    1.0
+                } else if v < 0.0 {
+                    -1.0
+                } else {
+                    0.0
+                }
+            }
+            Unary::Sinc => tsf_runtime::math::sinc(v),
+        }
+    }
+
+    /// The language's built-in of this name.
+    pub fn builtin(name: &str) -> Option<Unary> {
+        Some(match name {
+            "sqrt" => Unary::Sqrt,
+            "sin" => Unary::Sin,
+            "cos" => Unary::Cos,
+            "tan" => Unary::Tan,
+            "atan" => Unary::Atan,
+            "exp" => Unary::Exp,
+            "log" => Unary::Ln,
+            "abs" => Unary::Abs,
+            "sign" => Unary::Sign,
+            "sinc" => Unary::Sinc,
+            _ => return None,
+        })
+    }
+}
+
+/// A scalar function of two arguments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Binary {
+    /// `a + b`
+    Add,
+    /// `a - b`
+    Sub,
+    /// `a * b`
+    Mul,
+    /// `a / b` (IEEE: a zero divisor gives an infinity or NaN)
+    Div,
+    /// `a / b`, a [`Fault`] when `b == 0` (the language's `/`)
+    DivChecked,
+    /// `a ^ b` (`powf`)
+    Pow,
+    /// `atan2(a, b)`
+    Atan2,
+    /// `min` (`f64::min`)
+    Min,
+    /// `max` (`f64::max`)
+    Max,
+}
+
+impl Binary {
+    /// The function (a checked division by 0 gives what IEEE gives; the tape
+    /// faults before it is used).
+    pub fn apply(self, a: f64, b: f64) -> f64 {
+        match self {
+            Binary::Add => a + b,
+            Binary::Sub => a - b,
+            Binary::Mul => a * b,
+            Binary::Div | Binary::DivChecked => a / b,
+            Binary::Pow => a.powf(b),
+            Binary::Atan2 => a.atan2(b),
+            Binary::Min => a.min(b),
+            Binary::Max => a.max(b),
+        }
+    }
+}
+
+/// One instruction: destination register, operand registers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Op {
+    Add(u32, u32, u32),
+    Sub(u32, u32, u32),
+    Mul(u32, u32, u32),
+    Div(u32, u32, u32),
+    DivChecked(u32, u32, u32),
+    Neg(u32, u32),
+    Call(Unary, u32, u32),
+    Call2(Binary, u32, u32, u32),
+}
+
+/// A division by zero met while running a tape: the caller falls back to
+/// the interpreter, which reports it with its span.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fault;
+
+/// Compiled straight-line code: `inputs` registers in, `outputs` read out.
+#[derive(Debug, Clone)]
+pub struct Tape {
+    ops: Vec<Op>,
+    /// The register file's initial contents (inputs 0, constants loaded).
+    init: Vec<f64>,
+    inputs: usize,
+    outputs: Vec<u32>,
+}
+
+impl Tape {
+    /// A fresh register file for this tape (constants loaded): allocate it
+    /// once and reuse it for every evaluation.
+    pub fn registers(&self) -> Vec<f64> {
+        self.init.clone()
+    }
+
+    /// Number of inputs (the first registers).
+    pub fn inputs(&self) -> usize {
+        self.inputs
+    }
+
+    /// Number of outputs.
+    pub fn outputs(&self) -> usize {
+        self.outputs.len()
+    }
+
+    /// Number of instructions.
+    pub fn len(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// `true` when the outputs are inputs or constants.
+    pub fn is_empty(&self) -> bool {
+        self.ops.is_empty()
+    }
+
+    /// Runs the tape on `regs` (from [`Tape::registers`], inputs written into
+    /// its first [`Tape::inputs`] slots).
+    pub fn run(&self, regs: &mut [f64]) -> Result<(), Fault> {
+        for op in &self.ops {
+            match *op {
+                Op::Add(d, a, b) => regs[d as usize] = regs[a as usize] + regs[b as usize],
+                Op::Sub(d, a, b) => regs[d as usize] = regs[a as usize] - regs[b as usize],
+                Op::Mul(d, a, b) => regs[d as usize] = regs[a as usize] * regs[b as usize],
+                Op::Div(d, a, b) => regs[d as usize] = regs[a as usize] / regs[b as usize],
+                Op::DivChecked(d, a, b) => {
+                    let y = regs[b as usize];
+                    if y == 0.0 {
+                        return Err(Fault);
+                    }
+                    regs[d as usize] = regs[a as usize] / y;
+                }
+                Op::Neg(d, a) => regs[d as usize] = -regs[a as usize],
+                Op::Call(f, d, a) => regs[d as usize] = f.apply(regs[a as usize]),
+                Op::Call2(f, d, a, b) => {
+                    regs[d as usize] = f.apply(regs[a as usize], regs[b as usize])
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Copies the outputs of a run out of `regs` into `out` (as many as fit).
+    pub fn read(&self, regs: &[f64], out: &mut [f64]) {
+        for (o, &r) in out.iter_mut().zip(&self.outputs) {
+            *o = regs[r as usize];
+        }
+    }
+
+    /// Writes `values` into the inputs starting at input `at`.
+    pub fn write(&self, regs: &mut [f64], at: usize, values: &[f64]) {
+        if let Some(dst) = regs.get_mut(at..at + values.len()) {
+            dst.copy_from_slice(values);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shares_folds_and_faults() {
+        // f(x, y) = [x * y + x * y; 2 * 3 + y; x / y; 0 * (x / y)]
+        let mut b = Builder::new(2);
+        let (x, y) = (b.input(0), b.input(1));
+        let xy = b.bin(Binary::Mul, x, y);
+        let xy2 = b.bin(Binary::Mul, x, y);
+        assert_eq!(xy, xy2, "common subexpressions are shared");
+        let s = b.bin(Binary::Add, xy, xy2);
+        let (two, three) = (b.constant(2.0), b.constant(3.0));
+        let six = b.bin(Binary::Mul, two, three);
+        assert_eq!(b.value(six), Some(6.0), "constants fold");
+        let c = b.bin(Binary::Add, six, y);
+        let q = b.bin(Binary::DivChecked, x, y);
+        let zero = b.constant(0.0);
+        let dead = b.bin(Binary::Mul, zero, q);
+        assert_eq!(b.value(dead), Some(0.0));
+        let tape = b.finish(&[s, c, q, dead]);
+        assert_eq!(tape.len(), 4, "x*y, the sum, 6 + y, x / y");
+        let mut regs = tape.registers();
+        tape.write(&mut regs, 0, &[3.0, 2.0]);
+        tape.run(&mut regs).expect("no fault");
+        let mut out = [0.0; 4];
+        tape.read(&regs, &mut out);
+        assert_eq!(out, [12.0, 8.0, 1.5, 0.0]);
+        // The unused division still faults at y = 0, like the interpreter.
+        tape.write(&mut regs, 0, &[3.0, 0.0]);
+        assert_eq!(tape.run(&mut regs), Err(Fault));
+    }
+}
