@@ -1,11 +1,15 @@
 //! Simulation benchmark: 1000 s of the 7-rule spacecraft (Xu & Huang 2020
 //! spec) at a 1 ms RK4 step with its adaptive event trigger, in closed loop
 //! with the runtime controller, the CSV trace formatted and discarded (as
-//! `tsfc simulate` streams it). Prints the wall time and the run's figures.
+//! `tsfc simulate` streams it). Prints the wall time, the real-time factor
+//! (simulated seconds per wall second) and the run's figures; `--report PATH`
+//! takes the design from a certified report of `tsfc compile` instead of
+//! compiling it, `--interpreter` runs the language's evaluator instead of the
+//! compiled tape (the reference path).
 //!
-//! `cargo run --release -p tsfc --bin bench-sim [-- SPEC [HORIZON_S]]`
+//! `cargo run --release -p tsfc --bin bench-sim [-- [--report PATH] [--interpreter] [SPEC [HORIZON_S]]]`
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -20,28 +24,57 @@ fn fail(e: &tsfc::sim::SimError) -> ExitCode {
     ExitCode::from(e.exit_code())
 }
 
+const USAGE: &str = "usage: bench-sim [--report PATH] [--interpreter] [SPEC [HORIZON_S]]";
+
 fn main() -> ExitCode {
+    let mut report = None;
+    let mut evaluator = tsfc::sim::Evaluator::Compiled;
+    let mut positional = Vec::new();
     let mut args = std::env::args().skip(1);
-    let spec = args.next().map_or_else(
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--report" => match args.next() {
+                Some(p) => report = Some(PathBuf::from(p)),
+                None => {
+                    eprintln!("{USAGE}");
+                    return ExitCode::from(2);
+                }
+            },
+            "--interpreter" => evaluator = tsfc::sim::Evaluator::Interpreter,
+            _ => positional.push(a),
+        }
+    }
+    let mut positional = positional.into_iter();
+    let spec = positional.next().map_or_else(
         || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../specs/xu2020_event_triggered.tsf"),
         PathBuf::from,
     );
-    let horizon = match args.next().map(|h| h.parse::<f64>()) {
+    let horizon = match positional.next().map(|h| h.parse::<f64>()) {
         None => 1000.0,
         Some(Ok(h)) if h > 0.0 => h,
         Some(_) => {
-            eprintln!("usage: bench-sim [SPEC [HORIZON_S]]");
+            eprintln!("{USAGE}");
             return ExitCode::from(2);
         }
     };
     let t = Instant::now();
-    let prepared = match tsfc::sim::prepare(&spec) {
+    let prepared = match &report {
+        None => tsfc::sim::prepare(&spec),
+        Some(r) => tsfc::sim::prepare_reusing(&spec, Some(r), Path::new(".")).map(|(p, reuse)| {
+            if let tsfc::sim::Reuse::Recompiled(why) = reuse {
+                eprintln!("note: {why}: compiled the design");
+            }
+            p
+        }),
+    };
+    let prepared = match prepared {
         Ok(p) => p,
         Err(e) => return fail(&e),
     };
     let compile_s = t.elapsed().as_secs_f64();
     let opts = tsfc::sim::Options {
         horizon: Some(horizon),
+        evaluator,
         ..tsfc::sim::Options::default()
     };
     let t = Instant::now();
@@ -52,10 +85,14 @@ fn main() -> ExitCode {
     let sim_s = t.elapsed().as_secs_f64();
     let m = &outcome.metrics;
     println!("spec                {}", spec.display());
-    println!("compile             {compile_s:.3} s");
+    println!("prepare             {compile_s:.3} s");
     println!(
-        "simulate            {sim_s:.3} s for {horizon} s simulated ({})",
+        "simulate            {sim_s:.3} s for {horizon} s simulated ({}, {evaluator:?})",
         m.integrator
+    );
+    println!(
+        "real-time factor    {:.0}x (simulated s per wall s)",
+        horizon / sim_s
     );
     println!(
         "rhs evaluations     {} ({:.2} us each, all-in)",

@@ -24,6 +24,7 @@ pub mod plant;
 pub mod plot;
 pub mod premise;
 pub mod region;
+pub mod reuse;
 pub mod scenario;
 pub mod signal;
 pub mod source;
@@ -31,6 +32,7 @@ pub mod tape;
 pub mod trigger;
 
 pub use metrics::{Metrics, Trace};
+pub use reuse::{prepare_reusing, Reuse};
 pub use scenario::{run, Outcome};
 
 use crate::model::TsModel;
@@ -117,13 +119,18 @@ pub struct Prepared {
 /// Spec diagnostics are rendered into the error message.
 pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
     let run = crate::pipeline::read(path)?.compile(&crate::synth::Settings::default())?;
+    prepare_run(&run)
+}
+
+/// The simulator's design of a compiled spec (it must be certified).
+pub fn prepare_run(run: &crate::pipeline::Run) -> Result<Prepared, SimError> {
     let tables = run.tables()?;
     let design = run.certified()?.0.clone();
     let source = source::SpecSource {
         name: run.source.name.clone(),
         text: run.source.text.clone(),
     };
-    let model = run.model;
+    let model = run.model.clone();
     // The synthesized trigger weight Upsilon (two-step method); without one,
     // `weight = synthesize` falls back to P / lambda_max(P) (see
     // `trigger::trigger_weight`).

@@ -9,7 +9,7 @@
 
 use super::source::SpecSource;
 use super::tape::lower::{Lowerer, Scope, SymMat, Unsupported};
-use super::tape::{Builder, Tape};
+use super::tape::{Builder, Registers, Tape};
 use super::{Evaluator, SimError};
 use nalgebra::DMatrix;
 use tsf_lang::ast::Expr;
@@ -34,7 +34,7 @@ enum Truth<'a> {
 /// The compiled right-hand side and its register file.
 struct Compiled {
     tape: Tape,
-    regs: Vec<f64>,
+    regs: Box<Registers>,
 }
 
 /// The plant's right-hand side.
@@ -42,6 +42,7 @@ pub struct Plant<'a> {
     spec: &'a Spec,
     source: &'a SpecSource,
     n: usize,
+    m: usize,
     extra: usize,
     truth: Truth<'a>,
     compiled: Option<Compiled>,
@@ -73,6 +74,7 @@ impl<'a> Plant<'a> {
                 spec,
                 source,
                 n,
+                m: spec.m(),
                 extra: dynamics.extra_states.iter().map(|s| s.len).sum(),
                 truth: Truth::Dynamics(dynamics),
                 compiled: None,
@@ -99,6 +101,7 @@ impl<'a> Plant<'a> {
             spec,
             source,
             n,
+            m: spec.m(),
             extra: 0,
             truth: Truth::Model {
                 a: coef(a, "A")?,
@@ -174,7 +177,7 @@ impl<'a> Plant<'a> {
         if outputs.len() != dim {
             return Err(Unsupported("derivative count".into()));
         }
-        Ok(lw.b.finish(&outputs))
+        lw.finish(&outputs)
     }
 
     /// Dimension of the plant state (controller states, then extra states).
@@ -204,12 +207,12 @@ impl<'a> Plant<'a> {
         w: &[f64],
         ds: &mut [f64],
     ) -> Result<(), SimError> {
-        let (dim, m) = (self.dim(), self.spec.m());
+        let (dim, m) = (self.dim(), self.m);
         if let Some(c) = &mut self.compiled {
             let regs = &mut c.regs;
             regs[0] = t;
-            c.tape.write(regs, 1, s);
-            c.tape.write(regs, 1 + dim, u);
+            c.tape.write(regs, 1, &s[..dim.min(s.len())]);
+            c.tape.write(regs, 1 + dim, &u[..m.min(u.len())]);
             c.tape.write(regs, 1 + dim + m, w);
             if c.tape.run(regs).is_ok() {
                 c.tape.read(regs, ds);

@@ -5,7 +5,7 @@
 //! [`Evaluator::Interpreter`] there is none: the controller and the region
 //! compute `z` themselves, as before.
 
-use super::tape::{Binary, Builder, Id, Tape, Unary};
+use super::tape::{Binary, Builder, Id, Registers, Tape, Unary};
 use super::Evaluator;
 use crate::tables::sym::{Func, Sym};
 use crate::tables::{PremiseCode, Tables};
@@ -13,7 +13,7 @@ use crate::tables::{PremiseCode, Tables};
 /// The compiled premise vector and its register file.
 pub struct Premises {
     tape: Tape,
-    regs: Vec<f64>,
+    regs: Box<Registers>,
 }
 
 fn unary(f: Func) -> Unary {
@@ -55,7 +55,8 @@ fn lower(b: &mut Builder, s: &Sym, n: usize) -> Id {
 }
 
 impl Premises {
-    /// The premise vector of `tables` as a tape, or `None` for the interpreter.
+    /// The premise vector of `tables` as a tape, or `None` for the
+    /// interpreter (also when the tape would be too large).
     pub fn new(tables: &Tables, evaluator: Evaluator) -> Option<Self> {
         if evaluator != Evaluator::Compiled {
             return None;
@@ -77,7 +78,7 @@ impl Premises {
                 .collect(),
             PremiseCode::Exprs(e) => e.iter().map(|s| lower(&mut b, s, n)).collect(),
         };
-        let tape = b.finish(&z);
+        let tape = b.finish(&z)?;
         Some(Premises {
             regs: tape.registers(),
             tape,

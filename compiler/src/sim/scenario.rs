@@ -268,7 +268,6 @@ pub fn run(
     let mut premises = Premises::new(tables, opts.evaluator);
     let mut z = vec![0.0; tables.p];
     let mut signals = Signals::new(spec, &prepared.source, opts.evaluator);
-    let mut w = vec![0.0; signals.len()];
     let mut u = vec![0.0; m];
     let trace = Trace {
         state_names: tables
@@ -328,8 +327,8 @@ pub fn run(
             t_next = t1;
         }
         let mut rhs = |tt: f64, y: &[f64], dy: &mut [f64]| {
-            signals.eval(tt, &mut w)?;
-            plant.rhs(tt, y, &u, &w, dy)
+            let w = signals.at(tt)?;
+            plant.rhs(tt, y, &u, w, dy)
         };
         stepper.advance(&mut rhs, t, t_next, &mut x)?;
         t = t_next;

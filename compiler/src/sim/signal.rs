@@ -5,18 +5,17 @@
 
 use super::source::SpecSource;
 use super::tape::lower::{Lowerer, SymMat, Unsupported};
-use super::tape::{Builder, Tape};
+use super::tape::{Builder, Registers, Tape};
 use super::{Evaluator, SimError};
 use tsf_lang::ast::Expr;
 use tsf_lang::eval::{Env, Mode};
 use tsf_lang::spec::Spec;
 
-/// The compiled signals, their register file and the last `(t, w(t))`.
+/// The compiled signals, their register file and the time of the last value.
 struct Compiled {
     tape: Tape,
-    regs: Vec<f64>,
+    regs: Box<Registers>,
     last: Option<u64>,
-    w: Vec<f64>,
 }
 
 /// The disturbance vector `w(t)` (components without a signal are 0).
@@ -27,6 +26,8 @@ pub struct Signals<'a> {
     parts: Vec<(usize, usize, &'a Expr)>,
     q: usize,
     compiled: Option<Compiled>,
+    /// The last value.
+    w: Vec<f64>,
 }
 
 impl<'a> Signals<'a> {
@@ -45,13 +46,13 @@ impl<'a> Signals<'a> {
             parts,
             q: spec.q(),
             compiled: None,
+            w: vec![0.0; spec.q()],
         };
         if evaluator == Evaluator::Compiled {
             signals.compiled = signals.compile().ok().map(|tape| Compiled {
                 regs: tape.registers(),
                 tape,
                 last: None,
-                w: vec![0.0; spec.q()],
             });
         }
         signals
@@ -70,7 +71,7 @@ impl<'a> Signals<'a> {
                 _ => return Err(Unsupported("signal length".into())),
             }
         }
-        Ok(lw.b.finish(&out))
+        lw.finish(&out)
     }
 
     /// Total disturbance dimension q.
@@ -85,21 +86,32 @@ impl<'a> Signals<'a> {
 
     /// Writes `w(t)` into `w` (length q).
     pub fn eval(&mut self, t: f64, w: &mut [f64]) -> Result<(), SimError> {
-        if let Some(c) = &mut self.compiled {
-            if c.last != Some(t.to_bits()) {
-                c.regs[0] = t;
-                if c.tape.run(&mut c.regs).is_ok() {
-                    c.tape.read(&c.regs, &mut c.w);
-                    c.last = Some(t.to_bits());
-                } else {
-                    c.last = None;
-                    return self.interpret(t, w);
-                }
+        let v = self.at(t)?;
+        w.copy_from_slice(v);
+        Ok(())
+    }
+
+    /// `w(t)` (length q), valid until the next call.
+    pub fn at(&mut self, t: f64) -> Result<&[f64], SimError> {
+        let Some(c) = &mut self.compiled else {
+            let mut w = std::mem::take(&mut self.w);
+            let r = self.interpret(t, &mut w);
+            self.w = w;
+            return r.map(|()| &self.w[..]);
+        };
+        if c.last != Some(t.to_bits()) {
+            c.regs[0] = t;
+            if c.tape.run(&mut c.regs).is_err() {
+                c.last = None;
+                let mut w = std::mem::take(&mut self.w);
+                let r = self.interpret(t, &mut w);
+                self.w = w;
+                return r.map(|()| &self.w[..]);
             }
-            w.copy_from_slice(&c.w);
-            return Ok(());
+            c.tape.read(&c.regs, &mut self.w);
+            c.last = Some(t.to_bits());
         }
-        self.interpret(t, w)
+        Ok(&self.w)
     }
 
     /// [`Signals::eval`] by the language's evaluator (the reference path).

@@ -4,7 +4,7 @@
 //! `a * 0`, `a / 1`, `--a`) are applied. Checked divisions are remembered as
 //! guards: they stay in the tape even when their value is unused.
 
-use super::{Binary, Op, Tape, Unary};
+use super::{Batch, Binary, Kind, Tape, Unary, REGISTERS};
 use std::collections::HashMap;
 
 /// A node of the graph (an input, a constant or an operation).
@@ -95,6 +95,18 @@ impl Builder {
         self.intern(Node::Un(f, a))
     }
 
+    fn node(&self, id: Id) -> Option<Node> {
+        self.nodes.get(id.0 as usize).copied()
+    }
+
+    /// The operand of a negation.
+    fn negated(&self, id: Id) -> Option<Id> {
+        match self.node(id) {
+            Some(Node::Un(Unary::Neg, x)) => Some(x),
+            _ => None,
+        }
+    }
+
     /// `f(a, b)`.
     pub fn bin(&mut self, f: Binary, a: Id, b: Id) -> Id {
         let (va, vb) = (self.value(a), self.value(b));
@@ -104,6 +116,8 @@ impl Builder {
                 return self.constant(f.apply(x, y));
             }
         }
+        // Exact identities only: IEEE defines a - b as a + (-b), and a
+        // negation or a product by +-1 is exact.
         match (f, va, vb) {
             (Binary::Add, Some(z), _) if z == 0.0 => return b,
             (Binary::Add | Binary::Sub, _, Some(z)) if z == 0.0 => return a,
@@ -115,6 +129,14 @@ impl Builder {
             (Binary::Mul, _, Some(o)) if o == 1.0 => return a,
             (Binary::Mul, Some(m), _) if m == -1.0 => return self.un(Unary::Neg, b),
             (Binary::Mul, _, Some(m)) if m == -1.0 => return self.un(Unary::Neg, a),
+            (Binary::Mul, Some(k), _) if self.negated(b).is_some() => {
+                let (k, x) = (self.constant(-k), self.negated(b).unwrap_or(b));
+                return self.bin(Binary::Mul, k, x);
+            }
+            (Binary::Mul, _, Some(k)) if self.negated(a).is_some() => {
+                let (k, x) = (self.constant(-k), self.negated(a).unwrap_or(a));
+                return self.bin(Binary::Mul, x, k);
+            }
             (Binary::Div | Binary::DivChecked, _, Some(o)) if o == 1.0 => return a,
             // A constant nonzero divisor never faults.
             (Binary::DivChecked, _, Some(_)) if !checked_zero => {
@@ -122,74 +144,136 @@ impl Builder {
             }
             _ => {}
         }
+        match (f, self.negated(a), self.negated(b)) {
+            (Binary::Add, _, Some(y)) => return self.bin(Binary::Sub, a, y),
+            (Binary::Add, Some(x), None) => return self.bin(Binary::Sub, b, x),
+            (Binary::Sub, _, Some(y)) => return self.bin(Binary::Add, a, y),
+            _ => {}
+        }
+        let before = self.nodes.len();
         let id = self.intern(Node::Bin(f, a, b));
-        if f == Binary::DivChecked && !self.guards.contains(&id) {
+        if f == Binary::DivChecked && self.nodes.len() > before {
             self.guards.push(id);
         }
         id
     }
 
-    /// The tape computing `outputs` (and every guard): nodes in creation
-    /// order (operands before their uses), registers `inputs, constants,
-    /// results`.
-    pub fn finish(self, outputs: &[Id]) -> Tape {
-        let mut live = vec![false; self.nodes.len()];
+    /// The tape computing `outputs` (and every guard), or `None` when it
+    /// needs more than [`REGISTERS`] registers. Registers: inputs, constants,
+    /// results. A product used once, by a sum or difference, is fused into
+    /// it (`x + a * b`, rounded as two operations); instructions are ordered
+    /// by level (longest path from the inputs) and, within a level, by kind,
+    /// and runs of one kind form a batch.
+    pub fn finish(self, outputs: &[Id]) -> Option<Tape> {
+        let count = self.nodes.len();
+        let mut uses = vec![0u32; count];
+        let mut live = vec![false; count];
         let mut stack: Vec<Id> = outputs.iter().chain(&self.guards).copied().collect();
+        for id in &stack {
+            // Outputs and guards are read outside the instruction stream.
+            uses[id.0 as usize] += 2;
+        }
         while let Some(id) = stack.pop() {
             let k = id.0 as usize;
             if std::mem::replace(&mut live[k], true) {
                 continue;
             }
-            match self.nodes[k] {
-                Node::Un(_, a) => stack.push(a),
-                Node::Bin(_, a, b) => stack.extend([a, b]),
-                Node::Input(_) | Node::Const(_) => {}
+            let operands = match self.nodes[k] {
+                Node::Un(_, a) => vec![a],
+                Node::Bin(_, a, b) => vec![a, b],
+                Node::Input(_) | Node::Const(_) => Vec::new(),
+            };
+            for a in operands {
+                uses[a.0 as usize] += 1;
+                stack.push(a);
             }
         }
-        let mut reg = vec![u32::MAX; self.nodes.len()];
+        let live_count = live.iter().filter(|&&l| l).count();
+        if self.inputs + live_count > REGISTERS {
+            return None;
+        }
+        // A product `a * b` read once, by a sum or difference.
+        let fusible = |id: Id| match self.nodes[id.0 as usize] {
+            Node::Bin(Binary::Mul, a, b) if uses[id.0 as usize] == 1 => Some((a, b)),
+            _ => None,
+        };
+        let mut fused = vec![false; count];
+        // (kind, node, operands) of every instruction, in creation order.
+        let mut instrs: Vec<(Kind, usize, [Id; 3])> = Vec::new();
+        for (k, node) in self.nodes.iter().enumerate() {
+            if !live[k] {
+                continue;
+            }
+            let instr = match *node {
+                Node::Input(_) | Node::Const(_) => continue,
+                Node::Un(Unary::Neg, a) => (Kind::Neg, [a, a, a]),
+                Node::Un(f, a) => (Kind::Call(f), [a, a, a]),
+                Node::Bin(Binary::Add, x, y) => match (fusible(y), fusible(x)) {
+                    (Some((a, b)), _) => {
+                        fused[y.0 as usize] = true;
+                        (Kind::MulAdd, [x, a, b])
+                    }
+                    (None, Some((a, b))) => {
+                        fused[x.0 as usize] = true;
+                        (Kind::MulAdd, [y, a, b])
+                    }
+                    _ => (Kind::Add, [x, y, y]),
+                },
+                Node::Bin(Binary::Sub, x, y) => match fusible(y) {
+                    Some((a, b)) => {
+                        fused[y.0 as usize] = true;
+                        (Kind::MulSub, [x, a, b])
+                    }
+                    None => (Kind::Sub, [x, y, y]),
+                },
+                Node::Bin(f, a, b) => (Kind::of(f), [a, b, b]),
+            };
+            instrs.push((instr.0, k, instr.1));
+        }
+        instrs.retain(|(_, k, _)| !fused[*k]);
+        // Levels: inputs and constants 0, an instruction one above its operands.
+        let mut level = vec![0u32; count];
+        for (_, k, ops) in &instrs {
+            level[*k] = 1 + ops.iter().map(|a| level[a.0 as usize]).max().unwrap_or(0);
+        }
+        instrs.sort_by_key(|(kind, k, _)| (level[*k], kind.rank()));
+        let mut reg = vec![u16::MAX; count];
         let mut init = vec![0.0; self.inputs];
         for (k, node) in self.nodes.iter().enumerate() {
             match *node {
-                Node::Input(i) => reg[k] = i,
+                // ok: at most REGISTERS registers (checked above), so u16.
+                Node::Input(i) => reg[k] = i as u16,
                 Node::Const(bits) if live[k] => {
-                    reg[k] = init.len() as u32;
+                    reg[k] = init.len() as u16;
                     init.push(f64::from_bits(bits));
                 }
                 _ => {}
             }
         }
-        let mut ops = Vec::new();
-        for (k, node) in self.nodes.iter().enumerate() {
-            if !live[k] {
-                continue;
-            }
-            let r = |id: Id| reg[id.0 as usize];
-            let d = init.len() as u32;
-            let op = match *node {
-                Node::Input(_) | Node::Const(_) => continue,
-                Node::Un(Unary::Neg, a) => Op::Neg(d, r(a)),
-                Node::Un(f, a) => Op::Call(f, d, r(a)),
-                Node::Bin(f, a, b) => {
-                    let (a, b) = (r(a), r(b));
-                    match f {
-                        Binary::Add => Op::Add(d, a, b),
-                        Binary::Sub => Op::Sub(d, a, b),
-                        Binary::Mul => Op::Mul(d, a, b),
-                        Binary::Div => Op::Div(d, a, b),
-                        Binary::DivChecked => Op::DivChecked(d, a, b),
-                        f => Op::Call2(f, d, a, b),
-                    }
-                }
-            };
-            reg[k] = d;
+        for (_, k, _) in &instrs {
+            reg[*k] = init.len() as u16;
             init.push(0.0);
-            ops.push(op);
         }
-        Tape {
-            ops,
+        let mut batches: Vec<Batch> = Vec::new();
+        let mut args = Vec::with_capacity(instrs.len());
+        for (kind, k, ops) in &instrs {
+            let r = |id: Id| reg[id.0 as usize];
+            args.push([reg[*k], r(ops[0]), r(ops[1]), r(ops[2])]);
+            match batches.last_mut() {
+                Some(b) if b.kind == *kind => b.end += 1,
+                _ => batches.push(Batch {
+                    kind: *kind,
+                    start: args.len() - 1,
+                    end: args.len(),
+                }),
+            }
+        }
+        Some(Tape {
+            batches,
+            args,
             init,
             inputs: self.inputs,
             outputs: outputs.iter().map(|id| reg[id.0 as usize]).collect(),
-        }
+        })
     }
 }

@@ -100,6 +100,13 @@ impl<'a> Lowerer<'a> {
         Lowerer { b, consts, fns }
     }
 
+    /// The tape computing `outputs`.
+    pub fn finish(self, outputs: &[Id]) -> Result<super::Tape, Unsupported> {
+        self.b
+            .finish(outputs)
+            .ok_or_else(|| Unsupported("too many registers".into()))
+    }
+
     /// The nodes of a constant matrix.
     pub fn constant(&mut self, m: &Mat) -> SymMat {
         SymMat {

@@ -13,7 +13,9 @@
 //!
 //! Evaluation allocates nothing: the caller owns the register file
 //! ([`Tape::registers`]), writes the inputs into its first slots, runs the
-//! tape and reads the outputs. A division by a value that is 0 at run time
+//! tape and reads the outputs. Register numbers are `u16` and the file has
+//! exactly [`REGISTERS`] slots, so every access is in bounds by construction
+//! (no bounds checks in the loop); a larger tape is not built. A division by a value that is 0 at run time
 //! is a [`Fault`], never an infinity: the caller then re-evaluates with the
 //! interpreter, which reports the error with its span (or computes the value,
 //! should it succeed). Divisions are kept even where their value is unused
@@ -135,17 +137,74 @@ impl Binary {
     }
 }
 
-/// One instruction: destination register, operand registers.
+/// Size of a register file: every `u16` register number is in bounds.
+pub const REGISTERS: usize = 1 << 16;
+
+/// A register file.
+pub type Registers = [f64; REGISTERS];
+
+/// What the instructions of a batch compute (operands `a, b, c` of
+/// `[d, a, b, c]`, result in register `d`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// `a + b`
+    Add,
+    /// `a - b`
+    Sub,
+    /// `a * b`
+    Mul,
+    /// `a / b`
+    Div,
+    /// `a / b`, a fault when `b == 0`
+    DivChecked,
+    /// `-a`
+    Neg,
+    /// `a + b * c` (two roundings, like the sum of a product)
+    MulAdd,
+    /// `a - b * c` (two roundings)
+    MulSub,
+    /// `f(a)`
+    Call(Unary),
+    /// `f(a, b)`
+    Call2(Binary),
+}
+
+impl Kind {
+    /// The kind of a two-operand node (sums and differences have their own).
+    fn of(f: Binary) -> Kind {
+        match f {
+            Binary::Add => Kind::Add,
+            Binary::Sub => Kind::Sub,
+            Binary::Mul => Kind::Mul,
+            Binary::Div => Kind::Div,
+            Binary::DivChecked => Kind::DivChecked,
+            f => Kind::Call2(f),
+        }
+    }
+
+    /// Sort key within a level (groups one kind into one batch).
+    fn rank(self) -> u8 {
+        match self {
+            Kind::Add => 0,
+            Kind::Sub => 1,
+            Kind::Mul => 2,
+            Kind::Div => 3,
+            Kind::DivChecked => 4,
+            Kind::Neg => 5,
+            Kind::MulAdd => 6,
+            Kind::MulSub => 7,
+            Kind::Call(f) => 8 + f as u8,
+            Kind::Call2(f) => 32 + f as u8,
+        }
+    }
+}
+
+/// A run of instructions of one kind: `args[start..end]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Op {
-    Add(u32, u32, u32),
-    Sub(u32, u32, u32),
-    Mul(u32, u32, u32),
-    Div(u32, u32, u32),
-    DivChecked(u32, u32, u32),
-    Neg(u32, u32),
-    Call(Unary, u32, u32),
-    Call2(Binary, u32, u32, u32),
+struct Batch {
+    kind: Kind,
+    start: usize,
+    end: usize,
 }
 
 /// A division by zero met while running a tape: the caller falls back to
@@ -156,18 +215,26 @@ pub struct Fault;
 /// Compiled straight-line code: `inputs` registers in, `outputs` read out.
 #[derive(Debug, Clone)]
 pub struct Tape {
-    ops: Vec<Op>,
+    batches: Vec<Batch>,
+    /// `[d, a, b, c]` per instruction.
+    args: Vec<[u16; 4]>,
     /// The register file's initial contents (inputs 0, constants loaded).
     init: Vec<f64>,
     inputs: usize,
-    outputs: Vec<u32>,
+    outputs: Vec<u16>,
 }
 
 impl Tape {
     /// A fresh register file for this tape (constants loaded): allocate it
     /// once and reuse it for every evaluation.
-    pub fn registers(&self) -> Vec<f64> {
-        self.init.clone()
+    pub fn registers(&self) -> Box<Registers> {
+        let mut regs = vec![0.0; REGISTERS];
+        regs[..self.init.len()].copy_from_slice(&self.init);
+        match regs.into_boxed_slice().try_into() {
+            Ok(file) => file,
+            // ok: the vector has exactly REGISTERS elements.
+            Err(_) => unreachable!("a register file has REGISTERS slots"),
+        }
     }
 
     /// Number of inputs (the first registers).
@@ -182,51 +249,68 @@ impl Tape {
 
     /// Number of instructions.
     pub fn len(&self) -> usize {
-        self.ops.len()
+        self.args.len()
     }
 
     /// `true` when the outputs are inputs or constants.
     pub fn is_empty(&self) -> bool {
-        self.ops.is_empty()
+        self.args.is_empty()
+    }
+
+    /// Number of batches (runs of one kind of instruction).
+    pub fn batches(&self) -> usize {
+        self.batches.len()
     }
 
     /// Runs the tape on `regs` (from [`Tape::registers`], inputs written into
     /// its first [`Tape::inputs`] slots).
-    pub fn run(&self, regs: &mut [f64]) -> Result<(), Fault> {
-        for op in &self.ops {
-            match *op {
-                Op::Add(d, a, b) => regs[d as usize] = regs[a as usize] + regs[b as usize],
-                Op::Sub(d, a, b) => regs[d as usize] = regs[a as usize] - regs[b as usize],
-                Op::Mul(d, a, b) => regs[d as usize] = regs[a as usize] * regs[b as usize],
-                Op::Div(d, a, b) => regs[d as usize] = regs[a as usize] / regs[b as usize],
-                Op::DivChecked(d, a, b) => {
-                    let y = regs[b as usize];
-                    if y == 0.0 {
-                        return Err(Fault);
+    pub fn run(&self, regs: &mut Registers) -> Result<(), Fault> {
+        for batch in &self.batches {
+            let args = &self.args[batch.start..batch.end];
+            macro_rules! each {
+                (|$a:ident, $b:ident, $c:ident| $e:expr) => {
+                    for &[d, a, b, c] in args {
+                        let ($a, $b, $c) = (regs[a as usize], regs[b as usize], regs[c as usize]);
+                        regs[d as usize] = $e;
                     }
-                    regs[d as usize] = regs[a as usize] / y;
+                };
+            }
+            match batch.kind {
+                Kind::Add => each!(|a, b, _c| a + b),
+                Kind::Sub => each!(|a, b, _c| a - b),
+                Kind::Mul => each!(|a, b, _c| a * b),
+                Kind::Div => each!(|a, b, _c| a / b),
+                Kind::DivChecked => {
+                    for &[d, a, b, _] in args {
+                        let y = regs[b as usize];
+                        if y == 0.0 {
+                            return Err(Fault);
+                        }
+                        regs[d as usize] = regs[a as usize] / y;
+                    }
                 }
-                Op::Neg(d, a) => regs[d as usize] = -regs[a as usize],
-                Op::Call(f, d, a) => regs[d as usize] = f.apply(regs[a as usize]),
-                Op::Call2(f, d, a, b) => {
-                    regs[d as usize] = f.apply(regs[a as usize], regs[b as usize])
-                }
+                Kind::Neg => each!(|a, _b, _c| -a),
+                Kind::MulAdd => each!(|a, b, c| a + b * c),
+                Kind::MulSub => each!(|a, b, c| a - b * c),
+                Kind::Call(f) => each!(|a, _b, _c| f.apply(a)),
+                Kind::Call2(f) => each!(|a, b, _c| f.apply(a, b)),
             }
         }
         Ok(())
     }
 
     /// Copies the outputs of a run out of `regs` into `out` (as many as fit).
-    pub fn read(&self, regs: &[f64], out: &mut [f64]) {
+    pub fn read(&self, regs: &Registers, out: &mut [f64]) {
         for (o, &r) in out.iter_mut().zip(&self.outputs) {
             *o = regs[r as usize];
         }
     }
 
     /// Writes `values` into the inputs starting at input `at`.
-    pub fn write(&self, regs: &mut [f64], at: usize, values: &[f64]) {
-        if let Some(dst) = regs.get_mut(at..at + values.len()) {
-            dst.copy_from_slice(values);
+    pub fn write(&self, regs: &mut Registers, at: usize, values: &[f64]) {
+        let end = (at + values.len()).min(self.inputs);
+        for (r, v) in regs[at.min(end)..end].iter_mut().zip(values) {
+            *r = *v;
         }
     }
 }
@@ -252,7 +336,7 @@ mod tests {
         let zero = b.constant(0.0);
         let dead = b.bin(Binary::Mul, zero, q);
         assert_eq!(b.value(dead), Some(0.0));
-        let tape = b.finish(&[s, c, q, dead]);
+        let tape = b.finish(&[s, c, q, dead]).expect("a small tape");
         assert_eq!(tape.len(), 4, "x*y, the sum, 6 + y, x / y");
         let mut regs = tape.registers();
         tape.write(&mut regs, 0, &[3.0, 2.0]);
