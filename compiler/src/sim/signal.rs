@@ -74,6 +74,11 @@ impl<'a> Signals<'a> {
         lw.finish(&out)
     }
 
+    /// Whether the signals run as a compiled tape.
+    pub fn is_compiled(&self) -> bool {
+        self.compiled.is_some()
+    }
+
     /// Total disturbance dimension q.
     pub fn len(&self) -> usize {
         self.q
