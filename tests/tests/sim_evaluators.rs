@@ -84,8 +84,18 @@ fn compiled_and_interpreted_trajectories_agree_on_every_shipped_spec() {
         let (reference, reference_csv) = run(Evaluator::Interpreter);
         let (mt, mr) = (&tape.metrics, &reference.metrics);
         assert_eq!(
-            (mt.samples, mt.transmissions, mt.saturated_samples, mt.no_rule_samples),
-            (mr.samples, mr.transmissions, mr.saturated_samples, mr.no_rule_samples),
+            (
+                mt.samples,
+                mt.transmissions,
+                mt.saturated_samples,
+                mt.no_rule_samples
+            ),
+            (
+                mr.samples,
+                mr.transmissions,
+                mr.saturated_samples,
+                mr.no_rule_samples
+            ),
             "{name}"
         );
         assert_eq!(mt.rhs_evaluations, mr.rhs_evaluations, "{name}");
@@ -103,7 +113,11 @@ fn compiled_and_interpreted_trajectories_agree_on_every_shipped_spec() {
         for (k, (row_t, r)) in rows_t[1..].iter().zip(&body_r).enumerate() {
             let t = parse(row_t);
             assert_eq!(t[0], r[0], "{name}: sampling instant of row {k}");
-            assert_eq!(t[width - 1], r[width - 1], "{name}: transmission at row {k}");
+            assert_eq!(
+                t[width - 1],
+                r[width - 1],
+                "{name}: transmission at row {k}"
+            );
             for j in 1..width - 1 {
                 let scale = t[j].abs().max(r[j].abs()).max(1e-6 * peak[j]);
                 let rel = (t[j] - r[j]).abs() / scale.max(f64::MIN_POSITIVE);

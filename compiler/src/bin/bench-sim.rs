@@ -24,6 +24,13 @@ fn fail(e: &tsfc::sim::SimError) -> ExitCode {
     ExitCode::from(e.exit_code())
 }
 
+/// Time this thread has run on a CPU, in seconds (Linux `schedstat`).
+fn cpu_time_s() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
+}
+
 const USAGE: &str = "usage: bench-sim [--report PATH] [--interpreter] [SPEC [HORIZON_S]]";
 
 fn main() -> ExitCode {
@@ -62,7 +69,7 @@ fn main() -> ExitCode {
         None => tsfc::sim::prepare(&spec),
         Some(r) => tsfc::sim::prepare_reusing(&spec, Some(r), Path::new(".")).map(|(p, reuse)| {
             if let tsfc::sim::Reuse::Recompiled(why) = reuse {
-                eprintln!("note: {why}: compiled the design");
+                eprintln!("note: {why}; compiled the design");
             }
             p
         }),
@@ -77,12 +84,13 @@ fn main() -> ExitCode {
         evaluator,
         ..tsfc::sim::Options::default()
     };
-    let t = Instant::now();
+    let (t, cpu) = (Instant::now(), cpu_time_s());
     let outcome = match tsfc::sim::simulate_csv(&prepared, &opts, &mut std::io::sink()) {
         Ok(o) => o,
         Err(e) => return fail(&e),
     };
     let sim_s = t.elapsed().as_secs_f64();
+    let sim_cpu = cpu.zip(cpu_time_s()).map(|(a, b)| b - a);
     let m = &outcome.metrics;
     println!("spec                {}", spec.display());
     println!("prepare             {compile_s:.3} s");
@@ -94,6 +102,13 @@ fn main() -> ExitCode {
         "real-time factor    {:.0}x (simulated s per wall s)",
         horizon / sim_s
     );
+    if let Some(cpu) = sim_cpu {
+        // On a shared machine the wall time includes waiting for a core.
+        println!(
+            "on-CPU time         {cpu:.3} s ({:.0}x simulated s per CPU s)",
+            horizon / cpu
+        );
+    }
     println!(
         "rhs evaluations     {} ({:.2} us each, all-in)",
         m.rhs_evaluations,

@@ -168,8 +168,12 @@ pub fn simulate_to(
     dir: &Path,
 ) -> Result<(Outcome, Vec<PathBuf>), SimError> {
     // Refuse bad settings before touching the folder.
-    let dim = plant::Plant::new(&prepared.model.spec, &prepared.source, Evaluator::Interpreter)?
-        .dim();
+    let dim = plant::Plant::new(
+        &prepared.model.spec,
+        &prepared.source,
+        Evaluator::Interpreter,
+    )?
+    .dim();
     scenario::plan(prepared, opts, dim)?;
     let path = dir.join(format!("{}.csv", prepared.model.spec.controller.node));
     let io_err =

@@ -126,7 +126,11 @@ impl<'a> Plant<'a> {
         let col = |lw: &Lowerer, at: usize, len: usize| {
             SymMat::column((at..at + len).map(|k| lw.b.input(k)).collect())
         };
-        let (x, u, w) = (col(&lw, 1, n), col(&lw, 1 + dim, m), col(&lw, 1 + dim + m, q));
+        let (x, u, w) = (
+            col(&lw, 1, n),
+            col(&lw, 1 + dim, m),
+            col(&lw, 1 + dim + m, q),
+        );
         let bind = |lw: &Lowerer, sigs: &[Signal], at: usize| -> Vec<(String, SymMat)> {
             sigs.iter()
                 .map(|s| (s.name.clone(), col(lw, at + s.offset, s.len)))

@@ -97,7 +97,8 @@ impl Premises {
 
     /// Writes `z(x)` (x: the controller state) into `z`.
     pub fn eval(&mut self, x: &[f64], z: &mut [f64]) {
-        self.tape.write(&mut self.regs, 0, &x[..x.len().min(self.tape.inputs())]);
+        self.tape
+            .write(&mut self.regs, 0, &x[..x.len().min(self.tape.inputs())]);
         // ok: premise tapes contain no checked division, so they never fault.
         let _ = self.tape.run(&mut self.regs);
         self.tape.read(&self.regs, z);

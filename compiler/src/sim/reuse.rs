@@ -77,7 +77,9 @@ struct SampledView {
 fn matrix(rows: &[Vec<f64>], r: usize, c: usize, what: &str) -> Result<DMatrix<f64>, String> {
     let fits = rows.len() == r && rows.iter().all(|row| row.len() == c);
     if !fits || rows.iter().flatten().any(|v| !v.is_finite()) {
-        return Err(format!("its {what} is not a {r}x{c} matrix of finite numbers"));
+        return Err(format!(
+            "its {what} is not a {r}x{c} matrix of finite numbers"
+        ));
     }
     Ok(DMatrix::from_fn(r, c, |i, j| rows[i][j]))
 }
@@ -87,7 +89,8 @@ fn premise_code(model: &TsModel) -> Result<PremiseCode, String> {
     let spec = &model.spec;
     let mut entries = Vec::new();
     for p in &spec.premises {
-        let all = premise_entries(spec, &p.expr).map_err(|e| format!("premise `{}`: {e}", p.name))?;
+        let all =
+            premise_entries(spec, &p.expr).map_err(|e| format!("premise `{}`: {e}", p.name))?;
         match p.component {
             Some(k) => entries.push(all.get(k).cloned().ok_or("premise component")?),
             None => entries.extend(all),
@@ -109,7 +112,10 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
     let (n, m) = (model.n, model.m);
     let certified = r.status == "certified" && r.certificate.as_ref().is_some_and(|c| c.ok);
     if !certified {
-        return Err(format!("its design is not certified (status `{}`)", r.status));
+        return Err(format!(
+            "its design is not certified (status `{}`)",
+            r.status
+        ));
     }
     let version = env!("CARGO_PKG_VERSION");
     if r.tsfc_version != version {
@@ -137,8 +143,7 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
         Some(t) => Some(matrix(&t.weight, n, n, "trigger weight")?),
         None => None,
     };
-    let names =
-        |s: &[tsf_lang::spec::Signal]| s.iter().flat_map(|s| s.component_names()).collect();
+    let names = |s: &[tsf_lang::spec::Signal]| s.iter().flat_map(|s| s.component_names()).collect();
     let tables = Tables {
         name: spec.controller.node.clone(),
         header: Header {
@@ -148,7 +153,10 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
             objectives: Vec::new(),
             min_margin: r.certificate.as_ref().map_or(f64::NAN, |c| c.min_margin),
             relaxation: spec.relaxation.node.to_string(),
-            sampling: r.sampled_loop.as_ref().map(|s| (s.sampling[0], s.sampling[1])),
+            sampling: r
+                .sampled_loop
+                .as_ref()
+                .map(|s| (s.sampling[0], s.sampling[1])),
         },
         n,
         m,

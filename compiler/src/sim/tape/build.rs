@@ -88,8 +88,7 @@ impl Builder {
         if let Some(v) = self.value(a) {
             return self.constant(f.apply(v));
         }
-        if let (Unary::Neg, Some(Node::Un(Unary::Neg, inner))) = (f, self.nodes.get(a.0 as usize))
-        {
+        if let (Unary::Neg, Some(Node::Un(Unary::Neg, inner))) = (f, self.nodes.get(a.0 as usize)) {
             return *inner;
         }
         self.intern(Node::Un(f, a))

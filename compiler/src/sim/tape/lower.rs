@@ -410,7 +410,9 @@ impl<'a> Lowerer<'a> {
             [r, c] => {
                 let (r0, r1) = range(self, r, m.rows)?;
                 let (c0, c1) = range(self, c, m.cols)?;
-                Ok(SymMat::from_fn(r1 - r0, c1 - c0, |i, j| m.at(r0 + i, c0 + j)))
+                Ok(SymMat::from_fn(r1 - r0, c1 - c0, |i, j| {
+                    m.at(r0 + i, c0 + j)
+                }))
             }
             _ => unsupported("bad index"),
         }

@@ -182,7 +182,7 @@ impl Kind {
         }
     }
 
-    /// Sort key within a level (groups one kind into one batch).
+    /// Order of kinds within a level (groups one kind into one batch).
     fn rank(self) -> u8 {
         match self {
             Kind::Add => 0,

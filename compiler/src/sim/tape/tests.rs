@@ -47,7 +47,10 @@ const XU: &str = include_str!("../../../../specs/xu2020_event_triggered.tsf");
 /// items added), checked.
 fn pendulum_with(theta_dot: &str, extra: &str) -> Spec {
     let text = PENDULUM.replace("theta' = omega;", &format!("theta' = {theta_dot};"));
-    let text = text.replace("state theta, omega;", &format!("state theta, omega;\n{extra}"));
+    let text = text.replace(
+        "state theta, omega;",
+        &format!("state theta, omega;\n{extra}"),
+    );
     match tsf_lang::check_source(&text) {
         (Some(spec), _) => spec,
         (None, diags) => panic!("{diags:#?}"),
@@ -65,9 +68,8 @@ fn worst_difference(spec: &Spec, compiled: bool) -> f64 {
     let mut rng = SplitMix64::new(3);
     let mut worst: f64 = 0.0;
     for _ in 0..200 {
-        let mut draw = |len: usize| -> Vec<f64> {
-            (0..len).map(|_| rng.next_f64() - 0.5).collect()
-        };
+        let mut draw =
+            |len: usize| -> Vec<f64> { (0..len).map(|_| rng.next_f64() - 0.5).collect() };
         let (t, s, u, w) = (10.0 * draw(1)[0].abs(), draw(dim), draw(m), draw(q));
         let (mut a, mut b) = (vec![0.0; dim], vec![0.0; dim]);
         reference.rhs(t, &s, &u, &w, &mut a).expect("interpreter");
