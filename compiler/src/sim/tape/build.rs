@@ -118,16 +118,14 @@ impl Builder {
         // Exact identities only: IEEE defines a - b as a + (-b), and a
         // negation or a product by +-1 is exact.
         match (f, va, vb) {
-            (Binary::Add, Some(z), _) if z == 0.0 => return b,
-            (Binary::Add | Binary::Sub, _, Some(z)) if z == 0.0 => return a,
-            (Binary::Sub, Some(z), _) if z == 0.0 => return self.un(Unary::Neg, b),
-            (Binary::Mul, Some(z), _) | (Binary::Mul, _, Some(z)) if z == 0.0 => {
-                return self.constant(0.0)
-            }
-            (Binary::Mul, Some(o), _) if o == 1.0 => return b,
-            (Binary::Mul, _, Some(o)) if o == 1.0 => return a,
-            (Binary::Mul, Some(m), _) if m == -1.0 => return self.un(Unary::Neg, b),
-            (Binary::Mul, _, Some(m)) if m == -1.0 => return self.un(Unary::Neg, a),
+            (Binary::Add, Some(0.0), _) => return b,
+            (Binary::Add | Binary::Sub, _, Some(0.0)) => return a,
+            (Binary::Sub, Some(0.0), _) => return self.un(Unary::Neg, b),
+            (Binary::Mul, Some(0.0), _) | (Binary::Mul, _, Some(0.0)) => return self.constant(0.0),
+            (Binary::Mul, Some(1.0), _) => return b,
+            (Binary::Mul, _, Some(1.0)) => return a,
+            (Binary::Mul, Some(-1.0), _) => return self.un(Unary::Neg, b),
+            (Binary::Mul, _, Some(-1.0)) => return self.un(Unary::Neg, a),
             (Binary::Mul, Some(k), _) if self.negated(b).is_some() => {
                 let (k, x) = (self.constant(-k), self.negated(b).unwrap_or(b));
                 return self.bin(Binary::Mul, k, x);
@@ -136,7 +134,7 @@ impl Builder {
                 let (k, x) = (self.constant(-k), self.negated(a).unwrap_or(a));
                 return self.bin(Binary::Mul, x, k);
             }
-            (Binary::Div | Binary::DivChecked, _, Some(o)) if o == 1.0 => return a,
+            (Binary::Div | Binary::DivChecked, _, Some(1.0)) => return a,
             // A constant nonzero divisor never faults.
             (Binary::DivChecked, _, Some(_)) if !checked_zero => {
                 return self.bin(Binary::Div, a, b)
