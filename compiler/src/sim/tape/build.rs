@@ -4,7 +4,7 @@
 //! `a * 0`, `a / 1`, `--a`) are applied. Checked divisions are remembered as
 //! guards: they stay in the tape even when their value is unused.
 
-use super::{Batch, Binary, Kind, Tape, Unary, REGISTERS};
+use super::{Batch, Binary, Instr, Kind, Tape, Unary, REGISTERS, SHORT_RUN};
 use std::collections::HashMap;
 
 /// A node of the graph (an input, a constant or an operation).
@@ -251,26 +251,61 @@ impl Builder {
             reg[*k] = init.len() as u16;
             init.push(0.0);
         }
-        let mut batches: Vec<Batch> = Vec::new();
-        let mut args = Vec::with_capacity(instrs.len());
-        for (kind, k, ops) in &instrs {
-            let r = |id: Id| reg[id.0 as usize];
-            args.push([reg[*k], r(ops[0]), r(ops[1]), r(ops[2])]);
-            match batches.last_mut() {
-                Some(b) if b.kind == *kind => b.end += 1,
-                _ => batches.push(Batch {
+        let instrs: Vec<Instr> = instrs
+            .iter()
+            .map(|(kind, k, ops)| {
+                let r = |id: Id| reg[id.0 as usize];
+                Instr {
                     kind: *kind,
-                    start: args.len() - 1,
-                    end: args.len(),
-                }),
-            }
-        }
+                    regs: [reg[*k], r(ops[0]), r(ops[1]), r(ops[2])],
+                }
+            })
+            .collect();
+        let batches = batches(&instrs);
         Some(Tape {
             batches,
-            args,
+            instrs,
             init,
             inputs: self.inputs,
             outputs: outputs.iter().map(|id| reg[id.0 as usize]).collect(),
         })
     }
+}
+
+/// Runs of one kind become batches; neighbouring runs of at most
+/// [`SHORT_RUN`] instructions are merged into one mixed batch.
+fn batches(instrs: &[Instr]) -> Vec<Batch> {
+    let mut runs: Vec<Batch> = Vec::new();
+    for (i, instr) in instrs.iter().enumerate() {
+        match runs.last_mut() {
+            Some(b) if b.kind == Some(instr.kind) => b.end = i + 1,
+            _ => runs.push(Batch {
+                kind: Some(instr.kind),
+                start: i,
+                end: i + 1,
+            }),
+        }
+    }
+    let mut out: Vec<Batch> = Vec::with_capacity(runs.len());
+    for run in runs {
+        let short = run.end - run.start <= SHORT_RUN;
+        match out.last_mut() {
+            Some(b) if short && (b.kind.is_none() || b.end - b.start <= SHORT_RUN) => {
+                b.kind = None;
+                b.end = run.end;
+            }
+            _ => out.push(run),
+        }
+    }
+    // A mixed batch of one run is that run.
+    for b in &mut out {
+        if b.kind.is_none()
+            && instrs[b.start..b.end]
+                .iter()
+                .all(|i| i.kind == instrs[b.start].kind)
+        {
+            b.kind = Some(instrs[b.start].kind);
+        }
+    }
+    out
 }

@@ -199,10 +199,21 @@ impl Kind {
     }
 }
 
-/// A run of instructions of one kind: `args[start..end]`.
+/// One instruction: its kind and registers `[d, a, b, c]` (result `d`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Instr {
+    kind: Kind,
+    regs: [u16; 4],
+}
+
+/// Runs of one kind at most this long are merged into a mixed batch, where
+/// each instruction is dispatched on its own kind (cheaper than a batch each).
+const SHORT_RUN: usize = 3;
+
+/// Instructions `start..end`: all of one kind, or of mixed kinds (`None`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Batch {
-    kind: Kind,
+    kind: Option<Kind>,
     start: usize,
     end: usize,
 }
@@ -216,8 +227,7 @@ pub struct Fault;
 #[derive(Debug, Clone)]
 pub struct Tape {
     batches: Vec<Batch>,
-    /// `[d, a, b, c]` per instruction.
-    args: Vec<[u16; 4]>,
+    instrs: Vec<Instr>,
     /// The register file's initial contents (inputs 0, constants loaded).
     init: Vec<f64>,
     inputs: usize,
@@ -249,12 +259,12 @@ impl Tape {
 
     /// Number of instructions.
     pub fn len(&self) -> usize {
-        self.args.len()
+        self.instrs.len()
     }
 
     /// `true` when the outputs are inputs or constants.
     pub fn is_empty(&self) -> bool {
-        self.args.is_empty()
+        self.instrs.is_empty()
     }
 
     /// Number of batches (runs of one kind of instruction).
@@ -265,35 +275,56 @@ impl Tape {
     /// Runs the tape on `regs` (from [`Tape::registers`], inputs written into
     /// its first [`Tape::inputs`] slots).
     pub fn run(&self, regs: &mut Registers) -> Result<(), Fault> {
+        // One instruction of kind `$kind` (a constant in a batch of one kind,
+        // so the match folds away there).
+        macro_rules! step {
+            ($kind:expr, $regs:expr) => {{
+                let [d, a, b, c] = $regs;
+                let (d, a, b, c) = (d as usize, a as usize, b as usize, c as usize);
+                regs[d] = match $kind {
+                    Kind::Add => regs[a] + regs[b],
+                    Kind::Sub => regs[a] - regs[b],
+                    Kind::Mul => regs[a] * regs[b],
+                    Kind::Div => regs[a] / regs[b],
+                    Kind::DivChecked => {
+                        if regs[b] == 0.0 {
+                            return Err(Fault);
+                        }
+                        regs[a] / regs[b]
+                    }
+                    Kind::Neg => -regs[a],
+                    Kind::MulAdd => regs[a] + regs[b] * regs[c],
+                    Kind::MulSub => regs[a] - regs[b] * regs[c],
+                    Kind::Call(f) => f.apply(regs[a]),
+                    Kind::Call2(f) => f.apply(regs[a], regs[b]),
+                };
+            }};
+        }
         for batch in &self.batches {
-            let args = &self.args[batch.start..batch.end];
+            let instrs = &self.instrs[batch.start..batch.end];
             macro_rules! each {
-                (|$a:ident, $b:ident, $c:ident| $e:expr) => {
-                    for &[d, a, b, c] in args {
-                        let ($a, $b, $c) = (regs[a as usize], regs[b as usize], regs[c as usize]);
-                        regs[d as usize] = $e;
+                ($kind:expr) => {
+                    for i in instrs {
+                        step!($kind, i.regs)
                     }
                 };
             }
             match batch.kind {
-                Kind::Add => each!(|a, b, _c| a + b),
-                Kind::Sub => each!(|a, b, _c| a - b),
-                Kind::Mul => each!(|a, b, _c| a * b),
-                Kind::Div => each!(|a, b, _c| a / b),
-                Kind::DivChecked => {
-                    for &[d, a, b, _] in args {
-                        let y = regs[b as usize];
-                        if y == 0.0 {
-                            return Err(Fault);
-                        }
-                        regs[d as usize] = regs[a as usize] / y;
+                None => {
+                    for i in instrs {
+                        step!(i.kind, i.regs)
                     }
                 }
-                Kind::Neg => each!(|a, _b, _c| -a),
-                Kind::MulAdd => each!(|a, b, c| a + b * c),
-                Kind::MulSub => each!(|a, b, c| a - b * c),
-                Kind::Call(f) => each!(|a, _b, _c| f.apply(a)),
-                Kind::Call2(f) => each!(|a, b, _c| f.apply(a, b)),
+                Some(Kind::Add) => each!(Kind::Add),
+                Some(Kind::Sub) => each!(Kind::Sub),
+                Some(Kind::Mul) => each!(Kind::Mul),
+                Some(Kind::Div) => each!(Kind::Div),
+                Some(Kind::DivChecked) => each!(Kind::DivChecked),
+                Some(Kind::Neg) => each!(Kind::Neg),
+                Some(Kind::MulAdd) => each!(Kind::MulAdd),
+                Some(Kind::MulSub) => each!(Kind::MulSub),
+                Some(Kind::Call(f)) => each!(Kind::Call(f)),
+                Some(Kind::Call2(f)) => each!(Kind::Call2(f)),
             }
         }
         Ok(())
