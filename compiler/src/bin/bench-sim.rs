@@ -114,6 +114,18 @@ fn main() -> ExitCode {
         m.rhs_evaluations,
         1e6 * sim_s / m.rhs_evaluations.max(1) as f64
     );
+    let checked = &prepared.model.spec;
+    let describe = |tape: Option<&tsfc::sim::tape::Tape>| {
+        tape.map_or_else(
+            || "interpreted".to_string(),
+            |t| format!("{} instructions in {} batches", t.len(), t.batches()),
+        )
+    };
+    if let Ok(plant) = tsfc::sim::plant::Plant::new(checked, &prepared.source, evaluator) {
+        println!("plant tape          {}", describe(plant.tape()));
+    }
+    let signals = tsfc::sim::signal::Signals::new(checked, &prepared.source, evaluator);
+    println!("signals tape        {}", describe(signals.tape()));
     println!("samples             {}", m.samples);
     println!("transmissions       {}", m.transmissions);
     println!(

@@ -118,6 +118,11 @@ impl<'a> Plant<'a> {
         self.compiled.is_some()
     }
 
+    /// The compiled right-hand side, if any.
+    pub fn tape(&self) -> Option<&Tape> {
+        self.compiled.as_ref().map(|c| &c.tape)
+    }
+
     /// The right-hand side as a tape over the inputs `[t, s, u, w]`.
     fn compile(&self) -> Result<Tape, Unsupported> {
         let spec = self.spec;

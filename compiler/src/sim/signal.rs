@@ -79,6 +79,11 @@ impl<'a> Signals<'a> {
         self.compiled.is_some()
     }
 
+    /// The compiled signals, if any.
+    pub fn tape(&self) -> Option<&Tape> {
+        self.compiled.as_ref().map(|c| &c.tape)
+    }
+
     /// Total disturbance dimension q.
     pub fn len(&self) -> usize {
         self.q
