@@ -20,7 +20,7 @@ where
     }
 }
 
-/// `sum_j c_j k_j[i]`, taken from 0 in order of `j`.
+/// `sum_j c_j k_j[i]`, taken from 0 in order of `j` (a missing `k_j[i]` is 0).
 #[inline(always)]
 fn weighted<const K: usize>(i: usize, c: &[f64; K], k: &[&[f64]; K]) -> f64 {
     let mut s = 0.0;
@@ -30,17 +30,39 @@ fn weighted<const K: usize>(i: usize, c: &[f64; K], k: &[&[f64]; K]) -> f64 {
     s
 }
 
-/// `y_i + h * sum_j c_j k_j[i]`.
+/// The stages cut to length `n`, or `None` if one is shorter.
+fn cut<'a, const K: usize>(k: &[&'a [f64]; K], n: usize) -> Option<[&'a [f64]; K]> {
+    let mut out: [&[f64]; K] = [&[]; K];
+    for (o, kj) in out.iter_mut().zip(k) {
+        *o = kj.get(..n)?;
+    }
+    Some(out)
+}
+
+/// `out_i = y_i + h * sum_j c_j k_j[i]` (`out` may be `y` itself: `y = None`).
 #[inline(always)]
-fn stage<const K: usize>(yi: f64, i: usize, h: f64, c: &[f64; K], k: &[&[f64]; K]) -> f64 {
-    yi + h * weighted(i, c, k)
+fn update<const K: usize>(out: &mut [f64], y: Option<&[f64]>, h: f64, c: &[f64; K], k: [&[f64]; K]) {
+    let n = y.map_or(out.len(), |y| y.len().min(out.len()));
+    let Some(ks) = cut(&k, n) else {
+        for i in 0..n {
+            let yi = y.map_or(out[i], |y| y[i]);
+            out[i] = yi + h * weighted(i, c, &k);
+        }
+        return;
+    };
+    for i in 0..n {
+        let mut s = 0.0;
+        for (cj, kj) in c.iter().zip(&ks) {
+            s += cj * kj[i];
+        }
+        let yi = y.map_or(out[i], |y| y[i]);
+        out[i] = yi + h * s;
+    }
 }
 
 /// `out = y + h * sum_j c_j k_j`.
 fn combine<const K: usize>(out: &mut [f64], y: &[f64], h: f64, c: &[f64; K], k: [&[f64]; K]) {
-    for (i, (o, &yi)) in out.iter_mut().zip(y).enumerate() {
-        *o = stage(yi, i, h, c, &k);
-    }
+    update(out, Some(y), h, c, k);
 }
 
 /// The classical RK4 weights.
@@ -86,10 +108,7 @@ impl Rk4 {
         combine(&mut self.tmp, y, h, &[1.0], [k3]);
         sys.rhs(t + h, &self.tmp, k4)?;
         self.evals += 4;
-        let ks = [&k1[..], k2, k3, k4];
-        for (i, yi) in y.iter_mut().enumerate() {
-            *yi = stage(*yi, i, h, &RK4_WEIGHTS, &ks);
-        }
+        update(y, None, h, &RK4_WEIGHTS, [k1, k2, k3, k4]);
         Ok(())
     }
 
