@@ -205,6 +205,48 @@ pub enum SimStmt {
     },
     /// `dynamics { ... }`
     Dynamics(Vec<Spanned<DynStmt>>, Span),
+    /// `monte_carlo { ... }`
+    MonteCarlo(Vec<McStmt>, Span),
+}
+
+/// How a `monte_carlo` statement perturbs its target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Vary {
+    /// `name scale dist;`: the nominal value times a factor drawn per run.
+    Scale,
+    /// `name offset dist;`: the nominal value plus an offset drawn per run.
+    Offset,
+    /// `name in dist;`: a value drawn per run (the nominal one is not used).
+    In,
+}
+
+/// A statement inside `monte_carlo { ... }`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum McStmt {
+    /// `key = value;` (`runs`).
+    Setting(Setting),
+    /// `name scale|offset|in uniform(lo, hi);`
+    Vary {
+        /// The perturbed constant, `x0` or disturbance.
+        name: Ident,
+        /// How.
+        how: Spanned<Vary>,
+        /// The distribution (a call such as `uniform(lo, hi)`).
+        dist: Expr,
+        /// The whole statement.
+        span: Span,
+    },
+    /// `converged |x| <= tol by t;`
+    Converged {
+        /// `x` or a state name.
+        signal: Ident,
+        /// The norm bound.
+        tol: Expr,
+        /// The time by which the bound must hold for good.
+        by: Expr,
+        /// The whole statement.
+        span: Span,
+    },
 }
 
 /// One top-level item.

@@ -41,6 +41,10 @@ pub const MAX_ECHO_CHARS: usize = 40;
 /// around the marked places, with `...` for the rest).
 pub const MAX_SHOWN_LINE: usize = 120;
 
+/// Most runs of a Monte Carlo campaign (`runs` of `monte_carlo { }`, and
+/// `tsfc simulate --monte-carlo N`).
+pub const MAX_MONTE_CARLO_RUNS: u64 = 1_000_000;
+
 /// Largest degree d of `relaxation polya(d = ..)`.
 pub const MAX_POLYA_DEGREE: usize = 4;
 

@@ -454,6 +454,68 @@ pub struct Simulation {
     pub integrator: Integrator,
     /// Truth dynamics, if given.
     pub dynamics: Option<Dynamics>,
+    /// Declared uncertainty for Monte Carlo campaigns, if given.
+    pub monte_carlo: Option<MonteCarlo>,
+    /// Where the block is.
+    pub span: Span,
+}
+
+/// What a `monte_carlo` statement perturbs (always the truth plant).
+#[derive(Debug, Clone, PartialEq)]
+pub enum McTarget {
+    /// A constant of the spec (`local` false) or of the `dynamics` block.
+    Const {
+        /// Its name.
+        name: String,
+        /// Whether it is a constant of the `dynamics` block.
+        local: bool,
+    },
+    /// The initial state (its `n` controller states).
+    InitialState,
+    /// A disturbance signal's amplitude (index into [`Spec::disturbances`]).
+    Disturbance(usize),
+}
+
+/// One uncertain quantity: drawn per run uniformly in `[lo, hi]` (per component).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Uncertain {
+    /// What is perturbed.
+    pub target: McTarget,
+    /// How the draw acts on the nominal value.
+    pub how: crate::ast::Vary,
+    /// Lower bounds (one per component; a scalar for constants and disturbances).
+    pub lo: Vec<f64>,
+    /// Upper bounds (`lo <= hi`, both finite).
+    pub hi: Vec<f64>,
+    /// The statement.
+    pub span: Span,
+}
+
+/// `converged |x| <= tol by t`: a run converged when the Euclidean norm of the
+/// signal stays at most `tol` from some time `<= by` to the end.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Convergence {
+    /// The signal's `(offset, len)` in the state (`x`: `(0, n)`).
+    pub signal: (usize, usize),
+    /// Its name as written.
+    pub name: String,
+    /// The norm bound.
+    pub tol: f64,
+    /// The time by which the bound holds for good.
+    pub by: f64,
+    /// The statement.
+    pub span: Span,
+}
+
+/// The `monte_carlo { }` block of the scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MonteCarlo {
+    /// Default run count.
+    pub runs: Option<u64>,
+    /// The uncertain quantities, in source order.
+    pub uncertain: Vec<Uncertain>,
+    /// What "converged" means.
+    pub converged: Convergence,
     /// Where the block is.
     pub span: Span,
 }

@@ -16,6 +16,7 @@ mod dynamics;
 mod env;
 mod generatable;
 mod model;
+mod monte_carlo;
 mod objective_parts;
 mod objectives;
 mod premises;

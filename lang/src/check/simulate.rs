@@ -2,20 +2,22 @@
 //! disturbance signals of `t`, and the truth `dynamics` (see [`super::dynamics`]).
 
 use super::{unknown_choice, Checker, Draft};
-use crate::ast::{Expr, ExprKind, Ident, Item, Setting, SimStmt, Value};
+use crate::ast::{Expr, ExprKind, Ident, Item, McStmt, Setting, SimStmt, Value};
 use crate::diag::Diagnostic;
 use crate::eval::Mat;
 use crate::span::Span;
 use crate::spec::{Dynamics, Integrator, Simulation};
 
 /// What the statements of a `simulate` block set so far.
-struct Scenario {
+struct Scenario<'a> {
     x0: Option<Vec<f64>>,
     time: Option<(f64, f64, f64)>,
     signals: Vec<(usize, Expr)>,
     seed: u64,
     integrator: Integrator,
     dynamics: Option<Dynamics>,
+    /// The `monte_carlo` block (checked once the rest of the scenario is known).
+    monte_carlo: Option<(&'a [McStmt], Span)>,
     /// False once a statement failed (missing settings are then not reported).
     ok: bool,
     /// Setting keys given so far.
@@ -45,6 +47,7 @@ impl Checker<'_> {
             seed: 0,
             integrator: Integrator::Rk4,
             dynamics: None,
+            monte_carlo: None,
             ok: true,
             seen: Vec::new(),
         };
@@ -56,6 +59,13 @@ impl Checker<'_> {
                     Some(signal) => sc.signals.push(signal),
                     None => sc.ok = false,
                 },
+                SimStmt::MonteCarlo(body, mspan) => {
+                    if sc.monte_carlo.is_some() {
+                        self.err(Diagnostic::error(*mspan, "`monte_carlo` is given twice"));
+                        sc.ok = false;
+                    }
+                    sc.monte_carlo = Some((body, *mspan));
+                }
                 SimStmt::Dynamics(body, dspan) => {
                     sc.dynamics = self.dynamics(body, *dspan);
                     if sc.dynamics.is_none() {
@@ -82,7 +92,18 @@ impl Checker<'_> {
             }
             return None;
         };
+        let monte_carlo = match sc.monte_carlo {
+            Some((body, mspan)) => {
+                let mc = self.monte_carlo(body, mspan, n, sc.dynamics.as_ref(), time, &sc.signals);
+                if mc.is_none() {
+                    sc.ok = false;
+                }
+                mc
+            }
+            None => None,
+        };
         sc.ok.then_some(Simulation {
+            monte_carlo,
             x0,
             time,
             signals: sc.signals,
@@ -94,7 +115,7 @@ impl Checker<'_> {
     }
 
     /// One setting: `x0`, `time`, `seed` or `integrator`, each given once.
-    fn sim_setting(&mut self, s: &Setting, n: usize, sc: &mut Scenario) {
+    fn sim_setting(&mut self, s: &Setting, n: usize, sc: &mut Scenario<'_>) {
         if sc.seen.contains(&s.key.node) {
             self.err(Diagnostic::error(
                 s.key.span,

@@ -178,6 +178,12 @@ fn rule_name(r: &Rule) -> Option<&'static str> {
         Rule::dynamics_block => "`dynamics { ... }`",
         Rule::signal_def => "a signal `name(t) = ...;`",
         Rule::sim_stmt => "a simulate statement",
+        Rule::monte_carlo_block => "`monte_carlo { ... }`",
+        Rule::mc_stmt => "a monte_carlo statement",
+        Rule::mc_vary => "`name scale|offset|in uniform(lo, hi);`",
+        Rule::mc_converged => "`converged |x| <= tol by t;`",
+        Rule::mc_how | Rule::kw_scale | Rule::kw_offset => "`scale`, `offset` or `in`",
+        Rule::kw_by => "`by`",
         Rule::modifier => "a modifier",
         Rule::EOI => "end of item",
         Rule::item => "an item (`const`, `state`, `rule`, ...)",
@@ -593,6 +599,14 @@ impl Cx {
                 let value = self.expr(next(&mut parts, span)?)?;
                 Ok(SimStmt::Signal { name, param, value })
             }
+            Rule::monte_carlo_block => {
+                let mspan = self.span(&s);
+                let stmts = s
+                    .into_inner()
+                    .map(|p| self.mc_stmt(p))
+                    .collect::<PResult<_>>()?;
+                Ok(SimStmt::MonteCarlo(stmts, mspan))
+            }
             _ => {
                 let dspan = self.span(&s);
                 let mut stmts = Vec::new();
@@ -616,6 +630,46 @@ impl Cx {
                 Ok(SimStmt::Dynamics(stmts, dspan))
             }
         }
+    }
+}
+
+impl Cx {
+    fn mc_stmt(&self, p: Pair<Rule>) -> PResult<McStmt> {
+        let span = self.span(&p);
+        let s = first(p, span)?;
+        let rule = s.as_rule();
+        if rule == Rule::setting {
+            return Ok(McStmt::Setting(self.setting(s)?));
+        }
+        let mut parts = s.into_inner();
+        if rule == Rule::mc_vary {
+            let name = self.ident(next(&mut parts, span)?);
+            let how_pair = next(&mut parts, span)?;
+            let how_span = self.span(&how_pair);
+            let how = match how_pair.as_str() {
+                "scale" => Vary::Scale,
+                "offset" => Vary::Offset,
+                _ => Vary::In,
+            };
+            let dist = self.expr(next(&mut parts, span)?)?;
+            return Ok(McStmt::Vary {
+                name,
+                how: Spanned::new(how, how_span),
+                dist,
+                span,
+            });
+        }
+        let mut parts =
+            parts.filter(|q| q.as_rule() != Rule::kw_converged && q.as_rule() != Rule::kw_by);
+        let signal = self.ident(next(&mut parts, span)?);
+        let tol = self.expr(next(&mut parts, span)?)?;
+        let by = self.expr(next(&mut parts, span)?)?;
+        Ok(McStmt::Converged {
+            signal,
+            tol,
+            by,
+            span,
+        })
     }
 }
 
