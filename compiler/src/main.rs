@@ -77,9 +77,17 @@ enum Command {
     /// over the step limit of docs/limits.md); 2 usage or I/O error (a non-positive or too long
     /// --horizon, a non-finite --x0); 3 design not certified; 4 the run went non-finite, diverged
     /// (V = x'Px ended above its initial value) or left the premise region (outputs are written).
+    ///
+    /// Monte Carlo: `--monte-carlo [N]` runs N truth plants drawn from the scenario's
+    /// `monte_carlo { }` block (default N: its `runs`) on all cores and writes
+    /// OUT/<controller>.mc.summary.{md,csv,json}, .mc.runs.{csv,json} and plots; `--shard k/K`
+    /// runs the indices i with i mod K == k - 1 and writes OUT/<controller>.mc.shard-k-of-K.json;
+    /// `--merge DIR...` merges shard files into the summary one whole run gives (no spec needed).
+    /// Exit code 4 when some run failed.
     Simulate {
         /// Spec file.
-        spec: PathBuf,
+        #[arg(required_unless_present = "merge")]
+        spec: Option<PathBuf>,
         /// Output folder.
         #[arg(long, default_value = "tsfc-out")]
         out: PathBuf,
@@ -93,6 +101,21 @@ enum Command {
         /// Certified report of the design (default: OUT/<controller>.report.json, if present).
         #[arg(long)]
         report: Option<PathBuf>,
+        /// Run a Monte Carlo campaign of N runs (default: the `runs` of the `monte_carlo` block).
+        #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "0")]
+        monte_carlo: Option<u64>,
+        /// Run only shard k of K of the campaign (run indices i with i mod K == k - 1).
+        #[arg(long, value_name = "k/K", requires = "monte_carlo", value_parser = tsfc::sim::campaign::parse_shard)]
+        shard: Option<(u64, u64)>,
+        /// Campaign seed (default: the scenario's `seed`).
+        #[arg(long, requires = "monte_carlo")]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores).
+        #[arg(long, requires = "monte_carlo")]
+        jobs: Option<usize>,
+        /// Merge the shard files (*.mc.shard-k-of-K.json) found in these folders into OUT.
+        #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["monte_carlo", "x0", "report"])]
+        merge: Option<Vec<PathBuf>>,
     },
 }
 
@@ -112,7 +135,29 @@ fn main() -> ExitCode {
             x0,
             horizon,
             report,
-        } => simulate(&spec, &out, x0, horizon, report.as_deref()),
+            monte_carlo,
+            shard,
+            seed,
+            jobs,
+            merge,
+        } => match (merge, spec) {
+            (Some(dirs), _) => merge_shards(&dirs, &out),
+            (None, Some(spec)) => match monte_carlo {
+                Some(n) => {
+                    let cfg = tsfc::sim::campaign::Config {
+                        runs: (n > 0).then_some(n),
+                        shard: shard.unwrap_or((1, 1)),
+                        seed,
+                        jobs,
+                        progress: true,
+                    };
+                    campaign(&spec, &out, x0, horizon, report.as_deref(), &cfg)
+                }
+                None => simulate(&spec, &out, x0, horizon, report.as_deref()),
+            },
+            // ok: clap requires the spec unless --merge is given.
+            (None, None) => ExitCode::from(2),
+        },
     }
 }
 
@@ -210,16 +255,7 @@ fn simulate(
     /// The run went non-finite, diverged or left the premise region.
     const RUN_FAILED: u8 = 4;
     let run = || -> Result<(tsfc::sim::Outcome, Vec<PathBuf>), tsfc::sim::SimError> {
-        let (prepared, reuse) = tsfc::sim::prepare_reusing(path, report, out)?;
-        match reuse {
-            tsfc::sim::Reuse::Reused(r) => eprintln!(
-                "using the certified design of `{}` (same spec sha256; nothing solved)",
-                r.display()
-            ),
-            tsfc::sim::Reuse::Recompiled(why) => {
-                eprintln!("note: {why}; compiled the design")
-            }
-        }
+        let prepared = prepare(path, report, out)?;
         let opts = tsfc::sim::Options {
             x0,
             horizon,
@@ -259,16 +295,103 @@ fn simulate(
                 ExitCode::from(RUN_FAILED)
             }
         }
-        Err(e) => {
-            // Rendered spec diagnostics carry their own `error:` lines.
-            let rendered = e.message.starts_with("error") || e.message.starts_with("warning");
-            eprint!("{}{}", if rendered { "" } else { "error: " }, e.message);
-            if !e.message.ends_with('\n') {
-                eprintln!();
-            }
-            ExitCode::from(e.exit_code())
-        }
+        Err(e) => report_error(&e),
     }
+}
+
+/// Prints a pipeline error (rendered diagnostics carry their own `error:` lines).
+fn report_error(e: &tsfc::sim::SimError) -> ExitCode {
+    let rendered = e.message.starts_with("error") || e.message.starts_with("warning");
+    eprint!("{}{}", if rendered { "" } else { "error: " }, e.message);
+    if !e.message.ends_with('\n') {
+        eprintln!();
+    }
+    ExitCode::from(e.exit_code())
+}
+
+/// Loads the certified design of `path` (reusing a matching report).
+fn prepare(
+    path: &std::path::Path,
+    report: Option<&std::path::Path>,
+    out: &std::path::Path,
+) -> Result<tsfc::sim::Prepared, tsfc::sim::SimError> {
+    let (prepared, reuse) = tsfc::sim::prepare_reusing(path, report, out)?;
+    match reuse {
+        tsfc::sim::Reuse::Reused(r) => eprintln!(
+            "using the certified design of `{}` (same spec sha256; nothing solved)",
+            r.display()
+        ),
+        tsfc::sim::Reuse::Recompiled(why) => eprintln!("note: {why}; compiled the design"),
+    }
+    Ok(prepared)
+}
+
+/// Prints a campaign summary and the files written; exit 4 when a run failed.
+fn campaign_done(s: &tsfc::sim::campaign::summary::Summary, files: &[PathBuf]) -> ExitCode {
+    eprintln!(
+        "monte carlo `{}`: {} runs, {} converged ({:.2} %), {} failed",
+        s.name,
+        s.runs,
+        s.converged,
+        100.0 * s.fraction_converged,
+        s.failed
+    );
+    for f in files {
+        eprintln!("  wrote                {}", f.display());
+    }
+    if s.failed == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(4)
+    }
+}
+
+fn campaign(
+    path: &std::path::Path,
+    out: &std::path::Path,
+    x0: Option<Vec<f64>>,
+    horizon: Option<f64>,
+    report: Option<&std::path::Path>,
+    cfg: &tsfc::sim::campaign::Config,
+) -> ExitCode {
+    use tsfc::sim::campaign;
+    let run = || -> Result<ExitCode, tsfc::sim::SimError> {
+        let prepared = prepare(path, report, out)?;
+        let opts = tsfc::sim::Options {
+            x0,
+            horizon,
+            ..tsfc::sim::Options::default()
+        };
+        let started = std::time::Instant::now();
+        let part = campaign::run_campaign(&prepared, &opts, cfg)?;
+        let wall = started.elapsed().as_secs_f64();
+        eprintln!(
+            "ran {} runs (shard {}/{}) in {wall:.2} s ({:.3} s per run on {} threads)",
+            part.runs.len(),
+            part.shard.0,
+            part.shard.1,
+            wall / part.runs.len().max(1) as f64,
+            cfg.jobs
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        );
+        if part.shard.1 > 1 {
+            let f = campaign::write_shard(&part, out)?;
+            eprintln!("  wrote                {}", f.display());
+            return Ok(ExitCode::SUCCESS);
+        }
+        let (s, files) = campaign::write_campaign(&part, out)?;
+        Ok(campaign_done(&s, &files))
+    };
+    run().unwrap_or_else(|e| report_error(&e))
+}
+
+fn merge_shards(dirs: &[PathBuf], out: &std::path::Path) -> ExitCode {
+    let run = || -> Result<ExitCode, tsfc::sim::SimError> {
+        let part = tsfc::sim::campaign::merge_dirs(dirs)?;
+        let (s, files) = tsfc::sim::campaign::write_campaign(&part, out)?;
+        Ok(campaign_done(&s, &files))
+    };
+    run().unwrap_or_else(|e| report_error(&e))
 }
 
 fn check(specs: &[PathBuf], format: Format) -> ExitCode {

@@ -12,6 +12,10 @@ pub const MAX_STEPS: u64 = 10_000_000;
 /// whole run; a system that needs more is too stiff for it.
 pub const MAX_ADAPTIVE_STEPS: u64 = 10 * MAX_STEPS;
 
+/// Most steps of a Monte Carlo campaign over all its runs (each run is also
+/// bounded by [`MAX_STEPS`]): `runs * steps per run`, about a day of one core.
+pub const MAX_CAMPAIGN_STEPS: u64 = 100_000_000_000;
+
 /// Most points per plotted series (samples, transmission instants, gaps).
 pub const MAX_PLOT_POINTS: usize = 4000;
 

@@ -15,6 +15,7 @@
 //! region ([`region`]) are counted; errors caused by a spec item point into
 //! the spec ([`source`]).
 
+pub mod campaign;
 pub mod controller;
 pub mod csv;
 pub mod integrator;
@@ -33,7 +34,7 @@ pub mod trigger;
 
 pub use metrics::{Metrics, Trace};
 pub use reuse::{prepare_reusing, Reuse};
-pub use scenario::{run, Outcome};
+pub use scenario::{run, run_truth, Outcome};
 
 use crate::model::TsModel;
 use crate::tables::Tables;

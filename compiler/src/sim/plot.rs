@@ -21,7 +21,8 @@ use super::SimError;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-const SIZE: (u32, u32) = (1000, 700);
+/// Figure size in pixels.
+pub(crate) const SIZE: (u32, u32) = (1000, 700);
 
 #[derive(Clone, Copy)]
 enum Figure {
@@ -39,7 +40,8 @@ struct Panel {
     dots: Series,
 }
 
-fn colour(i: usize) -> RGBColor {
+/// The `i`-th colour of the plots' palette.
+pub(crate) fn colour(i: usize) -> RGBColor {
     const C: [RGBColor; 6] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
@@ -195,6 +197,11 @@ fn png(fig: Figure, o: &Outcome) -> Result<Vec<u8>, SimError> {
         let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
         draw(&root, fig, o)?;
     }
+    encode_png(&rgb, SIZE)
+}
+
+/// An RGB buffer of `size` as PNG bytes.
+pub(crate) fn encode_png(rgb: &[u8], (w, h): (u32, u32)) -> Result<Vec<u8>, SimError> {
     let mut out = Vec::new();
     {
         let mut enc = png::Encoder::new(&mut out, w, h);
@@ -203,7 +210,7 @@ fn png(fig: Figure, o: &Outcome) -> Result<Vec<u8>, SimError> {
         let mut wr = enc
             .write_header()
             .map_err(|e| SimError::usage(format!("png: {e}")))?;
-        wr.write_image_data(&rgb)
+        wr.write_image_data(rgb)
             .map_err(|e| SimError::usage(format!("png: {e}")))?;
     }
     Ok(out)

@@ -236,14 +236,31 @@ pub fn plan<'a>(
 pub fn run(
     prepared: &Prepared,
     opts: &Options,
+    csv: Option<&mut dyn Write>,
+) -> Result<Outcome, SimError> {
+    run_truth(prepared, &prepared.model.spec, opts, csv, None)
+}
+
+/// What sees every sampling instant of a run (time, plant state, held command).
+pub type Observer<'o> = &'o mut dyn FnMut(f64, &[f64], &[f64]);
+
+/// [`run`] with the truth plant and disturbance signals of `truth` (the
+/// design's spec with perturbed constants or signals: the controller, the
+/// scenario's settings and the certificate stay those of `prepared`), and an
+/// `observer` of every sampling instant.
+pub fn run_truth(
+    prepared: &Prepared,
+    truth: &tsf_lang::Spec,
+    opts: &Options,
     mut csv: Option<&mut dyn Write>,
+    mut observer: Option<Observer<'_>>,
 ) -> Result<Outcome, SimError> {
     let started = Instant::now();
     let (model, tables) = (&prepared.model, &prepared.tables);
     let spec = &model.spec;
     let n = spec.n();
     let m = spec.m();
-    let mut plant = Plant::new(spec, &prepared.source, opts.evaluator)?;
+    let mut plant = Plant::new(truth, &prepared.source, opts.evaluator)?;
     let dim = plant.dim();
     let plan = plan(prepared, opts, dim)?;
     let (t0, t1, h) = (plan.t0, plan.t1, plan.h);
@@ -267,7 +284,7 @@ pub fn run(
     let region = Region::new(model, tables);
     let mut premises = Premises::new(tables, opts.evaluator);
     let mut z = vec![0.0; tables.p];
-    let mut signals = Signals::new(spec, &prepared.source, opts.evaluator);
+    let mut signals = Signals::new(truth, &prepared.source, opts.evaluator);
     let mut u = vec![0.0; m];
     let trace = Trace {
         state_names: tables
@@ -315,6 +332,9 @@ pub fn run(
             no_rule,
             in_region,
         });
+        if let Some(obs) = observer.as_mut() {
+            obs(t, &x, &u);
+        }
         if let Some(out) = csv.as_mut() {
             super::csv::row(*out, t, &x, &u, sent).map_err(write_err)?;
         }

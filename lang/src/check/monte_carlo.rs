@@ -138,16 +138,11 @@ impl Checker<'_> {
                     let tol_v = self.positive(tol, "the convergence bound");
                     let by_v = self.scalar(by, "the convergence time");
                     if let Some(b) = by_v {
-                        if !(b.is_finite() && b > time.0 && b <= time.1) {
+                        if !(b.is_finite() && b > time.0) {
                             self.err(
-                                Diagnostic::error(
-                                    by.span,
-                                    "the convergence time is outside the time span",
-                                )
-                                .with_label(format!(
-                                    "the scenario runs from {} to {} s",
-                                    time.0, time.1
-                                )),
+                                Diagnostic::error(by.span, "the convergence time must be after the start")
+                                    .with_label(format!("the scenario starts at {} s", time.0))
+                                    .with_help("a time in seconds; it may lie past the spec's span when `--horizon` extends it"),
                             );
                             ok = false;
                         }
@@ -418,11 +413,11 @@ mod tests {
         let (m, _) = only_error(&format!("{SIM} monte_carlo {{ runs = 3; }} }}"));
         assert_eq!(m, "`monte_carlo` needs a convergence rule");
         let (m, at) = only_error(&format!(
-            "{SIM} monte_carlo {{ converged |x| <= 1 by 11; }} }}"
+            "{SIM} monte_carlo {{ converged |x| <= 1 by -1; }} }}"
         ));
         assert_eq!(
             (m.as_str(), at.as_str()),
-            ("the convergence time is outside the time span", "11")
+            ("the convergence time must be after the start", "-1")
         );
     }
 }
