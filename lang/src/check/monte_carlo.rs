@@ -217,6 +217,8 @@ impl Checker<'_> {
                         .flat_map(|d| d.consts.iter().map(|(c, _)| c.as_str())),
                 );
                 names.extend(self.disturbances.iter().map(|d| d.name.as_str()));
+                names[1..].sort_unstable();
+                names.dedup();
                 self.err(
                     unknown_choice(
                         at,

@@ -136,6 +136,15 @@ pub fn run_campaign(
         };
         run_truth(prepared, spec, &quiet, None, Some(&mut obs))?;
     }
+    for k in 1..nominal.len() {
+        if nominal[k].iter().all(|v| v.is_nan()) {
+            nominal[k] = nominal[k - 1].clone();
+        }
+    }
+    let nominal: Vec<Vec<Option<f64>>> = nominal
+        .into_iter()
+        .map(|r| r.into_iter().map(|v| v.is_finite().then_some(v)).collect())
+        .collect();
 
     let indices: Vec<u64> = (k - 1..runs).step_by(kk as usize).collect();
     let count = indices.len() as u64;

@@ -95,9 +95,7 @@ fn draw_envelope<DB: DrawingBackend>(
             }
         }
         for (c, &i) in idx.iter().enumerate() {
-            let line = (0..bins)
-                .filter(|&k| p.nominal.get(k).is_some_and(|r| r[i].is_finite()))
-                .map(|k| (mid(k), p.nominal[k][i]));
+            let line = (0..bins).filter_map(|k| Some((mid(k), (*p.nominal.get(k)?.get(i)?)?)));
             chart
                 .draw_series(LineSeries::new(line, colour(c).stroke_width(2)))
                 .map_err(err)?;

@@ -143,8 +143,9 @@ pub struct Partial {
     pub runs: Vec<RunRecord>,
     /// The shard's state envelope.
     pub envelope: Envelope,
-    /// The nominal run (no perturbation) per bin: its last sample in the bin.
-    pub nominal: Vec<Vec<f64>>,
+    /// The nominal run (no perturbation) per bin: its last sample in the bin
+    /// (the previous bin's where none fell; `None`: not finite).
+    pub nominal: Vec<Vec<Option<f64>>>,
 }
 
 impl Partial {
