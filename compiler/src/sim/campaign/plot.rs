@@ -7,7 +7,7 @@
 //!   a line of the same colour, a grey line at zero;
 //! - `settle`: histogram of the settle times of the runs that settled (30
 //!   bins from the smallest to the largest), a red line at the declared
-//!   convergence time;
+//!   convergence time when it falls inside that range;
 //! - `transmissions`: histogram of the transmission counts per run (30 bins).
 
 use super::summary::Partial;
@@ -111,7 +111,6 @@ fn draw_histogram<DB: DrawingBackend>(
 ) -> Result<(), SimError> {
     let (mut lo, mut hi) = values
         .iter()
-        .chain(mark.iter())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
@@ -144,7 +143,7 @@ fn draw_histogram<DB: DrawingBackend>(
             Rectangle::new([(x, 0.0), (x + w, c as f64)], colour(0).filled())
         }))
         .map_err(err)?;
-    if let Some(m) = mark {
+    if let Some(m) = mark.filter(|m| (lo..=hi).contains(m)) {
         chart
             .plotting_area()
             .draw(&PathElement::new(

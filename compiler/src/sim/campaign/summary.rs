@@ -325,7 +325,11 @@ pub fn summarize(p: &Partial) -> Summary {
 
 fn fmt_spread(s: &Option<Spread>, unit: &str) -> [String; 4] {
     match s {
-        Some(s) => [s.min, s.median, s.p95, s.max].map(|v| format!("{v:.4}{unit}")),
+        Some(s) => [s.min, s.median, s.p95, s.max].map(|v| match unit {
+            "" => format!("{v}"),
+            " s" => format!("{v:.3} s"),
+            _ => format!("{v:.3e}"),
+        }),
         None => std::array::from_fn(|_| "-".to_string()),
     }
 }
@@ -381,14 +385,14 @@ impl Summary {
         for (name, spread, unit) in [
             ("settle time", &self.settle_time_s, " s"),
             ("transmissions", &self.transmissions, ""),
-            ("final norm", &self.final_norm, ""),
+            ("final norm", &self.final_norm, "e"),
         ] {
             for (l, v) in labels.iter().zip(fmt_spread(spread, unit)) {
                 rows.push((format!("{name} {l}"), v));
             }
         }
         rows.push((
-            "worst |u| per channel".into(),
+            "worst abs(u) per channel".into(),
             self.worst_abs_u
                 .iter()
                 .map(|u| format!("{u:.4}"))
