@@ -111,9 +111,14 @@ impl Envelope {
     /// The union with `other` (associative and commutative: the result does
     /// not depend on how runs were grouped).
     pub fn merge(&mut self, other: &Envelope) {
-        for (k, (lo, hi)) in other.lo.iter().zip(&other.hi).enumerate() {
-            self.add(k, lo);
-            self.add(k, hi);
+        let bins = self.lo.iter_mut().zip(self.hi.iter_mut());
+        for ((lo, hi), (olo, ohi)) in bins.zip(other.lo.iter().zip(&other.hi)) {
+            for (l, o) in lo.iter_mut().zip(olo) {
+                *l = l.min(*o);
+            }
+            for (h, o) in hi.iter_mut().zip(ohi) {
+                *h = h.max(*o);
+            }
         }
     }
 }
