@@ -6,6 +6,7 @@
 use super::{Checker, Dims, Draft};
 use crate::ast::{Ident, Item, ItemKind, NamedArg};
 use crate::diag::Diagnostic;
+use crate::display::literal;
 use crate::eval::Mat;
 use crate::span::Span;
 use crate::spec::TriggerSynthesis;
@@ -13,9 +14,12 @@ use crate::spec::TriggerSynthesis;
 /// The name of the gain in a rule.
 pub(super) const GAIN: &str = "F";
 
-/// "a 1x2 matrix (inputs x states)".
+/// The largest gain written out in a "write this instead" hint.
+const HINT_ENTRIES: usize = 12;
+
+/// "1x2, one row per input and one column per state".
 fn shape_words(rows: usize, cols: usize) -> String {
-    format!("{rows}x{cols}: one row per input, one column per state")
+    format!("{rows}x{cols}, one row per input and one column per state")
 }
 
 /// The `F = ...` of a rule item, if it gives one.
@@ -46,7 +50,14 @@ impl Checker<'_> {
         .with_label(format!("{}x{} matrix", v.nrows(), v.ncols()))
         .with_note(format!("u = F x: F is {}", shape_words(rows, cols)));
         if (v.nrows(), v.ncols()) == (cols, rows) && rows != cols {
-            d = d.with_help("this looks transposed: write its transpose, e.g. `F = [..]'`");
+            d = d.with_help(if v.len() <= HINT_ENTRIES {
+                format!(
+                    "this looks transposed: write `F = {}`",
+                    literal(&v.transpose())
+                )
+            } else {
+                "this looks transposed: write its transpose (`[..]'`)".to_string()
+            });
         } else if v.nrows() == 1 && v.len() == rows * cols && rows > 1 {
             d = d.with_help(
                 "rows are separated by `;` (`[a, b; c, d]`); `[[a, b], [c, d]]` puts the blocks side by side",
@@ -93,7 +104,7 @@ impl Checker<'_> {
         }
         let (m, n) = self.gain_shape();
         self.err(d.with_help(format!(
-            "give `F = ...` ({}) in every rule, or remove `F` from every rule to synthesize the gains",
+            "give every rule its `F = ...` ({}), or remove `F` from every rule to synthesize the gains",
             shape_words(m, n)
         )));
     }
@@ -166,7 +177,7 @@ mod tests {
             .0
             .help
             .as_deref()
-            .is_some_and(|h| h.contains("transposed")));
+            .is_some_and(|h| h.contains("transposed: write `F = [-1, -2]`")));
         let (m, _) = only_error_of(&two_rules("F = [-1, -2, 3]", "F = [-1, -2]"));
         assert_eq!(m, "the gain `F` of rule R1 must be 1x2, but this is 1x3");
         let (m, _) = only_error_of(&two_rules("F = [1, 2], F = [1, 2]", "F = [-1, -2]"));
