@@ -12,6 +12,12 @@ use crate::spec::{ClauseSet, Premise, RuleClause, RuleSpec};
 use crate::suggest::suggest;
 use std::collections::HashMap;
 
+/// What a rule gives directly: model matrices by name, and its gain `F`.
+struct RuleMatrices {
+    overrides: Vec<(String, Mat, Span)>,
+    gain: Option<(Mat, Span)>,
+}
+
 /// One clause of a rule's premise, comparable and hashable: the premise's
 /// index and the set's index or the bits of its `about` point.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -73,7 +79,8 @@ impl Checker<'_> {
             if at.is_some() && at_point.is_none() {
                 ok = false;
             }
-            let (overrides, gain, matrices_ok) = self.overrides(name, matrices, dims);
+            let (RuleMatrices { overrides, gain }, matrices_ok) =
+                self.overrides(name, matrices, dims);
             if !(ok && matrices_ok) {
                 continue;
             }
@@ -300,7 +307,7 @@ impl Checker<'_> {
         name: &Ident,
         matrices: &[NamedArg],
         dims: Dims,
-    ) -> (Vec<(String, Mat, Span)>, Option<(Mat, Span)>, bool) {
+    ) -> (RuleMatrices, bool) {
         let Dims { n, m, q } = dims;
         let mut ok = true;
         let mut overrides = Vec::new();
@@ -371,7 +378,7 @@ impl Checker<'_> {
             }
             overrides.push((mat.name.node.clone(), v, mat.value.span));
         }
-        (overrides, gain, ok)
+        (RuleMatrices { overrides, gain }, ok)
     }
 }
 
