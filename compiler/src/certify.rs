@@ -98,8 +98,24 @@ fn margins_of(
         .collect())
 }
 
-/// Checks `design` against the full set of conditions of its plan.
+/// Checks `design` against the full set of conditions of its plan. With
+/// given gains the conditions are rebuilt with the rules' F_j (never a gain
+/// recovered from the solution), and the design must carry exactly those.
 pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthError> {
+    if let Some(given) = model.spec.given_gains() {
+        let same = given.len() == design.gains.len()
+            && given.iter().zip(&design.gains).all(|(f, g)| {
+                f.shape() == g.shape()
+                    && f.iter()
+                        .zip(g.iter())
+                        .all(|(a, b)| a.to_bits() == b.to_bits())
+            });
+        if !same {
+            return Err(SynthError::Internal(
+                "internal error: the design's gains are not the rules' given gains".into(),
+            ));
+        }
+    }
     let built = build(
         model,
         &design.plan,

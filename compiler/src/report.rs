@@ -155,6 +155,37 @@ pub struct SampledReport {
     pub p: Vec<Vec<f64>>,
 }
 
+/// One objective's verdict for given gains (analysis mode).
+#[derive(Debug, Serialize)]
+pub struct VerdictReport {
+    /// The objective (or loop) in the spec's words.
+    pub objective: String,
+    /// Whether the given gains are certified for it.
+    pub certified: bool,
+    /// The quantity of `value` (`hinf_gamma`, `decay_rate`, ...), if any.
+    pub quantity: Option<&'static str>,
+    /// Certified: the certified value; not certified: the best value the
+    /// gains certify for it alone, if any.
+    pub value: Option<f64>,
+    /// `together` (with every other objective, one common P) or `alone`.
+    pub judged: &'static str,
+    /// Why it is not certified, when more than its value.
+    pub note: Option<String>,
+}
+
+impl From<&crate::synth::Verdict> for VerdictReport {
+    fn from(v: &crate::synth::Verdict) -> Self {
+        VerdictReport {
+            objective: v.objective.clone(),
+            certified: v.certified,
+            quantity: v.quantity.map(|q| q.key()),
+            value: v.value,
+            judged: if v.together { "together" } else { "alone" },
+            note: v.note.clone(),
+        }
+    }
+}
+
 /// Why there is no certified design.
 #[derive(Debug, Serialize)]
 pub struct Diagnosis {
@@ -183,6 +214,11 @@ pub struct Report {
     pub rules: usize,
     /// `certified`, `infeasible` or `refused`.
     pub status: &'static str,
+    /// `synthesis` (tsfc designs the gains) or `analysis` (the rules give
+    /// them; tsfc certifies the objectives for them).
+    pub mode: &'static str,
+    /// Per-objective verdicts of an analysis (empty for a synthesis).
+    pub verdicts: Vec<VerdictReport>,
     /// Relaxation used.
     pub relaxation: String,
     /// Margin eps of strict LMIs.
@@ -295,6 +331,15 @@ pub fn report(
                 achievable: achievable.clone(),
             }),
         ),
+        Err(SynthError::NotCertified { message, verdicts }) => (
+            "refused",
+            None,
+            None,
+            Some(Diagnosis {
+                message: message.clone(),
+                achievable: verdicts.iter().map(|v| v.to_string()).collect(),
+            }),
+        ),
         Err(e) => (
             "refused",
             None,
@@ -304,6 +349,13 @@ pub fn report(
                 achievable: Vec::new(),
             }),
         ),
+    };
+    let verdicts = match outcome {
+        Ok((d, _)) => d.verdicts.iter().map(VerdictReport::from).collect(),
+        Err(SynthError::NotCertified { verdicts, .. }) => {
+            verdicts.iter().map(VerdictReport::from).collect()
+        }
+        Err(_) => Vec::new(),
     };
     let certified = status == "certified";
     let mut problem = BTreeMap::new();
@@ -335,6 +387,12 @@ pub fn report(
         q: model.q,
         rules: model.r(),
         status,
+        mode: if crate::synth::given::analysis(model) {
+            "analysis"
+        } else {
+            "synthesis"
+        },
+        verdicts,
         relaxation: model.spec.relaxation.node.to_string(),
         lmi_margin_eps: design.map(|d| d.eps),
         objectives: design.map(|d| objectives(model, d)).unwrap_or_default(),

@@ -63,11 +63,7 @@ impl Runner<'_> {
             return Ok(Attempt::Trouble(SolveStatus::NumericalError));
         };
         let p = chol.inverse();
-        let gains = built
-            .m
-            .iter()
-            .map(|&mv| values_of(mv).map(|m| chol.solve(&m.transpose()).transpose()))
-            .collect::<Result<Vec<_>, _>>()?;
+        let gains = built.gains(values_of, &chol)?;
         let values = built
             .problem
             .vars()
@@ -92,6 +88,7 @@ impl Runner<'_> {
             approximate,
             trigger: None,
             sampled: None,
+            verdicts: Vec::new(),
         })))
     }
 

@@ -114,7 +114,7 @@ impl Objective for Linf {
                 vec![
                     Some(Expr::var(ctx.x).scale(phi)?),
                     None,
-                    Some(ch.output_map(ctx.x, ctx.m[j], n)?.transpose()),
+                    Some(ch.output_map(ctx.x, &ctx.m[j], n)?.transpose()),
                 ],
                 vec![
                     None,
