@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# Flight audit of the generated C (issue 18): for every shipped spec, in f64 and f32,
+#  - cross-compiles the generated controller, sensor and runtime files for a Cortex-M4
+#    with hardware single-precision floats (arm-none-eabi-gcc -Os, -fstack-usage);
+#  - reports .text / .rodata / .data / .bss per build and the stack: the largest frame and
+#    a whole-program bound (the sum of every frame: the generated code has no recursion and
+#    no function pointers, so no call chain can use more);
+#  - runs cppcheck's MISRA C:2012 addon on the generated files and lists the deviations by
+#    rule; every rule that occurs must have a written rationale in misra-rationale.md;
+#  - enforces the budgets below (exit 1 when one is exceeded or a deviation has no rationale).
+# Needs: a built `tsfc` (release), gcc-arm-none-eabi and cppcheck (Debian packages).
+# Usage: tests/audit/flight_audit.sh [OUT.md]   (the markdown table also goes to stdout);
+#        AUDIT_SPECS='specs/a.tsf specs/b.tsf' audits those specs only (default: specs/*.tsf).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+here=tests/audit
+out_md=${1:-}
+
+# Budgets (bytes): per build, controller + runtime objects (conservative: unused runtime
+# functions are counted too); the stack bound is the sum of every frame.
+TEXT_BUDGET_ZHANG=4096
+STACK_BUDGET=256
+
+tsfc=target/release/tsfc
+[ -x "$tsfc" ] || cargo build --release -p tsfc --quiet
+for tool in arm-none-eabi-gcc arm-none-eabi-size cppcheck; do
+    command -v "$tool" >/dev/null || { echo "audit: $tool not found (apt-get install gcc-arm-none-eabi cppcheck)" >&2; exit 2; }
+done
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cflags=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -Os -std=c99
+        -ffunction-sections -fdata-sections -fstack-usage -Wall -Wextra -Werror -c)
+
+# Sum of the sizes of the sections whose names start with $2 in object $1 (SysV format).
+section_sum() {
+    arm-none-eabi-size -A "$1" | awk -v p="$2" '$1 == p || index($1, p ".") == 1 { s += $2 } END { print s + 0 }'
+}
+
+status=0
+rows=()
+declare -A misra_count
+for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
+    name=$(basename "$spec" .tsf)
+    for precision in f64 f32; do
+        dir="$work/$name-$precision"
+        mkdir -p "$dir"
+        src="$dir/$name.tsf"
+        if grep -q '^precision ' "$spec"; then
+            sed "s/^precision .*;/precision $precision;/" "$spec" > "$src"
+        else
+            { cat "$spec"; echo "precision $precision;"; } > "$src"
+        fi
+        if ! "$tsfc" compile "$src" --out "$dir/gen" > "$dir/compile.log" 2>&1; then
+            echo "audit: $name ($precision) did not compile as certified:" >&2
+            tail -5 "$dir/compile.log" >&2
+            status=1
+            continue
+        fi
+        text=0; rodata=0; data=0; bss=0
+        for c in "$dir"/gen/*.c; do
+            o="$dir/$(basename "$c" .c).o"
+            arm-none-eabi-gcc "${cflags[@]}" -I"$dir/gen" "$c" -o "$o"
+            text=$((text + $(section_sum "$o" .text)))
+            rodata=$((rodata + $(section_sum "$o" .rodata)))
+            data=$((data + $(section_sum "$o" .data)))
+            bss=$((bss + $(section_sum "$o" .bss)))
+        done
+        read -r frame_max frame_sum dynamic < <(cat "$dir"/*.su | awk -F'\t' '
+            { if ($2 > m) m = $2; s += $2; if ($3 !~ /^static/) d = d " " $1 }
+            END { print m + 0, s + 0, (d == "" ? "none" : "yes") }')
+        # MISRA C:2012 on the generated files (the runtime is audited with them).
+        cppcheck --addon=misra --std=c99 --quiet --error-exitcode=0 \
+            --template='{id}' "$dir"/gen/*.c "$dir"/gen/*.h 2> "$dir/misra.txt" || true
+        rules=$(grep -o 'misra-c2012-[0-9.]*' "$dir/misra.txt" | sed 's/misra-c2012-//' | sort -V | uniq -c |
+                awk '{ printf "%s%s x%s", (NR > 1 ? ", " : ""), $2, $1 }')
+        while read -r count rule; do
+            [ -n "$rule" ] || continue
+            misra_count[$rule]=$(( ${misra_count[$rule]:-0} + count ))
+        done < <(grep -o 'misra-c2012-[0-9.]*' "$dir/misra.txt" | sed 's/misra-c2012-//' | sort | uniq -c)
+        rows+=("| $name | $precision | $text | $rodata | $data | $bss | $frame_max | $frame_sum | ${rules:-none} |")
+        if [ "$dynamic" != none ]; then
+            echo "audit: $name ($precision): a stack frame is not static" >&2
+            status=1
+        fi
+        if [ "$frame_sum" -gt "$STACK_BUDGET" ]; then
+            echo "audit: $name ($precision): stack bound $frame_sum B over the budget $STACK_BUDGET B" >&2
+            status=1
+        fi
+        if [[ "$name" == zhang2013* ]] && [ "$text" -gt "$TEXT_BUDGET_ZHANG" ]; then
+            echo "audit: $name ($precision): .text $text B over the budget $TEXT_BUDGET_ZHANG B" >&2
+            status=1
+        fi
+    done
+done
+
+{
+    echo "| spec | precision | .text B | .rodata B | .data B | .bss B | largest frame B | stack bound B | MISRA C:2012 deviations (rule x count) |"
+    echo "|---|---|---:|---:|---:|---:|---:|---:|---|"
+    printf '%s\n' "${rows[@]}"
+    echo
+    echo "Compiler: $(arm-none-eabi-gcc --version | head -1); flags: ${cflags[*]}"
+    echo "cppcheck: $(cppcheck --version)"
+} | tee "${out_md:-/dev/null}"
+
+for rule in "${!misra_count[@]}"; do
+    if ! grep -q "^| $rule |" "$here/misra-rationale.md"; then
+        echo "audit: MISRA rule $rule (${misra_count[$rule]} deviations) has no rationale in $here/misra-rationale.md" >&2
+        status=1
+    fi
+done
+exit $status
