@@ -83,7 +83,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
                 let pt = format_ident!("POINT_{}", k + 1);
                 let len = Literal::usize_unsuffixed(point.len());
                 let vals = array(point, prec);
-                let doc = format!("Operating point of `about` term {k}.");
+                let doc = format!(" Operating point of `about` term {k} of `TABLE.terms`.");
                 statics.push(quote! {
                     #[doc = #doc]
                     #[allow(clippy::approx_constant, clippy::excessive_precision)]
@@ -101,7 +101,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         let count = Literal::usize_unsuffixed(indices.len());
         let items = indices.iter().map(|k| Literal::usize_unsuffixed(*k));
         let doc = format!(
-            "Premise of rule {}: indices into `TABLE.terms`, multiplied in order.",
+            " Premise of rule {}: indices into `TABLE.terms`, multiplied in order.",
             t.rule_names.get(ri).map_or("?", String::as_str)
         );
         statics.push(quote! {
