@@ -194,7 +194,7 @@ pub fn normalize<T: Real, const R: usize>(w: &[T; R]) -> Option<[T; R]> {
     let mut s = T::ZERO;
     for (hi, &wi) in h.iter_mut().zip(w) {
         *hi = if wi > T::ZERO { wi } else { T::ZERO };
-        s = s + *hi;
+        s += *hi;
     }
     // `s > 0` and finite; NaN fails both comparisons.
     if !(s > T::ZERO && s <= T::MAX) {
@@ -260,11 +260,10 @@ pub fn blend<T: Real, const N: usize, const M: usize, const R: usize>(
 ) -> [T; M] {
     let mut u = [T::ZERO; M];
     for (&hj, fj) in h.iter().zip(gains) {
-        if !(hj > T::ZERO) {
-            continue;
-        }
-        for (us, row) in u.iter_mut().zip(fj) {
-            *us += hj * dot(row, x);
+        if hj > T::ZERO {
+            for (us, row) in u.iter_mut().zip(fj) {
+                *us += hj * dot(row, x);
+            }
         }
     }
     u
