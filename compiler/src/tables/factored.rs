@@ -34,11 +34,6 @@ impl FactoredTerms {
         }
         out
     }
-
-    /// The longest rule premise (number of terms).
-    pub fn max_rule_len(&self) -> usize {
-        self.rules.iter().map(Vec::len).max().unwrap_or(0)
-    }
 }
 
 #[cfg(test)]
@@ -67,7 +62,6 @@ mod tests {
             vec![is(0, 0.0), is(1, 0.0), is(1, 5.0), is(0, 5.0)]
         );
         assert_eq!(f.rules, vec![vec![0, 1], vec![0, 2], vec![3, 1], vec![]]);
-        assert_eq!(f.max_rule_len(), 2);
         // Same set on another premise component: a different term.
         let g = FactoredTerms::new(&[vec![is(0, 0.0)], vec![is(1, 0.0)]]);
         assert_eq!(g.terms.len(), 2);
