@@ -5,10 +5,12 @@
 //! loop ([`crate::sim`]).
 
 mod error;
+mod factored;
 mod sensor;
 pub mod sym;
 
 pub use error::TablesError;
+pub use factored::FactoredTerms;
 pub use sensor::{SensorLaw, SensorTables};
 
 use crate::certify::Certificate;
@@ -72,6 +74,9 @@ pub struct Tables {
     pub premise: PremiseCode,
     /// Rule premises.
     pub terms: Vec<Vec<TermSpec>>,
+    /// The rule premises over their distinct terms (what generated code
+    /// evaluates: each distinct term once per step).
+    pub factored: FactoredTerms,
     /// Rule centres (R x P).
     pub centres: Vec<Vec<f64>>,
     /// Gains F_j as rows (R x M x N).
@@ -165,6 +170,7 @@ pub fn tables(
         rule_names: model.rules.iter().map(|r| r.name.clone()).collect(),
         premise,
         terms: model.terms.clone(),
+        factored: FactoredTerms::new(&model.terms),
         centres: model.centers.clone(),
         gains: design
             .gains

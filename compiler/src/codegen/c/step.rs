@@ -10,6 +10,7 @@ impl Gen<'_> {
         let (p, u) = (&self.p, &self.u);
         let real = format!("{u}REAL");
         let pd = self.pd;
+        let dd = self.t.factored.terms.len().max(1);
         format!(
             r#"void {p}init({p}t *s) {{
     int i;
@@ -20,7 +21,8 @@ impl Gen<'_> {
 }}
 
 void {p}step_with_premises({p}t *s, const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
-    s->flags = {u}RT(tsf_step_with_premises)(&{p}tables, x, z, s->h, u);
+    {real} deg[{dd}]; /* degrees of the distinct premise terms */
+    s->flags = {u}RT(tsf_step_with_premises)(&{p}tables, x, z, deg, s->h, u);
 }}
 
 void {p}step({p}t *s, const {real} x[{u}N], {real} u[{u}M]) {{
