@@ -425,7 +425,9 @@ pub fn report(
         },
         p: design.map(|d| rows(&d.p)).unwrap_or_default(),
         stored_precision: cert.as_ref().and_then(|c| c.stored.clone()),
-        stored_precision_certified: cert.as_ref().and_then(|c| c.stored.as_ref().map(|s| s.certified)),
+        stored_precision_certified: cert
+            .as_ref()
+            .and_then(|c| c.stored.as_ref().map(|s| s.certified)),
         certificate: cert,
         reductions: design
             .map(|d| {

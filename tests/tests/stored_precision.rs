@@ -64,7 +64,10 @@ fn stored(c: &Compiled) -> &StoredPrecision {
 #[test]
 fn a_shipped_spec_certifies_in_stored_precision_f64_and_f32() {
     let text = std::fs::read_to_string(spec_path("inverted_pendulum.tsf")).expect("spec");
-    assert_eq!(shipped("inverted_pendulum.tsf").spec.precision, Precision::F64);
+    assert_eq!(
+        shipped("inverted_pendulum.tsf").spec.precision,
+        Precision::F64
+    );
     for precision in ["f64", "f32"] {
         let text = text.replace("precision f64;", &format!("precision {precision};"));
         let c = run("inverted_pendulum.tsf", &text);
@@ -78,11 +81,19 @@ fn a_shipped_spec_certifies_in_stored_precision_f64_and_f32() {
         assert_eq!(s.conditions, cert.lmis.len(), "every LMI re-checked");
         // The gains move by at most one rounding: the margin barely moves.
         let rel = (s.worst_margin - cert.min_margin).abs() / cert.min_margin;
-        assert!(rel < 1e-3, "{precision}: {} vs {}", s.worst_margin, cert.min_margin);
+        assert!(
+            rel < 1e-3,
+            "{precision}: {} vs {}",
+            s.worst_margin,
+            cert.min_margin
+        );
         let m = &s.membership_rounding_bound;
         assert!(m.holds && m.required_margin > 0.0 && m.required_margin < m.available_margin);
         if precision == "f64" {
-            assert_eq!(s.max_relative_rounding, 0.0, "f64 stores every gain exactly");
+            assert_eq!(
+                s.max_relative_rounding, 0.0,
+                "f64 stores every gain exactly"
+            );
         } else {
             let u = f64::from(f32::EPSILON) / 2.0;
             assert!(s.max_relative_rounding > 0.0 && s.max_relative_rounding <= u);
@@ -95,7 +106,10 @@ fn the_constructed_loop_is_stable_in_f64_and_unstable_in_f32() {
     let f32_gain = F.map(|v| f64::from(v as f32));
     assert_ne!(f32_gain, F, "rounding moves the gain");
     let (exact, rounded) = (abscissa(F), abscissa(f32_gain));
-    assert!(exact < 0.0 && exact > -1e-5, "exact gain: max Re eig = {exact:e}");
+    assert!(
+        exact < 0.0 && exact > -1e-5,
+        "exact gain: max Re eig = {exact:e}"
+    );
     assert!(rounded > 0.0, "f32 gain: max Re eig = {rounded:e}");
 }
 
@@ -133,7 +147,10 @@ fn the_same_loop_in_f64_is_certified() {
     assert!(s.certified && s.worst_margin > 0.0, "{s:?}");
     assert_eq!(s.max_relative_rounding, 0.0);
     let cert = c.report.certificate.as_ref().expect("certificate");
-    assert_eq!(s.worst_margin, cert.min_margin, "given gains: the same LMIs");
+    assert_eq!(
+        s.worst_margin, cert.min_margin,
+        "given gains: the same LMIs"
+    );
 }
 
 #[test]

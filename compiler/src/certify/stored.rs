@@ -220,7 +220,10 @@ pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthE
         model.spec.trigger.as_ref().map(|t| &t.node),
         Some(Trigger::Aperiodic { .. })
     );
-    let weight = design.trigger.as_ref().map(|t| stored_mat(&t.weight, precision));
+    let weight = design
+        .trigger
+        .as_ref()
+        .map(|t| stored_mat(&t.weight, precision));
     let max_relative_rounding = design
         .trigger
         .iter()
