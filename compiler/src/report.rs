@@ -232,6 +232,11 @@ pub struct Report {
     pub p: Vec<Vec<f64>>,
     /// Certificate.
     pub certificate: Option<Certificate>,
+    /// The certificate re-checked with the tables as generated code stores
+    /// them (`precision f32` or `f64`), with the membership rounding bound.
+    pub stored_precision: Option<crate::certify::StoredPrecision>,
+    /// Whether the design as stored is certified (`stored_precision.certified`).
+    pub stored_precision_certified: Option<bool>,
     /// Reductions applied to the solved problem.
     pub reductions: Vec<String>,
     /// Search notes.
@@ -302,7 +307,13 @@ pub fn report(
             Some(d),
             Some(c.clone()),
             Some(Diagnosis {
-                message: format!("certificate refused: the worst condition is `{}`", c.worst),
+                message: match c.stored.as_ref().filter(|s| !s.certified) {
+                    Some(s) => format!(
+                        "certificate refused in stored precision {}: `{}` fails with the tables as generated code stores them (margin {:.3e})",
+                        s.precision, s.worst_lmi, s.worst_margin
+                    ),
+                    None => format!("certificate refused: the worst condition is `{}`", c.worst),
+                },
                 achievable: Vec::new(),
             }),
         ),
@@ -413,6 +424,10 @@ pub fn report(
             Vec::new()
         },
         p: design.map(|d| rows(&d.p)).unwrap_or_default(),
+        stored_precision: cert.as_ref().and_then(|c| c.stored.clone()),
+        stored_precision_certified: cert
+            .as_ref()
+            .and_then(|c| c.stored.as_ref().map(|s| s.certified)),
         certificate: cert,
         reductions: design
             .map(|d| {

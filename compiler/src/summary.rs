@@ -53,6 +53,18 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
             cert.worst
         );
     }
+    if let Some(sp) = &r.stored_precision {
+        let _ = writeln!(
+            s,
+            "  stored precision     {}: {}, worst margin {:.3e} at `{}`; membership rounding needs {:.3e} of {:.3e}",
+            sp.precision,
+            if sp.certified { "certified" } else { "NOT certified" },
+            sp.worst_margin,
+            sp.worst_lmi,
+            sp.membership_rounding_bound.required_margin,
+            sp.membership_rounding_bound.available_margin
+        );
+    }
     for red in &r.reductions {
         let _ = writeln!(s, "  reduction            {red}");
     }

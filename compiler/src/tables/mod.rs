@@ -41,6 +41,11 @@ pub struct Header {
     pub objectives: Vec<(String, String)>,
     /// Certificate's minimum margin.
     pub min_margin: f64,
+    /// Floating-point type the tables are stored in.
+    pub precision: Precision,
+    /// Worst margin of the certificate re-checked with the tables as stored
+    /// (`None` if the certificate carries no stored-precision check).
+    pub stored_margin: Option<f64>,
     /// Relaxation used.
     pub relaxation: String,
     /// Certified sampling intervals [h_min, h_max] in s (equal: a period) of a
@@ -158,6 +163,8 @@ pub fn tables(
             spec_sha256: spec_sha256.to_string(),
             objectives: achieved_objectives(&design.achieved),
             min_margin: cert.min_margin,
+            precision: spec.precision,
+            stored_margin: cert.stored.as_ref().map(|s| s.worst_margin),
             relaxation: spec.relaxation.node.to_string(),
             sampling: design.sampled.as_ref().map(|s| s.plan.sampling),
         },
