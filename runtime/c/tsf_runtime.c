@@ -111,7 +111,7 @@ static double tsf_atan_tail(double t) {
 static double tsf_atan_f64(double x) {
     double a;
     double r;
-    if (isnan(x)) {
+    if (isnan(x) != 0) {
         return x;
     }
     a = fabs(x);
@@ -158,7 +158,7 @@ static double tsf_atan_f64(double x) {
 /* ------------------------------------------------------------- triggers */
 
 int tsf_periodic_decide(uint32_t *count, uint32_t every) {
-    const int fire = *count == 0;
+    const int fire = (*count == 0u) ? 1 : 0;
     if (*count != UINT32_MAX) {
         *count = *count + 1u;
     }
@@ -299,7 +299,7 @@ static TSF_R TSF_FN(tsf_clamp01)(TSF_R v) {
 /* (p - q)/(r - s); if r - s overflows, every operand is halved first. */
 static TSF_R TSF_FN(tsf_edge_ratio)(TSF_R p, TSF_R q, TSF_R r, TSF_R s) {
     const TSF_R den = r - s;
-    if (isfinite(den)) {
+    if (isfinite(den) != 0) {
         return (p - q) / den;
     } else {
         const TSF_R ph = p * TSF_C(0.5);
@@ -420,7 +420,7 @@ static int TSF_FN(tsf_nearest_scaled)(const TSF_FN(tsf_controller) *c, const TSF
             d = d + e2;
         }
         better = *found ? d < *best_d : !isnan(d);
-        if (better) {
+        if (better != 0) {
             best = i;
             *best_d = d;
             *found = 1;
@@ -504,7 +504,7 @@ uint8_t TSF_FN(tsf_step_with_premises)(const TSF_FN(tsf_controller) *c, const TS
             flags |= TSF_FLAG_PREMISE_NONFINITE;
         }
     }
-    if (flags & (TSF_FLAG_STATE_NONFINITE | TSF_FLAG_PREMISE_NONFINITE)) {
+    if ((flags & (TSF_FLAG_STATE_NONFINITE | TSF_FLAG_PREMISE_NONFINITE)) != 0u) {
         for (i = 0; i < c->r; i++) {
             h[i] = TSF_C(0);
         }
@@ -582,7 +582,7 @@ static TSF_R TSF_FN(tsf_adaptive_nu)(const TSF_FN(tsf_adaptive_law) *law, TSF_R 
 int TSF_FN(tsf_adaptive_decide)(const TSF_FN(tsf_adaptive_law) *law, const TSF_R *weight,
                                 TSF_R *nu, TSF_R *last, int *has_last, const TSF_R *x, TSF_R *e,
                                 int n) {
-    const int first = !*has_last;
+    const int first = (*has_last == 0) ? 1 : 0;
     if (!TSF_FN(tsf_relative_decide)(weight, *nu, last, has_last, x, e, n)) {
         return 0;
     }
@@ -595,7 +595,7 @@ int TSF_FN(tsf_adaptive_decide)(const TSF_FN(tsf_adaptive_law) *law, const TSF_R
 int TSF_FN(tsf_mixed_decide)(TSF_R beta, TSF_R rho, TSF_R *last, int *has_last,
                              const TSF_R *sigma, TSF_R *d, int n) {
     int k;
-    if (*has_last) {
+    if (*has_last != 0) {
         for (k = 0; k < n; k++) {
             d[k] = last[k] - sigma[k];
         }

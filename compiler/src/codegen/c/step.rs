@@ -36,15 +36,15 @@ uint8_t {p}flags(const {p}t *s) {{
 }}
 
 int {p}is_fault(const {p}t *s) {{
-    return (s->flags & ({u}FLAG_STATE_NONFINITE | {u}FLAG_PREMISE_NONFINITE)) != 0;
+    return (s->flags & ({u}FLAG_STATE_NONFINITE | {u}FLAG_PREMISE_NONFINITE)) != 0u;
 }}
 
 int {p}no_rule_fired(const {p}t *s) {{
-    return (s->flags & {u}FLAG_NO_RULE_FIRED) != 0;
+    return (s->flags & {u}FLAG_NO_RULE_FIRED) != 0u;
 }}
 
 int {p}saturated(const {p}t *s) {{
-    return (s->flags & {u}FLAG_SATURATED) != 0;
+    return (s->flags & {u}FLAG_SATURATED) != 0u;
 }}
 
 const {real} *{p}strengths(const {p}t *s) {{
