@@ -158,7 +158,10 @@ static double tsf_atan_f64(double x) {
 /* ------------------------------------------------------------- triggers */
 
 int tsf_periodic_decide(uint32_t *count, uint32_t every) {
-    const int fire = (*count == 0u) ? 1 : 0;
+    int fire = 0;
+    if (*count == 0u) {
+        fire = 1;
+    }
     if (*count != UINT32_MAX) {
         *count = *count + 1u;
     }
@@ -582,7 +585,10 @@ static TSF_R TSF_FN(tsf_adaptive_nu)(const TSF_FN(tsf_adaptive_law) *law, TSF_R 
 int TSF_FN(tsf_adaptive_decide)(const TSF_FN(tsf_adaptive_law) *law, const TSF_R *weight,
                                 TSF_R *nu, TSF_R *last, int *has_last, const TSF_R *x, TSF_R *e,
                                 int n) {
-    const int first = (*has_last == 0) ? 1 : 0;
+    int first = 0;
+    if (*has_last == 0) {
+        first = 1;
+    }
     if (!TSF_FN(tsf_relative_decide)(weight, *nu, last, has_last, x, e, n)) {
         return 0;
     }

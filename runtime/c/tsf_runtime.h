@@ -28,6 +28,7 @@
 #define TSF_RUNTIME_H
 
 #include <float.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
