@@ -41,7 +41,13 @@ fn cut<'a, const K: usize>(k: &[&'a [f64]; K], n: usize) -> Option<[&'a [f64]; K
 
 /// `out_i = y_i + h * sum_j c_j k_j[i]` (`out` may be `y` itself: `y = None`).
 #[inline(always)]
-fn update<const K: usize>(out: &mut [f64], y: Option<&[f64]>, h: f64, c: &[f64; K], k: [&[f64]; K]) {
+fn update<const K: usize>(
+    out: &mut [f64],
+    y: Option<&[f64]>,
+    h: f64,
+    c: &[f64; K],
+    k: [&[f64]; K],
+) {
     let n = y.map_or(out.len(), |y| y.len().min(out.len()));
     let Some(ks) = cut(&k, n) else {
         for i in 0..n {
