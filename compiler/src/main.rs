@@ -216,9 +216,8 @@ fn simulate(
                 "using the certified design of `{}` (same spec sha256; nothing solved)",
                 r.display()
             ),
-            tsfc::sim::Reuse::Recompiled(why) => {
-                eprintln!("note: {why}; compiled the design")
-            }
+            tsfc::sim::Reuse::Refused(why) => eprintln!("note: {why}; compiled the design"),
+            tsfc::sim::Reuse::NoReport => {}
         }
         let opts = tsfc::sim::Options {
             x0,

@@ -6,7 +6,7 @@
 //! used only when it is certified (status and certificate), was written by
 //! this tsfc version, and records the SHA-256 of the very spec bytes being
 //! simulated, with the spec's controller, sizes and rules; otherwise the
-//! design is compiled again and [`Reuse::Recompiled`] says why. Gains of
+//! design is compiled again ([`Reuse::Refused`] says why). Gains of
 //! another version of the spec are never simulated.
 
 use super::{source, Prepared, SimError};
@@ -24,8 +24,11 @@ use std::path::{Path, PathBuf};
 pub enum Reuse {
     /// The certified report at this path (no solve).
     Reused(PathBuf),
-    /// Compiled again, for this reason (a sentence).
-    Recompiled(String),
+    /// Compiled: the report could not be used, for this reason (a sentence
+    /// naming the report).
+    Refused(String),
+    /// Compiled: no report was given and there is none in the output folder.
+    NoReport,
 }
 
 /// The parts of the report the simulator reads (other fields are ignored).
@@ -203,10 +206,10 @@ pub fn prepare_reusing(
     };
     let default = out.join(format!("{}.report.json", model.spec.controller.node));
     let candidate = report.unwrap_or(&default);
-    let why = match std::fs::read_to_string(candidate) {
+    let reuse = match std::fs::read_to_string(candidate) {
         Ok(json) => match from_report(&front, model, &json) {
             Ok(prepared) => return Ok((prepared, Reuse::Reused(candidate.to_path_buf()))),
-            Err(why) => format!("`{}` cannot be used: {why}", candidate.display()),
+            Err(why) => Reuse::Refused(format!("`{}` cannot be used: {why}", candidate.display())),
         },
         Err(e) if report.is_some() => {
             return Err(SimError::usage(format!(
@@ -214,8 +217,8 @@ pub fn prepare_reusing(
                 candidate.display()
             )))
         }
-        Err(_) => format!("there is no report at `{}`", candidate.display()),
+        Err(_) => Reuse::NoReport,
     };
     let run = front.compile(&crate::synth::Settings::default())?;
-    Ok((super::prepare_run(&run)?, Reuse::Recompiled(why)))
+    Ok((super::prepare_run(&run)?, reuse))
 }
