@@ -67,7 +67,11 @@ enum Command {
         #[arg(long, value_enum, value_delimiter = ',')]
         emit: Option<Vec<Target>>,
     },
-    /// Compile the design and run the spec's `simulate` scenario (CSV, metrics JSON, plots).
+    /// Run the spec's `simulate` scenario with its certified design (CSV, metrics JSON, plots).
+    ///
+    /// The design comes from the report of `tsfc compile` (--report, else OUT/<controller>.report.json)
+    /// when that report is certified, written by this tsfc and records the sha256 of this very spec;
+    /// otherwise the spec is compiled again (stderr says why).
     ///
     /// Exit codes: 0 the run finished inside the premise region; 1 spec error (also a scenario
     /// over the step limit of docs/limits.md); 2 usage or I/O error (a non-positive or too long
@@ -86,6 +90,9 @@ enum Command {
         /// steps of the scenario's time step.
         #[arg(long, allow_negative_numbers = true)]
         horizon: Option<f64>,
+        /// Certified report of the design (default: OUT/<controller>.report.json, if present).
+        #[arg(long)]
+        report: Option<PathBuf>,
     },
 }
 
@@ -104,7 +111,8 @@ fn main() -> ExitCode {
             out,
             x0,
             horizon,
-        } => simulate(&spec, &out, x0, horizon),
+            report,
+        } => simulate(&spec, &out, x0, horizon, report.as_deref()),
     }
 }
 
@@ -197,11 +205,20 @@ fn simulate(
     out: &std::path::Path,
     x0: Option<Vec<f64>>,
     horizon: Option<f64>,
+    report: Option<&std::path::Path>,
 ) -> ExitCode {
     /// The run went non-finite, diverged or left the premise region.
     const RUN_FAILED: u8 = 4;
     let run = || -> Result<(tsfc::sim::Outcome, Vec<PathBuf>), tsfc::sim::SimError> {
-        let prepared = tsfc::sim::prepare(path)?;
+        let (prepared, reuse) = tsfc::sim::prepare_reusing(path, report, out)?;
+        match reuse {
+            tsfc::sim::Reuse::Reused(r) => eprintln!(
+                "using the certified design of `{}` (same spec sha256; nothing solved)",
+                r.display()
+            ),
+            tsfc::sim::Reuse::Refused(why) => eprintln!("note: {why}; compiled the design"),
+            tsfc::sim::Reuse::NoReport => {}
+        }
         let opts = tsfc::sim::Options {
             x0,
             horizon,

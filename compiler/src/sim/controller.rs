@@ -34,6 +34,10 @@ pub trait Law {
     /// Writes `u = sat(sum_j h_j(z(x)) F_j x)` for the controller state `x`
     /// (length n) into `u` (length m) and returns the runtime's flags.
     fn command(&self, x: &[f64], u: &mut [f64]) -> Flags;
+
+    /// [`Law::command`] with the premise vector `z(x)` already computed
+    /// (length p; see [`super::premise::Premises`]).
+    fn command_with(&self, x: &[f64], z: &[f64], u: &mut [f64]) -> Flags;
 }
 
 struct Padded<'a, const N: usize, const M: usize, const P: usize, const R: usize> {
@@ -88,7 +92,18 @@ impl<const N: usize, const M: usize, const P: usize, const R: usize> Law
             PremiseCode::Linear(_) => premises_linear(&self.ctrl.premise_map, &xs),
             PremiseCode::Exprs(e) => std::array::from_fn(|p| e.get(p).map_or(0.0, |s| s.eval(x))),
         };
-        let step = self.ctrl.step_with_premises(&xs, &z);
+        self.apply(&xs, &z, u)
+    }
+
+    fn command_with(&self, x: &[f64], z: &[f64], u: &mut [f64]) -> Flags {
+        let xs: [f64; N] = pad(&x[..self.n.min(x.len())], 0.0);
+        self.apply(&xs, &pad(z, 0.0), u)
+    }
+}
+
+impl<const N: usize, const M: usize, const P: usize, const R: usize> Padded<'_, N, M, P, R> {
+    fn apply(&self, xs: &[f64; N], z: &[f64; P], u: &mut [f64]) -> Flags {
+        let step = self.ctrl.step_with_premises(xs, z);
         for (o, v) in u.iter_mut().zip(&step.u[..self.m]) {
             *o = *v;
         }

@@ -20,15 +20,59 @@ where
     }
 }
 
-/// `out = y + h * sum_j c_j k_j`.
-fn combine(out: &mut [f64], y: &[f64], h: f64, terms: &[(f64, &[f64])]) {
-    for (i, (o, &yi)) in out.iter_mut().zip(y).enumerate() {
-        let s = terms.iter().fold(0.0, |acc, &(c, k)| {
-            acc + c * k.get(i).copied().unwrap_or(0.0)
-        });
-        *o = yi + h * s;
+/// `sum_j c_j k_j[i]`, taken from 0 in order of `j` (a missing `k_j[i]` is 0).
+#[inline(always)]
+fn weighted<const K: usize>(i: usize, c: &[f64; K], k: &[&[f64]; K]) -> f64 {
+    let mut s = 0.0;
+    for (cj, kj) in c.iter().zip(k) {
+        s += cj * kj.get(i).copied().unwrap_or(0.0);
+    }
+    s
+}
+
+/// The stages cut to length `n`, or `None` if one is shorter.
+fn cut<'a, const K: usize>(k: &[&'a [f64]; K], n: usize) -> Option<[&'a [f64]; K]> {
+    let mut out: [&[f64]; K] = [&[]; K];
+    for (o, kj) in out.iter_mut().zip(k) {
+        *o = kj.get(..n)?;
+    }
+    Some(out)
+}
+
+/// `out_i = y_i + h * sum_j c_j k_j[i]` (`out` may be `y` itself: `y = None`).
+#[inline(always)]
+fn update<const K: usize>(
+    out: &mut [f64],
+    y: Option<&[f64]>,
+    h: f64,
+    c: &[f64; K],
+    k: [&[f64]; K],
+) {
+    let n = y.map_or(out.len(), |y| y.len().min(out.len()));
+    let Some(ks) = cut(&k, n) else {
+        for i in 0..n {
+            let yi = y.map_or(out[i], |y| y[i]);
+            out[i] = yi + h * weighted(i, c, &k);
+        }
+        return;
+    };
+    for i in 0..n {
+        let mut s = 0.0;
+        for (cj, kj) in c.iter().zip(&ks) {
+            s += cj * kj[i];
+        }
+        let yi = y.map_or(out[i], |y| y[i]);
+        out[i] = yi + h * s;
     }
 }
+
+/// `out = y + h * sum_j c_j k_j`.
+fn combine<const K: usize>(out: &mut [f64], y: &[f64], h: f64, c: &[f64; K], k: [&[f64]; K]) {
+    update(out, Some(y), h, c, k);
+}
+
+/// The classical RK4 weights.
+const RK4_WEIGHTS: [f64; 4] = [1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0];
 
 /// Fixed-step classical RK4 with at most `h` per step: an interval is split
 /// into `ceil((t1 - t0) / h)` equal steps so that `t1` is hit exactly.
@@ -63,21 +107,14 @@ impl Rk4 {
     ) -> Result<(), SimError> {
         let [k1, k2, k3, k4] = &mut self.k;
         sys.rhs(t, y, k1)?;
-        combine(&mut self.tmp, y, 0.5 * h, &[(1.0, k1)]);
+        combine(&mut self.tmp, y, 0.5 * h, &[1.0], [k1]);
         sys.rhs(t + 0.5 * h, &self.tmp, k2)?;
-        combine(&mut self.tmp, y, 0.5 * h, &[(1.0, k2)]);
+        combine(&mut self.tmp, y, 0.5 * h, &[1.0], [k2]);
         sys.rhs(t + 0.5 * h, &self.tmp, k3)?;
-        combine(&mut self.tmp, y, h, &[(1.0, k3)]);
+        combine(&mut self.tmp, y, h, &[1.0], [k3]);
         sys.rhs(t + h, &self.tmp, k4)?;
         self.evals += 4;
-        let inc = [
-            (1.0 / 6.0, &k1[..]),
-            (1.0 / 3.0, k2),
-            (1.0 / 3.0, k3),
-            (1.0 / 6.0, k4),
-        ];
-        combine(&mut self.tmp, y, h, &inc);
-        y.copy_from_slice(&self.tmp);
+        update(y, None, h, &RK4_WEIGHTS, [k1, k2, k3, k4]);
         Ok(())
     }
 
@@ -188,37 +225,26 @@ impl Dopri5 {
 
     /// One trial step of size `h`; returns the scaled error (new state in `ynew`).
     fn trial(&mut self, sys: &mut impl System, t: f64, h: f64, y: &[f64]) -> Result<f64, SimError> {
-        let rows: [&[f64]; 5] = [&A2, &A3, &A4, &A5, &A6];
-        sys.rhs(t, y, &mut self.k[0])?;
-        for (s, row) in rows.iter().enumerate() {
-            let (done, rest) = self.k.split_at_mut(s + 1);
-            let terms: Vec<(f64, &[f64])> = row
-                .iter()
-                .zip(done.iter())
-                .map(|(&a, k)| (a, &k[..]))
-                .collect();
-            combine(&mut self.tmp, y, h, &terms);
-            sys.rhs(t + C[s + 1] * h, &self.tmp, &mut rest[0])?;
-        }
-        let terms: Vec<(f64, &[f64])> = B5
-            .iter()
-            .zip(self.k.iter())
-            .map(|(&b, k)| (b, &k[..]))
-            .collect();
-        combine(&mut self.ynew, y, h, &terms);
-        let (first6, last) = self.k.split_at_mut(6);
-        sys.rhs(t + h, &self.ynew, &mut last[0])?;
+        let [k1, k2, k3, k4, k5, k6, k7] = &mut self.k;
+        let tmp = &mut self.tmp;
+        sys.rhs(t, y, k1)?;
+        combine(tmp, y, h, &A2, [k1]);
+        sys.rhs(t + C[1] * h, tmp, k2)?;
+        combine(tmp, y, h, &A3, [k1, k2]);
+        sys.rhs(t + C[2] * h, tmp, k3)?;
+        combine(tmp, y, h, &A4, [k1, k2, k3]);
+        sys.rhs(t + C[3] * h, tmp, k4)?;
+        combine(tmp, y, h, &A5, [k1, k2, k3, k4]);
+        sys.rhs(t + C[4] * h, tmp, k5)?;
+        combine(tmp, y, h, &A6, [k1, k2, k3, k4, k5]);
+        sys.rhs(t + C[5] * h, tmp, k6)?;
+        combine(&mut self.ynew, y, h, &B5, [k1, k2, k3, k4, k5, k6]);
+        sys.rhs(t + h, &self.ynew, k7)?;
         self.evals += 7;
-        let all: Vec<&[f64]> = first6
-            .iter()
-            .map(|k| &k[..])
-            .chain([&last[0][..]])
-            .collect();
+        let all = [&k1[..], k2, k3, k4, k5, k6, k7];
         let mut sum = 0.0;
         for (i, (&yi, &yn)) in y.iter().zip(&self.ynew).enumerate() {
-            let err = h * E.iter().zip(&all).fold(0.0, |acc, (&e, k)| {
-                acc + e * k.get(i).copied().unwrap_or(0.0)
-            });
+            let err = h * weighted(i, &E, &all);
             let sc = self.atol + self.rtol * yi.abs().max(yn.abs());
             sum += (err / sc) * (err / sc);
         }

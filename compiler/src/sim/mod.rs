@@ -3,15 +3,19 @@
 //! The controller in the loop is `tsf_runtime::Controller` with the design's
 //! gain tables ([`controller`]); the truth plant is the design model or the
 //! spec's `dynamics` block ([`plant`]); disturbances are the scenario's
-//! signals ([`signal`]); sampling and transmission follow the triggering law
-//! with the runtime's trigger state machines ([`trigger`]); the plant is
-//! integrated with RK4 or Dormand-Prince 5(4) between sampling instants
-//! ([`integrator`]) with the command held (zero-order hold). Outputs: a CSV
+//! signals ([`signal`]); the plant, the signals and the premise vector
+//! ([`premise`]) run as straight-line code compiled once per run ([`tape`]),
+//! or through the language's evaluator ([`Evaluator`]); sampling and
+//! transmission follow the triggering law with the runtime's trigger state
+//! machines ([`trigger`]); the plant is integrated with RK4 or
+//! Dormand-Prince 5(4) between sampling instants ([`integrator`]) with the
+//! command held (zero-order hold). Outputs: a CSV
 //! trace streamed to disk ([`csv`]), metrics ([`metrics`]), SVG and PNG plots
 //! of a thinned trace ([`plot`]); memory does not grow with the run's length,
 //! and the run's size is bounded by [`limits`]. Samples outside the premise
 //! region ([`region`]) are counted; errors caused by a spec item point into
-//! the spec ([`source`]).
+//! the spec ([`source`]). A certified report of the same spec gives the
+//! design without solving again ([`reuse`]).
 
 pub mod controller;
 pub mod csv;
@@ -20,13 +24,17 @@ pub mod limits;
 pub mod metrics;
 pub mod plant;
 pub mod plot;
+pub mod premise;
 pub mod region;
+pub mod reuse;
 pub mod scenario;
 pub mod signal;
 pub mod source;
+pub mod tape;
 pub mod trigger;
 
 pub use metrics::{Metrics, Trace};
+pub use reuse::{prepare_reusing, Reuse};
 pub use scenario::{run, Outcome};
 
 use crate::model::TsModel;
@@ -40,6 +48,19 @@ use tsf_lang::spec::{Integrator, Trigger};
 /// A simulation failure: the pipeline's error (its kind decides the exit code).
 pub type SimError = crate::error::Error;
 pub use crate::error::ErrorKind;
+
+/// How the plant, the disturbance signals and the premise vector are evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Evaluator {
+    /// Compiled once into straight-line code ([`tape`]); an expression the
+    /// tape cannot express, and any evaluation that divides by zero, goes
+    /// to the interpreter.
+    #[default]
+    Compiled,
+    /// The language's evaluator at every call (the reference path the
+    /// compiled code is tested against).
+    Interpreter,
+}
 
 /// Overrides of the spec's scenario.
 #[derive(Debug, Clone)]
@@ -61,6 +82,8 @@ pub struct Options {
     /// Show progress on stderr for runs longer than a second: a bar on a
     /// terminal, else a line every [`limits::PROGRESS_LOG_PERIOD_S`] seconds.
     pub progress: bool,
+    /// How expressions are evaluated.
+    pub evaluator: Evaluator,
 }
 
 impl Default for Options {
@@ -74,6 +97,7 @@ impl Default for Options {
             tolerances: (1e-6, 1e-9),
             convergence_rel_tol: 0.05,
             progress: false,
+            evaluator: Evaluator::Compiled,
         }
     }
 }
@@ -97,13 +121,18 @@ pub struct Prepared {
 /// Spec diagnostics are rendered into the error message.
 pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
     let run = crate::pipeline::read(path)?.compile(&crate::synth::Settings::default())?;
+    prepare_run(&run)
+}
+
+/// The simulator's design of a compiled spec (it must be certified).
+pub fn prepare_run(run: &crate::pipeline::Run) -> Result<Prepared, SimError> {
     let tables = run.tables()?;
     let design = run.certified()?.0.clone();
     let source = source::SpecSource {
         name: run.source.name.clone(),
         text: run.source.text.clone(),
     };
-    let model = run.model;
+    let model = run.model.clone();
     // The synthesized trigger weight Upsilon (two-step method); without one,
     // `weight = synthesize` falls back to P / lambda_max(P) (see
     // `trigger::trigger_weight`).
@@ -141,7 +170,12 @@ pub fn simulate_to(
     dir: &Path,
 ) -> Result<(Outcome, Vec<PathBuf>), SimError> {
     // Refuse bad settings before touching the folder.
-    let dim = plant::Plant::new(&prepared.model.spec, &prepared.source)?.dim();
+    let dim = plant::Plant::new(
+        &prepared.model.spec,
+        &prepared.source,
+        Evaluator::Interpreter,
+    )?
+    .dim();
     scenario::plan(prepared, opts, dim)?;
     let path = dir.join(format!("{}.csv", prepared.model.spec.controller.node));
     let io_err =

@@ -1,15 +1,20 @@
 //! The truth plant: either the spec's design model
 //! `x' = A(x) x + B(x) sat(u) + D(x) w` or its explicit `dynamics { }` block
-//! (which may add states the controller does not see). Expressions are
-//! evaluated with the language's evaluator; constant matrices are evaluated
-//! once.
+//! (which may add states the controller does not see). With
+//! [`Evaluator::Compiled`] the right-hand side is compiled once into a
+//! [`Tape`] (inputs `t, s, u, w`); with [`Evaluator::Interpreter`], or where
+//! the tape cannot express it, the language's evaluator evaluates the
+//! expressions at every call (constant matrices once). A tape that faults
+//! (a division by zero) hands the call to the evaluator, which reports it.
 
 use super::source::SpecSource;
-use super::SimError;
+use super::tape::lower::{Lowerer, Scope, SymMat, Unsupported};
+use super::tape::{Builder, Registers, Tape};
+use super::{Evaluator, SimError};
 use nalgebra::DMatrix;
 use tsf_lang::ast::Expr;
 use tsf_lang::eval::Mode;
-use tsf_lang::spec::{Dynamics, ModelMatrix, Spec};
+use tsf_lang::spec::{Dynamics, ModelMatrix, Signal, Spec};
 
 /// A model matrix: constant, or an expression of the state.
 enum Coef<'a> {
@@ -26,27 +31,53 @@ enum Truth<'a> {
     Dynamics(&'a Dynamics),
 }
 
+/// The compiled right-hand side and its register file.
+struct Compiled {
+    tape: Tape,
+    regs: Box<Registers>,
+}
+
 /// The plant's right-hand side.
 pub struct Plant<'a> {
     spec: &'a Spec,
     source: &'a SpecSource,
     n: usize,
+    m: usize,
     extra: usize,
     truth: Truth<'a>,
+    compiled: Option<Compiled>,
 }
 
 impl<'a> Plant<'a> {
     /// The truth plant of `spec`: its `dynamics` block if the scenario has one,
-    /// else the design model. Evaluation errors point into `source`.
-    pub fn new(spec: &'a Spec, source: &'a SpecSource) -> Result<Self, SimError> {
+    /// else the design model, evaluated by `evaluator`. Evaluation errors
+    /// point into `source`.
+    pub fn new(
+        spec: &'a Spec,
+        source: &'a SpecSource,
+        evaluator: Evaluator,
+    ) -> Result<Self, SimError> {
+        let mut plant = Self::interpreted(spec, source)?;
+        if evaluator == Evaluator::Compiled {
+            plant.compiled = plant.compile().ok().map(|tape| Compiled {
+                regs: tape.registers(),
+                tape,
+            });
+        }
+        Ok(plant)
+    }
+
+    fn interpreted(spec: &'a Spec, source: &'a SpecSource) -> Result<Self, SimError> {
         let n = spec.n();
         if let Some(dynamics) = spec.simulate.as_ref().and_then(|s| s.dynamics.as_ref()) {
             return Ok(Plant {
                 spec,
                 source,
                 n,
+                m: spec.m(),
                 extra: dynamics.extra_states.iter().map(|s| s.len).sum(),
                 truth: Truth::Dynamics(dynamics),
+                compiled: None,
             });
         }
         let env = spec.state_env(&vec![0.0; n], Mode::Exact);
@@ -70,13 +101,92 @@ impl<'a> Plant<'a> {
             spec,
             source,
             n,
+            m: spec.m(),
             extra: 0,
             truth: Truth::Model {
                 a: coef(a, "A")?,
                 b: coef(b, "B")?,
                 d,
             },
+            compiled: None,
         })
+    }
+
+    /// Whether the right-hand side runs as a compiled tape (else the
+    /// interpreter evaluates it).
+    pub fn is_compiled(&self) -> bool {
+        self.compiled.is_some()
+    }
+
+    /// The compiled right-hand side, if any.
+    pub fn tape(&self) -> Option<&Tape> {
+        self.compiled.as_ref().map(|c| &c.tape)
+    }
+
+    /// The right-hand side as a tape over the inputs `[t, s, u, w]`.
+    fn compile(&self) -> Result<Tape, Unsupported> {
+        let spec = self.spec;
+        let (n, dim, m, q) = (self.n, self.dim(), spec.m(), spec.q());
+        let mut lw = Lowerer::new(Builder::new(1 + dim + m + q), &spec.consts, &spec.fns);
+        let col = |lw: &Lowerer, at: usize, len: usize| {
+            SymMat::column((at..at + len).map(|k| lw.b.input(k)).collect())
+        };
+        let (x, u, w) = (
+            col(&lw, 1, n),
+            col(&lw, 1 + dim, m),
+            col(&lw, 1 + dim + m, q),
+        );
+        let bind = |lw: &Lowerer, sigs: &[Signal], at: usize| -> Vec<(String, SymMat)> {
+            sigs.iter()
+                .map(|s| (s.name.clone(), col(lw, at + s.offset, s.len)))
+                .collect()
+        };
+        // The evaluator's bindings, in its order (later ones shadow).
+        let mut scope = vec![("x".to_string(), x.clone())];
+        scope.extend(bind(&lw, &spec.states, 1));
+        let outputs = match &self.truth {
+            Truth::Model { a, b, d } => {
+                let mut coef = |c: &Coef, scope: &Scope| match c {
+                    Coef::Const(m) => Ok(lw.constant(m)),
+                    Coef::StateDependent(e) => lw.expr(e, scope),
+                };
+                let (a, b) = (coef(a, &scope)?, coef(b, &scope)?);
+                let d = d.as_ref().map(|d| coef(d, &scope)).transpose()?;
+                let times = |lw: &mut Lowerer, m: &SymMat, v: &SymMat| {
+                    if m.cols == v.rows && m.rows == n {
+                        Ok(lw.product(m, v))
+                    } else {
+                        Err(Unsupported("model matrix shape".into()))
+                    }
+                };
+                let (ax, bu) = (times(&mut lw, &a, &x)?, times(&mut lw, &b, &u)?);
+                let mut dx = lw.add(&ax, &bu)?;
+                if let Some(d) = d {
+                    let dw = times(&mut lw, &d, &w)?;
+                    dx = lw.add(&dx, &dw)?;
+                }
+                dx.data
+            }
+            Truth::Dynamics(dy) => {
+                for (name, value) in &dy.consts {
+                    let c = lw.constant(value);
+                    scope.push((name.clone(), c));
+                }
+                scope.extend(bind(&lw, &dy.extra_states, 1 + n));
+                scope.extend(bind(&lw, &spec.inputs, 1 + dim));
+                scope.extend(bind(&lw, &spec.disturbances, 1 + dim + m));
+                scope.push(("t".to_string(), col(&lw, 0, 1)));
+                let mut out = Vec::with_capacity(dim);
+                for (_, e) in &dy.derivatives {
+                    out.extend(lw.expr(e, &scope)?.data);
+                }
+                out
+            }
+        };
+        if outputs.len() != dim {
+            return Err(Unsupported("derivative count".into()));
+        }
+        lw.finish(&outputs)
     }
 
     /// Dimension of the plant state (controller states, then extra states).
@@ -96,8 +206,33 @@ impl<'a> Plant<'a> {
         }
     }
 
-    /// `ds = f(t, s, u, w)` with `u` the (saturated) command and `w` the disturbance.
+    /// `ds = f(t, s, u, w)` with `u` the (saturated) command and `w` the
+    /// disturbance (`s`, `u`, `w`, `ds` of the plant's, the spec's sizes).
     pub fn rhs(
+        &mut self,
+        t: f64,
+        s: &[f64],
+        u: &[f64],
+        w: &[f64],
+        ds: &mut [f64],
+    ) -> Result<(), SimError> {
+        let (dim, m) = (self.dim(), self.m);
+        if let Some(c) = &mut self.compiled {
+            let regs = &mut c.regs;
+            regs[0] = t;
+            c.tape.write(regs, 1, &s[..dim.min(s.len())]);
+            c.tape.write(regs, 1 + dim, &u[..m.min(u.len())]);
+            c.tape.write(regs, 1 + dim + m, w);
+            if c.tape.run(regs).is_ok() {
+                c.tape.read(regs, ds);
+                return Ok(());
+            }
+        }
+        self.interpret(t, s, u, w, ds)
+    }
+
+    /// [`Plant::rhs`] by the language's evaluator (the reference path).
+    fn interpret(
         &self,
         t: f64,
         s: &[f64],

@@ -45,4 +45,13 @@ impl<'a> Region<'a> {
         };
         self.bounds.iter().enumerate().all(|(p, &b)| inside(p, b))
     }
+
+    /// `true` when every component of the premise vector `z` is finite and
+    /// within its range.
+    pub fn contains_premises(&self, z: &[f64]) -> bool {
+        self.bounds.iter().enumerate().all(|(p, &(lo, hi))| {
+            let v = z.get(p).copied().unwrap_or(0.0);
+            v >= lo && v <= hi
+        })
+    }
 }

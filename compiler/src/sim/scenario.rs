@@ -6,6 +6,7 @@ use super::integrator::{Dopri5, Rk4, Stepper};
 use super::limits::step_count;
 use super::metrics::{Metrics, RunFacts, Sample, Tally, Trace};
 use super::plant::Plant;
+use super::premise::Premises;
 use super::region::Region;
 use super::signal::Signals;
 use super::source::{head, SpecSource};
@@ -242,7 +243,7 @@ pub fn run(
     let spec = &model.spec;
     let n = spec.n();
     let m = spec.m();
-    let plant = Plant::new(spec, &prepared.source)?;
+    let mut plant = Plant::new(spec, &prepared.source, opts.evaluator)?;
     let dim = plant.dim();
     let plan = plan(prepared, opts, dim)?;
     let (t0, t1, h) = (plan.t0, plan.t1, plan.h);
@@ -264,8 +265,9 @@ pub fn run(
     let terms = runtime_terms(tables);
     let controller = law(tables, &terms)?;
     let region = Region::new(model, tables);
-    let signals = Signals::new(spec, &prepared.source);
-    let mut w = vec![0.0; signals.len()];
+    let mut premises = Premises::new(tables, opts.evaluator);
+    let mut z = vec![0.0; tables.p];
+    let mut signals = Signals::new(spec, &prepared.source, opts.evaluator);
     let mut u = vec![0.0; m];
     let trace = Trace {
         state_names: tables
@@ -290,18 +292,28 @@ pub fn run(
     let last_sent = loop {
         let sent = sampler.gate.decide(&x[..n]);
         let mut no_rule = false;
+        if let Some(p) = premises.as_mut() {
+            p.eval(&x[..n], &mut z);
+        }
         if sent {
-            let flags = controller.command(&x[..n], &mut u);
+            let flags = match &premises {
+                Some(_) => controller.command_with(&x[..n], &z, &mut u),
+                None => controller.command(&x[..n], &mut u),
+            };
             saturated += u64::from(flags.contains(Flags::SATURATED));
             no_rule = flags.contains(Flags::NO_RULE_FIRED);
         }
+        let in_region = match &premises {
+            Some(_) => region.contains_premises(&z),
+            None => region.contains(&x[..n]),
+        };
         tally.sample(&Sample {
             t,
             x: &x,
             u: &u,
             sent,
             no_rule,
-            in_region: region.contains(&x[..n]),
+            in_region,
         });
         if let Some(out) = csv.as_mut() {
             super::csv::row(*out, t, &x, &u, sent).map_err(write_err)?;
@@ -315,8 +327,8 @@ pub fn run(
             t_next = t1;
         }
         let mut rhs = |tt: f64, y: &[f64], dy: &mut [f64]| {
-            signals.eval(tt, &mut w)?;
-            plant.rhs(tt, y, &u, &w, dy)
+            let w = signals.at(tt)?;
+            plant.rhs(tt, y, &u, w, dy)
         };
         stepper.advance(&mut rhs, t, t_next, &mut x)?;
         t = t_next;
