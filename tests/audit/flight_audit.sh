@@ -103,6 +103,19 @@ done
     echo "cppcheck: $(cppcheck --version)"
 } | tee "${out_md:-/dev/null}"
 
+# The Rust side: the flight example crate (the three generated no_std modules) for a
+# bare-metal Cortex-M4F target, when the toolchain has it (rustup target add thumbv7em-none-eabihf).
+if rustup target list --installed 2>/dev/null | grep -qx thumbv7em-none-eabihf; then
+    if cargo build --release --quiet -p flight-example --lib --target thumbv7em-none-eabihf; then
+        echo "Rust: flight-example (generated no_std modules) builds for thumbv7em-none-eabihf."
+    else
+        echo "audit: flight-example does not build for thumbv7em-none-eabihf" >&2
+        status=1
+    fi
+else
+    echo "Rust: thumbv7em-none-eabihf is not installed: the no_std modules are built for the host only."
+fi
+
 for rule in "${!misra_count[@]}"; do
     if ! grep -q "^| $rule |" "$here/misra-rationale.md"; then
         echo "audit: MISRA rule $rule (${misra_count[$rule]} deviations) has no rationale in $here/misra-rationale.md" >&2

@@ -13,8 +13,7 @@ use super::{source, Prepared, SimError};
 use crate::model::TsModel;
 use crate::pipeline::{self, Front};
 use crate::report::sha256_hex;
-use crate::tables::sym::premise_entries;
-use crate::tables::{Header, PremiseCode, Tables};
+use crate::tables::{Header, Tables};
 use nalgebra::DMatrix;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -46,6 +45,13 @@ struct ReportView {
     certificate: Option<CertificateView>,
     trigger: Option<TriggerView>,
     sampled_loop: Option<SampledView>,
+    stored_precision: Option<StoredView>,
+}
+
+#[derive(Debug, Deserialize)]
+struct StoredView {
+    certified: bool,
+    worst_margin: f64,
 }
 
 #[derive(Debug, Deserialize)]
@@ -87,25 +93,6 @@ fn matrix(rows: &[Vec<f64>], r: usize, c: usize, what: &str) -> Result<DMatrix<f
     Ok(DMatrix::from_fn(r, c, |i, j| rows[i][j]))
 }
 
-/// The premise code of `model` (as `tables::tables` computes it).
-fn premise_code(model: &TsModel) -> Result<PremiseCode, String> {
-    let spec = &model.spec;
-    let mut entries = Vec::new();
-    for p in &spec.premises {
-        let all =
-            premise_entries(spec, &p.expr).map_err(|e| format!("premise `{}`: {e}", p.name))?;
-        match p.component {
-            Some(k) => entries.push(all.get(k).cloned().ok_or("premise component")?),
-            None => entries.extend(all),
-        }
-    }
-    if entries.len() != model.premises.len() {
-        return Err("premise layout".into());
-    }
-    let linear: Option<Vec<Vec<f64>>> = entries.iter().map(|s| s.linear(model.n)).collect();
-    Ok(linear.map_or(PremiseCode::Exprs(entries), PremiseCode::Linear))
-}
-
 /// The simulator's design from a report of the spec read in `front`, or why
 /// it cannot be used.
 fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, String> {
@@ -126,6 +113,9 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
             "it was written by tsfc {} (this is {version})",
             r.tsfc_version
         ));
+    }
+    if r.stored_precision.as_ref().is_some_and(|s| !s.certified) {
+        return Err("its design is not certified as stored (stored_precision)".into());
     }
     let sha256 = sha256_hex(&front.source.bytes);
     if r.spec.sha256 != sha256 {
@@ -155,6 +145,8 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
             spec_sha256: sha256,
             objectives: Vec::new(),
             min_margin: r.certificate.as_ref().map_or(f64::NAN, |c| c.min_margin),
+            precision: spec.precision,
+            stored_margin: r.stored_precision.as_ref().map(|s| s.worst_margin),
             relaxation: spec.relaxation.node.to_string(),
             sampling: r
                 .sampled_loop
@@ -168,8 +160,9 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
         state_names: names(&spec.states),
         input_names: names(&spec.inputs),
         rule_names: rules.iter().map(|s| s.to_string()).collect(),
-        premise: premise_code(model)?,
+        premise: crate::tables::premise_code(model).map_err(|e| e.to_string())?,
         terms: model.terms.clone(),
+        factored: crate::tables::FactoredTerms::new(&model.terms),
         centres: model.centers.clone(),
         gains,
         u_max: spec

@@ -110,7 +110,7 @@ fn achieved_objectives(a: &Achieved) -> Vec<(String, String)> {
 
 /// The premise code of the model: `z = L x` when every premise component is
 /// linear in x, else one scalar expression per component.
-fn premise_code(model: &TsModel) -> Result<PremiseCode, TablesError> {
+pub(crate) fn premise_code(model: &TsModel) -> Result<PremiseCode, TablesError> {
     let spec = &model.spec;
     let mut entries = Vec::new();
     for p in &spec.premises {
