@@ -321,7 +321,8 @@ fn prepare(
             "using the certified design of `{}` (same spec sha256; nothing solved)",
             r.display()
         ),
-        tsfc::sim::Reuse::Recompiled(why) => eprintln!("note: {why}; compiled the design"),
+        tsfc::sim::Reuse::Refused(why) => eprintln!("note: {why}; compiled the design"),
+        tsfc::sim::Reuse::NoReport => {}
     }
     Ok(prepared)
 }

@@ -155,6 +155,37 @@ pub struct SampledReport {
     pub p: Vec<Vec<f64>>,
 }
 
+/// One objective's verdict for given gains (analysis mode).
+#[derive(Debug, Serialize)]
+pub struct VerdictReport {
+    /// The objective (or loop) in the spec's words.
+    pub objective: String,
+    /// Whether the given gains are certified for it.
+    pub certified: bool,
+    /// The quantity of `value` (`hinf_gamma`, `decay_rate`, ...), if any.
+    pub quantity: Option<&'static str>,
+    /// Certified: the certified value; not certified: the best value the
+    /// gains certify for it alone, if any.
+    pub value: Option<f64>,
+    /// `together` (with every other objective, one common P) or `alone`.
+    pub judged: &'static str,
+    /// Why it is not certified, when more than its value.
+    pub note: Option<String>,
+}
+
+impl From<&crate::synth::Verdict> for VerdictReport {
+    fn from(v: &crate::synth::Verdict) -> Self {
+        VerdictReport {
+            objective: v.objective.clone(),
+            certified: v.certified,
+            quantity: v.quantity.map(|q| q.key()),
+            value: v.value,
+            judged: if v.together { "together" } else { "alone" },
+            note: v.note.clone(),
+        }
+    }
+}
+
 /// Why there is no certified design.
 #[derive(Debug, Serialize)]
 pub struct Diagnosis {
@@ -183,6 +214,11 @@ pub struct Report {
     pub rules: usize,
     /// `certified`, `infeasible` or `refused`.
     pub status: &'static str,
+    /// `synthesis` (tsfc designs the gains) or `analysis` (the rules give
+    /// them; tsfc certifies the objectives for them).
+    pub mode: &'static str,
+    /// Per-objective verdicts of an analysis (empty for a synthesis).
+    pub verdicts: Vec<VerdictReport>,
     /// Relaxation used.
     pub relaxation: String,
     /// Margin eps of strict LMIs.
@@ -196,6 +232,11 @@ pub struct Report {
     pub p: Vec<Vec<f64>>,
     /// Certificate.
     pub certificate: Option<Certificate>,
+    /// The certificate re-checked with the tables as generated code stores
+    /// them (`precision f32` or `f64`), with the membership rounding bound.
+    pub stored_precision: Option<crate::certify::StoredPrecision>,
+    /// Whether the design as stored is certified (`stored_precision.certified`).
+    pub stored_precision_certified: Option<bool>,
     /// Reductions applied to the solved problem.
     pub reductions: Vec<String>,
     /// Search notes.
@@ -266,7 +307,13 @@ pub fn report(
             Some(d),
             Some(c.clone()),
             Some(Diagnosis {
-                message: format!("certificate refused: the worst condition is `{}`", c.worst),
+                message: match c.stored.as_ref().filter(|s| !s.certified) {
+                    Some(s) => format!(
+                        "certificate refused in stored precision {}: `{}` fails with the tables as generated code stores them (margin {:.3e})",
+                        s.precision, s.worst_lmi, s.worst_margin
+                    ),
+                    None => format!("certificate refused: the worst condition is `{}`", c.worst),
+                },
                 achievable: Vec::new(),
             }),
         ),
@@ -295,6 +342,15 @@ pub fn report(
                 achievable: achievable.clone(),
             }),
         ),
+        Err(SynthError::NotCertified { message, verdicts }) => (
+            "refused",
+            None,
+            None,
+            Some(Diagnosis {
+                message: message.clone(),
+                achievable: verdicts.iter().map(|v| v.to_string()).collect(),
+            }),
+        ),
         Err(e) => (
             "refused",
             None,
@@ -304,6 +360,13 @@ pub fn report(
                 achievable: Vec::new(),
             }),
         ),
+    };
+    let verdicts = match outcome {
+        Ok((d, _)) => d.verdicts.iter().map(VerdictReport::from).collect(),
+        Err(SynthError::NotCertified { verdicts, .. }) => {
+            verdicts.iter().map(VerdictReport::from).collect()
+        }
+        Err(_) => Vec::new(),
     };
     let certified = status == "certified";
     let mut problem = BTreeMap::new();
@@ -335,6 +398,12 @@ pub fn report(
         q: model.q,
         rules: model.r(),
         status,
+        mode: if crate::synth::given::analysis(model) {
+            "analysis"
+        } else {
+            "synthesis"
+        },
+        verdicts,
         relaxation: model.spec.relaxation.node.to_string(),
         lmi_margin_eps: design.map(|d| d.eps),
         objectives: design.map(|d| objectives(model, d)).unwrap_or_default(),
@@ -355,6 +424,10 @@ pub fn report(
             Vec::new()
         },
         p: design.map(|d| rows(&d.p)).unwrap_or_default(),
+        stored_precision: cert.as_ref().and_then(|c| c.stored.clone()),
+        stored_precision_certified: cert
+            .as_ref()
+            .and_then(|c| c.stored.as_ref().map(|s| s.certified)),
         certificate: cert,
         reductions: design
             .map(|d| {

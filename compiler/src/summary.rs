@@ -19,8 +19,29 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
         "{verdict}: controller `{}` (n = {}, m = {}, {} rules, relaxation {})",
         r.controller, r.n, r.m, r.rules, r.relaxation
     );
+    let mode = if r.mode == "analysis" {
+        "analysis: the rules give their gains F; tsfc certifies the objectives for them"
+    } else {
+        "synthesis: tsfc designs the gains"
+    };
+    let _ = writeln!(s, "  mode                 {mode}");
     for (k, v) in &r.objectives {
         let _ = writeln!(s, "  {k:<20} {v}");
+    }
+    // A refused analysis lists its verdicts under the diagnosis.
+    if r.diagnosis.is_none() {
+        for v in &r.verdicts {
+            let value = match (v.quantity, v.value) {
+                (Some(q), Some(x)) => format!(", {q} = {x:.6}"),
+                _ => String::new(),
+            };
+            let word = if v.certified {
+                "certified"
+            } else {
+                "not certified"
+            };
+            let _ = writeln!(s, "  verdict              {}: {word}{value}", v.objective);
+        }
     }
     if let Some(cert) = &r.certificate {
         let strict = cert.lmis.iter().filter(|l| l.strict).count();
@@ -30,6 +51,18 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
             cert.lmis.len(),
             cert.min_margin,
             cert.worst
+        );
+    }
+    if let Some(sp) = &r.stored_precision {
+        let _ = writeln!(
+            s,
+            "  stored precision     {}: {}, worst margin {:.3e} at `{}`; membership rounding needs {:.3e} of {:.3e}",
+            sp.precision,
+            if sp.certified { "certified" } else { "NOT certified" },
+            sp.worst_margin,
+            sp.worst_lmi,
+            sp.membership_rounding_bound.required_margin,
+            sp.membership_rounding_bound.available_margin
         );
     }
     for red in &r.reductions {

@@ -35,6 +35,11 @@ impl Display for Literal<'_> {
     }
 }
 
+/// A matrix in the spec's literal syntax (`[a, b; c, d]`), for messages.
+pub(crate) fn literal(m: &Mat) -> String {
+    Literal(m).to_string()
+}
+
 /// `name = value` pairs separated by commas.
 fn named(f: &mut Formatter<'_>, args: &[(&str, f64)]) -> fmt::Result {
     for (k, (name, v)) in args.iter().enumerate() {

@@ -149,6 +149,9 @@ pub struct RuleSpec {
     pub at: Option<(Vec<f64>, Span)>,
     /// Direct matrices given in the rule, by name (`A`, `B`, `D`), with spans.
     pub overrides: Vec<(String, Mat, Span)>,
+    /// The rule's given PDC gain `F = ...` (m x n), with the span of its value:
+    /// the compiler then analyzes these gains instead of synthesizing them.
+    pub gain: Option<(Mat, Span)>,
     /// Where the rule is.
     pub span: Span,
 }
@@ -585,6 +588,17 @@ impl Spec {
     /// q: total disturbance dimension.
     pub fn q(&self) -> usize {
         self.disturbances.iter().map(|s| s.len).sum()
+    }
+
+    /// The given PDC gains F_j in rule order, when the rules give them (the
+    /// checker makes every rule give one or none): the compiler then analyzes
+    /// these gains instead of synthesizing them.
+    pub fn given_gains(&self) -> Option<Vec<Mat>> {
+        self.rules
+            .iter()
+            .map(|r| r.gain.as_ref().map(|(f, _)| f.clone()))
+            .collect::<Option<Vec<_>>>()
+            .filter(|g| !g.is_empty())
     }
 
     /// An environment in which the states are bound to the components of `x`

@@ -111,7 +111,7 @@ static double tsf_atan_tail(double t) {
 static double tsf_atan_f64(double x) {
     double a;
     double r;
-    if (isnan(x)) {
+    if (isnan(x) != 0) {
         return x;
     }
     a = fabs(x);
@@ -158,7 +158,10 @@ static double tsf_atan_f64(double x) {
 /* ------------------------------------------------------------- triggers */
 
 int tsf_periodic_decide(uint32_t *count, uint32_t every) {
-    const int fire = *count == 0;
+    int fire = 0;
+    if (*count == 0u) {
+        fire = 1;
+    }
     if (*count != UINT32_MAX) {
         *count = *count + 1u;
     }
@@ -235,9 +238,31 @@ TSF_R TSF_FN(tsf_atan)(TSF_R v) {
 /* ------------------------------------------------------ vector algebra */
 
 TSF_R TSF_FN(tsf_dot)(const TSF_R *a, const TSF_R *b, int n) {
-    TSF_R acc = TSF_C(0);
+    TSF_R acc;
     int k;
-    for (k = 0; k < n; k++) {
+    if (n <= 0) {
+        return TSF_C(0);
+    }
+    acc = a[0] * b[0];
+    for (k = 1; k < n; k++) {
+        const TSF_R t = a[k] * b[k];
+        acc = acc + t;
+    }
+    return acc;
+}
+
+/* tsf_dot for the blend's rows (n >= 1), two products per iteration, still
+   added one after the other. */
+static TSF_R TSF_FN(tsf_row_dot)(const TSF_R *a, const TSF_R *b, int n) {
+    TSF_R acc = a[0] * b[0];
+    int k;
+    for (k = 1; k + 1 < n; k += 2) {
+        const TSF_R t0 = a[k] * b[k];
+        const TSF_R t1 = a[k + 1] * b[k + 1];
+        acc = acc + t0;
+        acc = acc + t1;
+    }
+    if (k < n) {
         const TSF_R t = a[k] * b[k];
         acc = acc + t;
     }
@@ -277,7 +302,7 @@ static TSF_R TSF_FN(tsf_clamp01)(TSF_R v) {
 /* (p - q)/(r - s); if r - s overflows, every operand is halved first. */
 static TSF_R TSF_FN(tsf_edge_ratio)(TSF_R p, TSF_R q, TSF_R r, TSF_R s) {
     const TSF_R den = r - s;
-    if (isfinite(den)) {
+    if (isfinite(den) != 0) {
         return (p - q) / den;
     } else {
         const TSF_R ph = p * TSF_C(0.5);
@@ -345,25 +370,30 @@ static TSF_R TSF_FN(tsf_degree)(const TSF_FN(tsf_term) *t, const TSF_R *z, int p
 
 /* ------------------------------------------------------- controller step */
 
-/* Rule weight (product t-norm): ((1 * d_1) * d_2) * ... */
-static TSF_R TSF_FN(tsf_rule_weight)(const TSF_FN(tsf_controller) *c, int i, const TSF_R *z) {
-    TSF_R w = TSF_C(1);
-    int k;
-    for (k = c->rule_terms[i]; k < c->rule_terms[i + 1]; k++) {
-        w = w * TSF_FN(tsf_degree)(&c->terms[k], z, c->p, c->about_points);
+/* Rule weights (product t-norm) from the degrees of the distinct terms:
+   w_i = ((1 * deg[k_1]) * deg[k_2]) * ... over rule i's indices (an index
+   out of range is degree 0). */
+static void TSF_FN(tsf_rule_weights)(const TSF_FN(tsf_controller) *c, const TSF_R *deg,
+                                     TSF_R *w) {
+    const unsigned d = c->d > 0 ? (unsigned)c->d : 0u;
+    int i, k;
+    for (i = 0; i < c->r; i++) {
+        TSF_R acc = TSF_C(1);
+        for (k = c->rule_factors[i]; k < c->rule_factors[i + 1]; k++) {
+            const unsigned f = (unsigned)c->factors[k];
+            acc = acc * (f < d ? deg[f] : TSF_C(0));
+        }
+        w[i] = acc;
     }
-    return w;
 }
 
-/* In place: h_i = w_i / sum w (weights NaN or <= 0 count as 0); 0 if no
-   rule fires. */
+/* In place: h_i = w_i / sum w (weights NaN or <= 0 count as 0, one pass
+   clamps and sums); 0 if no rule fires. */
 static int TSF_FN(tsf_normalize)(TSF_R *h, int r) {
     TSF_R s = TSF_C(0);
     int i;
     for (i = 0; i < r; i++) {
         h[i] = h[i] > TSF_C(0) ? h[i] : TSF_C(0);
-    }
-    for (i = 0; i < r; i++) {
         s = s + h[i];
     }
     if (!(s > TSF_C(0) && isfinite(s))) {
@@ -393,7 +423,7 @@ static int TSF_FN(tsf_nearest_scaled)(const TSF_FN(tsf_controller) *c, const TSF
             d = d + e2;
         }
         better = *found ? d < *best_d : !isnan(d);
-        if (better) {
+        if (better != 0) {
             best = i;
             *best_d = d;
             *found = 1;
@@ -414,19 +444,22 @@ static int TSF_FN(tsf_nearest_rule)(const TSF_FN(tsf_controller) *c, const TSF_R
     return best;
 }
 
-/* u = sum_j h_j (F_j x), rules with h_j == 0 skipped. */
+/* u = sum_j h_j (F_j x), rules whose h_j is not > 0 skipped. */
 static void TSF_FN(tsf_blend)(const TSF_FN(tsf_controller) *c, const TSF_R *h, const TSF_R *x,
                               TSF_R *u) {
     int j, s;
     for (s = 0; s < c->m; s++) {
         u[s] = TSF_C(0);
     }
+    if (c->n <= 0) {
+        return;
+    }
     for (j = 0; j < c->r; j++) {
-        if (h[j] == TSF_C(0)) {
+        if (!(h[j] > TSF_C(0))) {
             continue;
         }
         for (s = 0; s < c->m; s++) {
-            const TSF_R f = TSF_FN(tsf_dot)(&c->gains[(j * c->m + s) * c->n], x, c->n);
+            const TSF_R f = TSF_FN(tsf_row_dot)(&c->gains[(j * c->m + s) * c->n], x, c->n);
             const TSF_R t = h[j] * f;
             u[s] = u[s] + t;
         }
@@ -461,7 +494,7 @@ static uint8_t TSF_FN(tsf_saturate)(const TSF_FN(tsf_controller) *c, TSF_R *u) {
 }
 
 uint8_t TSF_FN(tsf_step_with_premises)(const TSF_FN(tsf_controller) *c, const TSF_R *x,
-                                       const TSF_R *z, TSF_R *h, TSF_R *u) {
+                                       const TSF_R *z, TSF_R *deg, TSF_R *h, TSF_R *u) {
     uint8_t flags = 0;
     int i;
     for (i = 0; i < c->n; i++) {
@@ -474,7 +507,7 @@ uint8_t TSF_FN(tsf_step_with_premises)(const TSF_FN(tsf_controller) *c, const TS
             flags |= TSF_FLAG_PREMISE_NONFINITE;
         }
     }
-    if (flags & (TSF_FLAG_STATE_NONFINITE | TSF_FLAG_PREMISE_NONFINITE)) {
+    if ((flags & (TSF_FLAG_STATE_NONFINITE | TSF_FLAG_PREMISE_NONFINITE)) != 0u) {
         for (i = 0; i < c->r; i++) {
             h[i] = TSF_C(0);
         }
@@ -483,9 +516,10 @@ uint8_t TSF_FN(tsf_step_with_premises)(const TSF_FN(tsf_controller) *c, const TS
         }
         return flags;
     }
-    for (i = 0; i < c->r; i++) {
-        h[i] = TSF_FN(tsf_rule_weight)(c, i, z);
+    for (i = 0; i < c->d; i++) {
+        deg[i] = TSF_FN(tsf_degree)(&c->terms[i], z, c->p, c->about_points);
     }
+    TSF_FN(tsf_rule_weights)(c, deg, h);
     if (!TSF_FN(tsf_normalize)(h, c->r)) {
         for (i = 0; i < c->r; i++) {
             h[i] = TSF_C(0);
@@ -551,7 +585,10 @@ static TSF_R TSF_FN(tsf_adaptive_nu)(const TSF_FN(tsf_adaptive_law) *law, TSF_R 
 int TSF_FN(tsf_adaptive_decide)(const TSF_FN(tsf_adaptive_law) *law, const TSF_R *weight,
                                 TSF_R *nu, TSF_R *last, int *has_last, const TSF_R *x, TSF_R *e,
                                 int n) {
-    const int first = !*has_last;
+    int first = 0;
+    if (*has_last == 0) {
+        first = 1;
+    }
     if (!TSF_FN(tsf_relative_decide)(weight, *nu, last, has_last, x, e, n)) {
         return 0;
     }
@@ -564,7 +601,7 @@ int TSF_FN(tsf_adaptive_decide)(const TSF_FN(tsf_adaptive_law) *law, const TSF_R
 int TSF_FN(tsf_mixed_decide)(TSF_R beta, TSF_R rho, TSF_R *last, int *has_last,
                              const TSF_R *sigma, TSF_R *d, int n) {
     int k;
-    if (*has_last) {
+    if (*has_last != 0) {
         for (k = 0; k < n; k++) {
             d[k] = last[k] - sigma[k];
         }

@@ -28,6 +28,7 @@
 #define TSF_RUNTIME_H
 
 #include <float.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -78,14 +79,18 @@ typedef struct tsf_termf {
     float prm[4];
 } tsf_termf;
 
-/* The const tables of one controller; matrices are row-major. */
+/* The const tables of one controller; matrices are row-major. Each distinct
+   premise term is listed once and evaluated once per step; a rule is the
+   list of its terms' indices (its weight is their degrees' product). */
 typedef struct tsf_controller {
     int n;                      /* states */
     int m;                      /* inputs */
     int p;                      /* premise components */
     int r;                      /* rules */
-    const tsf_term *terms;      /* every rule's terms, rule after rule */
-    const int *rule_terms;      /* rule i: terms[rule_terms[i] .. rule_terms[i + 1]] */
+    int d;                      /* distinct premise terms */
+    const tsf_term *terms;      /* the d distinct terms */
+    const int *factors;         /* every rule's term indices, rule after rule */
+    const int *rule_factors;    /* rule i: factors[rule_factors[i] .. rule_factors[i + 1]] */
     const double *about_points; /* operating points of `about` terms */
     const double *centres;      /* r rows of max(p, 1): rule centres in premise space */
     const double *gains;        /* r blocks of m x n: the PDC gains F_j */
@@ -98,8 +103,10 @@ typedef struct tsf_controllerf {
     int m;
     int p;
     int r;
+    int d;
     const tsf_termf *terms;
-    const int *rule_terms;
+    const int *factors;
+    const int *rule_factors;
     const float *about_points;
     const float *centres;
     const float *gains;
@@ -145,19 +152,21 @@ float tsf_fabsf(float v);
 float tsf_sincf(float v);
 float tsf_atanf(float v);
 
-/* sum_k a[k] b[k], accumulated from 0 in index order. */
+/* sum_k a[k] b[k], accumulated in index order from the first product (0 if
+   n <= 0). */
 double tsf_dot(const double *a, const double *b, int n);
 float tsf_dotf(const float *a, const float *b, int n);
 
-/* One control step of tsf_runtime::Controller::step_with_premises on state x
-   (c->n values) and premise vector z (c->p values): writes the normalised
-   firing strengths h (c->r values) and the saturated command u (c->m values)
-   and returns the TSF_FLAG_* bits. A NaN or infinite x or z gives u = 0,
-   h = 0; when no rule fires, the nearest rule centre's gain is used alone. */
+/* One control step of tsf_runtime::FactoredController::step_with_premises
+   on state x (c->n values) and premise vector z (c->p values): writes the
+   normalised firing strengths h (c->r values) and the saturated command u
+   (c->m values) and returns the TSF_FLAG_* bits; deg is scratch space for
+   the c->d term degrees. A NaN or infinite x or z gives u = 0, h = 0; when
+   no rule fires, the nearest rule centre's gain is used alone. */
 uint8_t tsf_step_with_premises(const tsf_controller *c, const double *x, const double *z,
-                               double *h, double *u);
+                               double *deg, double *h, double *u);
 uint8_t tsf_step_with_premisesf(const tsf_controllerf *c, const float *x, const float *z,
-                                float *h, float *u);
+                                float *deg, float *h, float *u);
 
 /* Periodic trigger: transmit on the first tick and then every `every` ticks
    (0 acts as 1); *count starts at 0. */

@@ -39,9 +39,13 @@ pub enum Term<'a, T> {
 
 impl<T: Real> Term<'_, T> {
     /// Degree of this term at premise vector `z`, in `[0, 1]`, never NaN.
+    #[inline(always)]
     pub fn degree(&self, z: &[T]) -> T {
         match *self {
-            Term::Is { var, set } => z.get(var).map_or(T::ZERO, |&v| set.degree(v)),
+            Term::Is { var, set } => match z.get(var) {
+                Some(&v) => set.degree(v),
+                None => T::ZERO,
+            },
             Term::About {
                 first,
                 point,
@@ -145,15 +149,18 @@ pub struct Step<T, const M: usize, const R: usize> {
     pub flags: Flags,
 }
 
-/// Dot product `sum_k a_k b_k`, accumulated from 0 in index order.
+/// Dot product `sum_k a_k b_k`, accumulated in index order starting from
+/// the first product (0 for empty slices). Starting from `0 +` instead would
+/// only turn a result of `-0` into `+0`.
 #[inline]
 fn dot<T: Real>(a: &[T], b: &[T]) -> T {
-    a.iter()
-        .zip(b)
-        .fold(T::ZERO, |acc, (&ai, &bi)| acc + ai * bi)
+    let mut terms = a.iter().zip(b).map(|(&ai, &bi)| ai * bi);
+    let first = terms.next().unwrap_or(T::ZERO);
+    terms.fold(first, |acc, t| acc + t)
 }
 
 /// Premise values of the linear form: `z_p = sum_k L[p][k] x_k` (index order).
+#[inline]
 pub fn premises_linear<T: Real, const N: usize, const P: usize>(
     l: &[[T; N]; P],
     x: &[T; N],
@@ -178,23 +185,26 @@ pub fn rule_weights<T: Real, const R: usize>(rules: &[Rule<'_, T>; R], z: &[T]) 
 ///
 /// Returns `None` if no rule fires (`s` not `> 0` or not finite). Negative or
 /// NaN weights (impossible from [`rule_weights`]) are treated as 0. When
-/// `Some`, every `h_i` is in `[0, 1]` and `sum h = 1` up to rounding.
+/// `Some`, every `h_i` is in `[0, 1]` and `sum h = 1` up to rounding. One
+/// branch-free pass clamps and sums, one pass divides (a zero weight gives
+/// `0 / s = 0`).
+#[inline]
 pub fn normalize<T: Real, const R: usize>(w: &[T; R]) -> Option<[T; R]> {
-    let mut w = *w;
-    for wi in w.iter_mut() {
-        if wi.is_nan() || *wi <= T::ZERO {
-            *wi = T::ZERO;
-        }
+    let mut h = [T::ZERO; R];
+    let mut s = T::ZERO;
+    for (hi, &wi) in h.iter_mut().zip(w) {
+        *hi = if wi > T::ZERO { wi } else { T::ZERO };
+        s += *hi;
     }
-    let s = w.iter().fold(T::ZERO, |acc, &wi| acc + wi);
-    if !(s > T::ZERO && s.is_finite()) {
+    // `s > 0` and finite; NaN fails both comparisons.
+    if !(s > T::ZERO && s <= T::MAX) {
         return None;
     }
-    for wi in w.iter_mut() {
+    for hi in h.iter_mut() {
         // w_i <= s (sum of non-negatives, monotone rounding) => h_i <= 1.
-        *wi = *wi / s;
+        *hi = *hi / s;
     }
-    Some(w)
+    Some(h)
 }
 
 /// Squared Euclidean distance between `z` and `c`, each operand first
@@ -237,10 +247,12 @@ pub fn nearest_rule<T: Real, const P: usize, const R: usize>(
     }
 }
 
-/// PDC blend `u = sum_j h_j (F_j x)`: rule-major, rules with `h_j == 0`
-/// skipped (so NaN/inf gains of rules that do not fire cannot leak), each
-/// `(F_j x)_s` a [`premises_linear`]-style dot product, accumulated as
-/// `u_s = u_s + h_j * (F_j x)_s` starting from 0.
+/// PDC blend `u = sum_j h_j (F_j x)`: rule-major, rules whose `h_j` is not
+/// `> 0` skipped before any gain product (so NaN/inf gains of rules that do
+/// not fire cannot leak; strengths from [`normalize`] are never negative or
+/// NaN), each `(F_j x)_s` a [`premises_linear`]-style dot product,
+/// accumulated as `u_s = u_s + h_j * (F_j x)_s` starting from 0.
+#[inline]
 pub fn blend<T: Real, const N: usize, const M: usize, const R: usize>(
     h: &[T; R],
     gains: &[[[T; N]; M]; R],
@@ -248,11 +260,10 @@ pub fn blend<T: Real, const N: usize, const M: usize, const R: usize>(
 ) -> [T; M] {
     let mut u = [T::ZERO; M];
     for (&hj, fj) in h.iter().zip(gains) {
-        if hj == T::ZERO {
-            continue;
-        }
-        for (us, row) in u.iter_mut().zip(fj) {
-            *us += hj * dot(row, x);
+        if hj > T::ZERO {
+            for (us, row) in u.iter_mut().zip(fj) {
+                *us += hj * dot(row, x);
+            }
         }
     }
     u
@@ -265,6 +276,7 @@ pub fn blend<T: Real, const N: usize, const M: usize, const R: usize>(
 /// Non-finite commands: NaN -> 0; `+-inf` -> `+-b_s` (or 0 if `b_s` is
 /// infinite); both raise [`Flags::COMMAND_NONFINITE`]. Clipping a finite value
 /// or an infinity to a finite bound raises [`Flags::SATURATED`].
+#[inline]
 pub fn saturate<T: Real, const M: usize>(u: &[T; M], u_bar: &[T; M]) -> ([T; M], Flags) {
     let mut out = [T::ZERO; M];
     let mut flags = Flags::NONE;
@@ -291,6 +303,68 @@ pub fn saturate<T: Real, const M: usize>(u: &[T; M], u_bar: &[T; M]) -> ([T; M],
         };
     }
     (out, flags)
+}
+
+/// Normalised strengths of weights `w` (stage 4): `(h, Flags::NONE)` if
+/// some rule fires, else the one-hot vector of [`nearest_rule`] at `z` with
+/// [`Flags::NO_RULE_FIRED`].
+#[inline]
+fn strengths<T: Real, const P: usize, const R: usize>(
+    w: &[T; R],
+    centres: &[[T; P]; R],
+    z: &[T; P],
+) -> ([T; R], Flags) {
+    match normalize(w) {
+        Some(h) => (h, Flags::NONE),
+        None => (one_hot(nearest_rule(centres, z)), Flags::NO_RULE_FIRED),
+    }
+}
+
+/// `e_i` (all zero if `i >= R`); out of line: the no-rule-fired path is cold.
+#[inline(never)]
+fn one_hot<T: Real, const R: usize>(i: usize) -> [T; R] {
+    let mut h = [T::ZERO; R];
+    if let Some(hi) = h.get_mut(i) {
+        *hi = T::ONE;
+    }
+    h
+}
+
+/// Stages 2-6 of the pipeline with the rule weights from `weights` (called
+/// only when `x` and `z` are finite): the fault check, strengths, blend and
+/// saturation shared by [`Controller`] and
+/// [`FactoredController`](crate::FactoredController).
+#[inline]
+pub(crate) fn run<T: Real, const N: usize, const M: usize, const P: usize, const R: usize>(
+    x: &[T; N],
+    z: &[T; P],
+    weights: impl FnOnce(&[T; P]) -> [T; R],
+    centres: &[[T; P]; R],
+    gains: &[[[T; N]; M]; R],
+    u_max: &[T; M],
+) -> Step<T, M, R> {
+    let mut flags = Flags::NONE;
+    if !x.iter().all(|v| v.is_finite()) {
+        flags |= Flags::STATE_NONFINITE;
+    }
+    if !z.iter().all(|v| v.is_finite()) {
+        flags |= Flags::PREMISE_NONFINITE;
+    }
+    if flags.is_fault() {
+        return Step {
+            u: [T::ZERO; M],
+            h: [T::ZERO; R],
+            flags,
+        };
+    }
+    let (h, f) = strengths(&weights(z), centres, z);
+    let raw = blend(&h, gains, x);
+    let (u, g) = saturate(&raw, u_max);
+    Step {
+        u,
+        h,
+        flags: flags | f | g,
+    }
 }
 
 /// A table-driven T-S PDC controller: everything is plain data, so generated
@@ -325,17 +399,7 @@ impl<T: Real, const N: usize, const M: usize, const P: usize, const R: usize>
     /// `(h, Flags::NONE)` if some rule fires, else the one-hot vector of
     /// [`nearest_rule`] with [`Flags::NO_RULE_FIRED`].
     pub fn strengths(&self, z: &[T; P]) -> ([T; R], Flags) {
-        let w = rule_weights(&self.rules, z);
-        match normalize(&w) {
-            Some(h) => (h, Flags::NONE),
-            None => {
-                let mut h = [T::ZERO; R];
-                if let Some(hi) = h.get_mut(nearest_rule(&self.centres, z)) {
-                    *hi = T::ONE;
-                }
-                (h, Flags::NO_RULE_FIRED)
-            }
-        }
+        strengths(&rule_weights(&self.rules, z), &self.centres, z)
     }
 
     /// Evaluate with premise values `z` computed by the caller.
@@ -345,27 +409,13 @@ impl<T: Real, const N: usize, const M: usize, const P: usize, const R: usize>
     /// runtime is stateless; a caller wanting "hold last command" can do so
     /// on [`Flags::is_fault`]).
     pub fn step_with_premises(&self, x: &[T; N], z: &[T; P]) -> Step<T, M, R> {
-        let mut flags = Flags::NONE;
-        if !x.iter().all(|v| v.is_finite()) {
-            flags |= Flags::STATE_NONFINITE;
-        }
-        if !z.iter().all(|v| v.is_finite()) {
-            flags |= Flags::PREMISE_NONFINITE;
-        }
-        if flags.is_fault() {
-            return Step {
-                u: [T::ZERO; M],
-                h: [T::ZERO; R],
-                flags,
-            };
-        }
-        let (h, f) = self.strengths(z);
-        let raw = blend(&h, &self.gains, x);
-        let (u, g) = saturate(&raw, &self.u_max);
-        Step {
-            u,
-            h,
-            flags: flags | f | g,
-        }
+        run(
+            x,
+            z,
+            |z| rule_weights(&self.rules, z),
+            &self.centres,
+            &self.gains,
+            &self.u_max,
+        )
     }
 }

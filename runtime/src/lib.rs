@@ -9,6 +9,8 @@
 //! - [`Membership`], [`about_degree`]: fuzzy sets of the `.tsf` language;
 //! - [`Controller`]: table-driven firing strengths, PDC blend, saturation,
 //!   with defined behaviour for non-firing premises and non-finite inputs;
+//! - [`FactoredController`]: the same step with each distinct premise term
+//!   evaluated once (what generated code runs);
 //! - [`trigger`]: periodic, static relative, adaptive (Xu & Huang 2020) and
 //!   mixed (Amrr et al. 2019) transmission triggers.
 
@@ -30,6 +32,7 @@
 extern crate std;
 
 pub mod controller;
+pub mod factored;
 pub mod math;
 pub mod membership;
 mod real;
@@ -39,6 +42,7 @@ pub use controller::{
     blend, nearest_rule, normalize, premises_linear, rule_weights, saturate, Controller, Flags,
     Rule, Step, Term,
 };
+pub use factored::{factored_weights, term_degrees, FactoredController};
 pub use membership::{about_degree, Membership};
 pub use real::Real;
 pub use trigger::{AdaptiveTrigger, MixedTrigger, PeriodicTrigger, RelativeTrigger};

@@ -8,7 +8,7 @@
 use crate::Real;
 
 /// Maps any value into `[0, 1]`; NaN -> 0.
-#[inline]
+#[inline(always)]
 pub(crate) fn clamp01<T: Real>(v: T) -> T {
     if v >= T::ONE {
         T::ONE
@@ -22,7 +22,7 @@ pub(crate) fn clamp01<T: Real>(v: T) -> T {
 /// `(num)/(den)` for an edge of a trapezoid, evaluated as `(p - q)/(r - s)`;
 /// if the denominator overflows (edge wider than `T::MAX`), all four operands
 /// are halved first so the ratio stays meaningful.
-#[inline]
+#[inline(always)]
 fn edge_ratio<T: Real>(p: T, q: T, r: T, s: T) -> T {
     let den = r - s;
     if den.is_finite() {
@@ -111,6 +111,7 @@ impl<T: Real> Membership<T> {
     /// - sigmoid: `1/(1 + exp(-(slope * (z - center))))`;
     ///
     /// each result then clamped into `[0, 1]` with NaN -> 0.
+    #[inline(always)]
     pub fn degree(&self, z: T) -> T {
         let v = match *self {
             Membership::Tri { a, b, c } => trap_degree(z, a, b, b, c),
@@ -128,6 +129,7 @@ impl<T: Real> Membership<T> {
 }
 
 /// Trapezoid evaluation shared by `Tri` and `Trap` (closed support `[a, d]`).
+#[inline(always)]
 fn trap_degree<T: Real>(z: T, a: T, b: T, c: T, d: T) -> T {
     if !(z >= a && z <= d) {
         // Outside the support, or NaN.

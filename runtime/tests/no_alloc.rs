@@ -1,4 +1,4 @@
-//! `Controller::step` and the triggers allocate nothing: a counting global
+//! `Controller::step`, `FactoredController::step` and the triggers allocate nothing: a counting global
 //! allocator records every allocation made on the test's own thread.
 
 mod common;
@@ -49,6 +49,7 @@ fn step_and_triggers_do_not_allocate() {
     g[1][0][0] = -1.5;
     g[3][1][2] = 2.0;
     let c = common::controller(g, [1.0, 1.0]);
+    let f = common::factored(g, [1.0, 1.0]);
     let mut periodic = PeriodicTrigger::new(3);
     let mut relative = RelativeTrigger::new([[1.0; 4]; 4], 0.1);
     let mut adaptive = AdaptiveTrigger::new([[1.0; 4]; 4], 0.2, 10.0, 1.0, 0.02);
@@ -69,6 +70,8 @@ fn step_and_triggers_do_not_allocate() {
         acc += s.u[0] + s.u[1];
         let s = c.step_with_premises(&x, &[40.0, 40.0]);
         acc += s.u[0];
+        let s = std::hint::black_box(&f).step(std::hint::black_box(&x));
+        acc += s.u[0] + s.u[1];
         acc += f64::from(u8::from(periodic.decide()));
         acc += f64::from(u8::from(relative.decide(&x)));
         acc += f64::from(u8::from(adaptive.decide(&x)));

@@ -330,3 +330,30 @@ fn tsfc_design_and_paper_design_in_the_papers_scenario() {
         assert!(u.iter().all(|v| v.abs() <= 2.0), "{u:?}");
     }
 }
+
+/// The xi search (L-inf with saturation and a bounded disturbance) ends with
+/// a bracket of 0.1 % around the smallest feasible xi and the design solved
+/// at its upper end; its bracket is placed by one xi-minimizing SDP, so the
+/// whole compile takes at most 12 SDPs (19 with the bracket grown from 1e-3).
+#[test]
+fn xi_search_brackets_the_smallest_xi_in_few_sdps() {
+    let (_, c) = compiled();
+    let (design, _) = c.outcome.as_ref().expect("certified");
+    let note = design
+        .notes
+        .iter()
+        .find(|n| n.starts_with("xi minimized by bisection"))
+        .expect("the xi search's note");
+    let nums: Vec<f64> = note
+        .split(|ch: char| !(ch.is_ascii_digit() || ch == '.'))
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    let (hi, lo) = (nums[nums.len() - 2], nums[nums.len() - 1]);
+    assert!(lo < hi && hi - lo <= 1.01e-3 * hi, "{note}");
+    let xi = design
+        .achieved
+        .get(tsfc::synth::Quantity::LinfXi)
+        .expect("xi");
+    assert!((xi - hi).abs() <= 1e-5 * hi, "{xi} vs {note}");
+    assert!(design.log.solves <= 12, "{} SDPs", design.log.solves);
+}

@@ -68,7 +68,7 @@ fn main() -> ExitCode {
     let prepared = match &report {
         None => tsfc::sim::prepare(&spec),
         Some(r) => tsfc::sim::prepare_reusing(&spec, Some(r), Path::new(".")).map(|(p, reuse)| {
-            if let tsfc::sim::Reuse::Recompiled(why) = reuse {
+            if let tsfc::sim::Reuse::Refused(why) = reuse {
                 eprintln!("note: {why}; compiled the design");
             }
             p

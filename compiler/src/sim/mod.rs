@@ -5,15 +5,17 @@
 //! spec's `dynamics` block ([`plant`]); disturbances are the scenario's
 //! signals ([`signal`]); the plant, the signals and the premise vector
 //! ([`premise`]) run as straight-line code compiled once per run ([`tape`]),
-//! or through the language's evaluator ([`Evaluator`]); sampling and transmission follow the triggering law
-//! with the runtime's trigger state machines ([`trigger`]); the plant is
-//! integrated with RK4 or Dormand-Prince 5(4) between sampling instants
-//! ([`integrator`]) with the command held (zero-order hold). Outputs: a CSV
+//! or through the language's evaluator ([`Evaluator`]); sampling and
+//! transmission follow the triggering law with the runtime's trigger state
+//! machines ([`trigger`]); the plant is integrated with RK4 or
+//! Dormand-Prince 5(4) between sampling instants ([`integrator`]) with the
+//! command held (zero-order hold). Outputs: a CSV
 //! trace streamed to disk ([`csv`]), metrics ([`metrics`]), SVG and PNG plots
 //! of a thinned trace ([`plot`]); memory does not grow with the run's length,
 //! and the run's size is bounded by [`limits`]. Samples outside the premise
 //! region ([`region`]) are counted; errors caused by a spec item point into
-//! the spec ([`source`]).
+//! the spec ([`source`]). A certified report of the same spec gives the
+//! design without solving again ([`reuse`]).
 
 pub mod campaign;
 pub mod controller;

@@ -6,15 +6,14 @@
 //! used only when it is certified (status and certificate), was written by
 //! this tsfc version, and records the SHA-256 of the very spec bytes being
 //! simulated, with the spec's controller, sizes and rules; otherwise the
-//! design is compiled again and [`Reuse::Recompiled`] says why. Gains of
+//! design is compiled again ([`Reuse::Refused`] says why). Gains of
 //! another version of the spec are never simulated.
 
 use super::{source, Prepared, SimError};
 use crate::model::TsModel;
 use crate::pipeline::{self, Front};
 use crate::report::sha256_hex;
-use crate::tables::sym::premise_entries;
-use crate::tables::{Header, PremiseCode, Tables};
+use crate::tables::{Header, Tables};
 use nalgebra::DMatrix;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -24,8 +23,11 @@ use std::path::{Path, PathBuf};
 pub enum Reuse {
     /// The certified report at this path (no solve).
     Reused(PathBuf),
-    /// Compiled again, for this reason (a sentence).
-    Recompiled(String),
+    /// Compiled: the report could not be used, for this reason (a sentence
+    /// naming the report).
+    Refused(String),
+    /// Compiled: no report was given and there is none in the output folder.
+    NoReport,
 }
 
 /// The parts of the report the simulator reads (other fields are ignored).
@@ -43,6 +45,13 @@ struct ReportView {
     certificate: Option<CertificateView>,
     trigger: Option<TriggerView>,
     sampled_loop: Option<SampledView>,
+    stored_precision: Option<StoredView>,
+}
+
+#[derive(Debug, Deserialize)]
+struct StoredView {
+    certified: bool,
+    worst_margin: f64,
 }
 
 #[derive(Debug, Deserialize)]
@@ -84,25 +93,6 @@ fn matrix(rows: &[Vec<f64>], r: usize, c: usize, what: &str) -> Result<DMatrix<f
     Ok(DMatrix::from_fn(r, c, |i, j| rows[i][j]))
 }
 
-/// The premise code of `model` (as `tables::tables` computes it).
-fn premise_code(model: &TsModel) -> Result<PremiseCode, String> {
-    let spec = &model.spec;
-    let mut entries = Vec::new();
-    for p in &spec.premises {
-        let all =
-            premise_entries(spec, &p.expr).map_err(|e| format!("premise `{}`: {e}", p.name))?;
-        match p.component {
-            Some(k) => entries.push(all.get(k).cloned().ok_or("premise component")?),
-            None => entries.extend(all),
-        }
-    }
-    if entries.len() != model.premises.len() {
-        return Err("premise layout".into());
-    }
-    let linear: Option<Vec<Vec<f64>>> = entries.iter().map(|s| s.linear(model.n)).collect();
-    Ok(linear.map_or(PremiseCode::Exprs(entries), PremiseCode::Linear))
-}
-
 /// The simulator's design from a report of the spec read in `front`, or why
 /// it cannot be used.
 fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, String> {
@@ -123,6 +113,9 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
             "it was written by tsfc {} (this is {version})",
             r.tsfc_version
         ));
+    }
+    if r.stored_precision.as_ref().is_some_and(|s| !s.certified) {
+        return Err("its design is not certified as stored (stored_precision)".into());
     }
     let sha256 = sha256_hex(&front.source.bytes);
     if r.spec.sha256 != sha256 {
@@ -152,6 +145,8 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
             spec_sha256: sha256,
             objectives: Vec::new(),
             min_margin: r.certificate.as_ref().map_or(f64::NAN, |c| c.min_margin),
+            precision: spec.precision,
+            stored_margin: r.stored_precision.as_ref().map(|s| s.worst_margin),
             relaxation: spec.relaxation.node.to_string(),
             sampling: r
                 .sampled_loop
@@ -165,8 +160,9 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
         state_names: names(&spec.states),
         input_names: names(&spec.inputs),
         rule_names: rules.iter().map(|s| s.to_string()).collect(),
-        premise: premise_code(model)?,
+        premise: crate::tables::premise_code(model).map_err(|e| e.to_string())?,
         terms: model.terms.clone(),
+        factored: crate::tables::FactoredTerms::new(&model.terms),
         centres: model.centers.clone(),
         gains,
         u_max: spec
@@ -203,10 +199,10 @@ pub fn prepare_reusing(
     };
     let default = out.join(format!("{}.report.json", model.spec.controller.node));
     let candidate = report.unwrap_or(&default);
-    let why = match std::fs::read_to_string(candidate) {
+    let reuse = match std::fs::read_to_string(candidate) {
         Ok(json) => match from_report(&front, model, &json) {
             Ok(prepared) => return Ok((prepared, Reuse::Reused(candidate.to_path_buf()))),
-            Err(why) => format!("`{}` cannot be used: {why}", candidate.display()),
+            Err(why) => Reuse::Refused(format!("`{}` cannot be used: {why}", candidate.display())),
         },
         Err(e) if report.is_some() => {
             return Err(SimError::usage(format!(
@@ -214,8 +210,8 @@ pub fn prepare_reusing(
                 candidate.display()
             )))
         }
-        Err(_) => format!("there is no report at `{}`", candidate.display()),
+        Err(_) => Reuse::NoReport,
     };
     let run = front.compile(&crate::synth::Settings::default())?;
-    Ok((super::prepare_run(&run)?, Reuse::Recompiled(why)))
+    Ok((super::prepare_run(&run)?, reuse))
 }

@@ -6,16 +6,22 @@
 //! 2001): X = P^{-1}, M_j = F_j X, Upsilon_ij = He(A_i X + B_i M_j); strict
 //! LMIs carry an explicit margin `eps`.
 
+use super::objective::GainTerm;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use tsf_lang::spec::InitialSet;
 use tsf_lmi::{Expr, LmiError, Problem, Var};
 
-/// Row `k` of `L v` as an expression (`v` has `m` rows and `n` columns).
+/// Row `k` of `v` as an expression (`v` has `m` rows and `n` columns).
 pub(super) fn var_row(v: Var, k: usize, m: usize, n: usize) -> Result<Expr, LmiError> {
+    Expr::product(&row_selector(k, m), v, &DMatrix::identity(n, n))
+}
+
+/// The 1 x m matrix that selects row `k`.
+pub(super) fn row_selector(k: usize, m: usize) -> DMatrix<f64> {
     let mut sel = DMatrix::zeros(1, m);
     sel[(0, k)] = 1.0;
-    Expr::product(&sel, v, &DMatrix::identity(n, n))
+    sel
 }
 
 /// The linear-region block `[W, row'; *, rhs]` (>= 0 puts the ellipsoid of
@@ -90,13 +96,13 @@ impl Channel {
     }
 
     /// C X + E M_j (p x n).
-    pub fn output_map(&self, x: Var, mj: Var, n: usize) -> Result<Expr, LmiError> {
+    pub fn output_map(&self, x: Var, mj: &GainTerm, n: usize) -> Result<Expr, LmiError> {
         let id = DMatrix::identity(n, n);
         let cx = Expr::product(&self.c, x, &id)?;
         if self.e.iter().all(|v| *v == 0.0) {
             Ok(cx)
         } else {
-            cx.add(Expr::product(&self.e, mj, &id)?)
+            cx.add(mj.times(&self.e, x, n)?)
         }
     }
 }

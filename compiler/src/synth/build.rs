@@ -1,16 +1,18 @@
 //! Builds the LMI problem of one [`Plan`]: the builder declares X = P^{-1} and
-//! M_j = F_j X, then every objective of the plan declares its variables and
+//! M_j = F_j X (or, when the rules give their gains, substitutes F_j X for
+//! M_j: the same conditions, now for fixed gains), then every objective of the plan declares its variables and
 //! imposes its conditions (in the orders of [`objectives::DECLARE_ORDER`] and
 //! [`objectives::IMPOSE_ORDER`], so that the same plan always gives the same
 //! problem). When no objective contains the Lyapunov decrease, plain
 //! stability is imposed.
 
-use super::objective::{BuildError, Ctx, Lmis, Objective};
+use super::objective::{BuildError, Ctx, GainTerm, Lmis, Objective};
 use super::objectives::{self, Decay};
 use super::plan::Plan;
 use super::reduction::Reduction;
 use super::relaxations::Relaxer;
 use crate::model::TsModel;
+use nalgebra::{Cholesky, DMatrix, Dyn};
 use tsf_lang::spec::Relaxation;
 use tsf_lmi::{Expr, Problem, Var};
 
@@ -21,14 +23,33 @@ pub struct Built {
     pub problem: Problem,
     /// X = P^{-1}.
     pub x: Var,
-    /// M_j = F_j X.
-    pub m: Vec<Var>,
+    /// M_j = F_j X: variables, or the given gains.
+    pub m: Vec<GainTerm>,
     /// Reductions applied (empty for the full build).
     pub reductions: Vec<Reduction>,
     /// Names of the constraints that are non-strict in the theory (`>= 0`).
     /// They are solved with the margin too, so that the numeric solution
     /// satisfies them with room, and certified as non-strict.
     pub nonstrict: Vec<String>,
+}
+
+impl Built {
+    /// The PDC gains of a solution: F_j = M_j X^{-1} from the solved M_j
+    /// (`value` reads a variable, `x` is the Cholesky factor of the solved
+    /// X), or the given F_j as they are, bit for bit.
+    pub fn gains<E>(
+        &self,
+        value: impl Fn(Var) -> Result<DMatrix<f64>, E>,
+        x: &Cholesky<f64, Dyn>,
+    ) -> Result<Vec<DMatrix<f64>>, E> {
+        self.m
+            .iter()
+            .map(|g| match g {
+                GainTerm::Free(mv) => value(*mv).map(|m| x.solve(&m.transpose()).transpose()),
+                GainTerm::Given(f) => Ok(f.clone()),
+            })
+            .collect()
+    }
 }
 
 /// Builds the problem for `plan`. With `reduce`, constraints provably implied
@@ -43,9 +64,16 @@ pub fn build(
     let (n, m, r) = (model.n, model.m, model.r());
     let mut problem = Problem::new();
     let x = problem.symmetric("X", n)?;
-    let mv = (0..r)
-        .map(|j| problem.full(&format!("M{}", j + 1), m, n))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mv = match model.spec.given_gains() {
+        Some(given) => given.into_iter().map(GainTerm::Given).collect(),
+        None => (0..r)
+            .map(|j| {
+                problem
+                    .full(&format!("M{}", j + 1), m, n)
+                    .map(GainTerm::Free)
+            })
+            .collect::<Result<Vec<_>, _>>()?,
+    };
     let pair_reduce = reduce && super::blocks::common_b(model);
     let mut lmis = Lmis {
         problem,

@@ -2,6 +2,7 @@
 //! matrix, achieved values, solver log, optional trigger) or a [`SynthError`] out.
 
 use super::achieved::Achieved;
+use super::given::Verdict;
 use super::objective::BuildError;
 use super::plan::Plan;
 use super::reduction::Reduction;
@@ -104,6 +105,9 @@ pub struct Design {
     /// The sampled-loop certificate (periodic trigger, or aperiodic sampling
     /// without a threshold).
     pub sampled: Option<SampledDesign>,
+    /// Per-objective verdicts when the rules give their gains (analysis);
+    /// empty when the gains were synthesized.
+    pub verdicts: Vec<Verdict>,
 }
 
 /// The certificate of the sampled loop for the gains of a [`Design`]: every
@@ -160,6 +164,14 @@ pub enum SynthError {
         /// What is achievable when bounds are relaxed one at a time.
         achievable: Vec<String>,
     },
+    /// Given gains (analysis) that are not certified for the objectives:
+    /// what holds and what fails, objective by objective.
+    NotCertified {
+        /// The verdict.
+        message: String,
+        /// Per objective, alone when they fail together.
+        verdicts: Vec<Verdict>,
+    },
     /// A combination of objectives tsfc does not support.
     Unsupported(String),
     /// The SDP would need more memory than the limit allows.
@@ -209,6 +221,13 @@ impl std::fmt::Display for SynthError {
                 write!(f, "{message} (solver status: {status})")?;
                 for a in achievable {
                     write!(f, "\n  {a}")?;
+                }
+                Ok(())
+            }
+            SynthError::NotCertified { message, verdicts } => {
+                write!(f, "{message}")?;
+                for v in verdicts {
+                    write!(f, "\n  {v}")?;
                 }
                 Ok(())
             }

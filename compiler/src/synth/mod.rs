@@ -4,6 +4,8 @@
 //! bisection over feasibility problems, an L-inf gain without a fixed phi by a
 //! line search over phi ([`search`]). Infeasible specs are diagnosed: each
 //! fixed bound is optimized with the others kept, to say what is achievable.
+//! When the rules give their gains, the same conditions analyze them instead
+//! ([`given`]).
 //! Objective families live in [`objectives`], one file each; relaxations in
 //! [`relaxations`]. This stage knows nothing about Clarabel: it talks to
 //! `tsf_lmi`.
@@ -15,6 +17,7 @@ pub mod build;
 mod design;
 mod diagnose;
 pub mod experimental;
+pub mod given;
 pub mod objective;
 pub mod objectives;
 pub mod plan;
@@ -30,6 +33,7 @@ pub use achieved::{Achieved, Quantity};
 pub use blocks::common_b;
 pub use build::{build, Built};
 pub use design::{Design, SampledDesign, Settings, SolverLog, SynthError, TriggerDesign};
+pub use given::Verdict;
 pub use objective::BuildError;
 pub use plan::{Bound, Goal, Plan};
 pub use reduction::Reduction;
@@ -69,12 +73,16 @@ pub fn synthesize_logged(
 
 fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
     let (model, settings) = (runner.model, runner.settings);
+    if let Some(why) = given::unsupported(model) {
+        return Err(SynthError::Unsupported(why));
+    }
     if let Some(e) = experimental::theorem2::synthesize(model, settings) {
         return Err(e);
     }
     if let Some(why) = sampling::uncovered(model) {
         return Err(SynthError::Unsupported(why));
     }
+    let analysis = given::analysis(model);
     let (plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
     match runner.run(&plan, goal) {
         Ok(Some(mut d)) => {
@@ -82,18 +90,24 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
             if let Some(w) = gain_warning(model, &d) {
                 d.notes.push(w);
             }
+            if analysis {
+                d.verdicts = given::together(&d);
+            }
             if trigger::wanted(model) {
-                let (t, notes) = runner.trigger(&d)?;
+                let out = runner.trigger(&d);
+                let (t, notes) = given::looped(model, &mut d, given::EVENT_LOOP, out)?;
                 d.notes.extend(notes);
                 d.trigger = Some(t);
             }
             if let Some(h) = sampling::wanted(model) {
-                let (s, note) = runner.sampled(&d, h)?;
+                let out = runner.sampled(&d, h);
+                let (s, note) = given::looped(model, &mut d, &given::sampled_loop(h), out)?;
                 d.notes.push(note);
                 d.sampled = Some(s);
             }
             Ok(d)
         }
+        Ok(None) | Err(SynthError::Solver { .. }) if analysis => Err(runner.alone(&plan)),
         Ok(None) => Err(diagnose::diagnose(runner, &plan)),
         Err(SynthError::Solver { status, .. }) => {
             // No verdict: still say what relaxing each bound achieves.

@@ -197,6 +197,34 @@ pub struct Sector {
     pub z: Vec<Var>,
 }
 
+/// M_j = F_j X of one rule: a decision variable when the gains are
+/// synthesized, or the given gain F_j (then M_j = F_j X is linear in X and
+/// every condition stays an LMI with F_j X substituted for M_j).
+#[derive(Debug, Clone, PartialEq)]
+pub enum GainTerm {
+    /// M_j, a decision variable (m x n).
+    Free(Var),
+    /// F_j, given (m x n).
+    Given(DMatrix<f64>),
+}
+
+impl GainTerm {
+    /// L M_j as an expression (rows of L by n): L M_j for a variable,
+    /// (L F_j) X for a given gain.
+    pub fn times(&self, left: &DMatrix<f64>, x: Var, n: usize) -> Result<Expr, LmiError> {
+        let id = DMatrix::identity(n, n);
+        match self {
+            GainTerm::Free(m) => Expr::product(left, *m, &id),
+            GainTerm::Given(f) => Expr::product(&(left * f), x, &id),
+        }
+    }
+
+    /// M_j itself (`m` rows).
+    pub fn expr(&self, x: Var, m: usize, n: usize) -> Result<Expr, LmiError> {
+        self.times(&DMatrix::identity(m, m), x, n)
+    }
+}
+
 /// Read-only context of the conditions: model, plan and the shared variables.
 pub struct Ctx<'a> {
     /// The model.
@@ -205,8 +233,8 @@ pub struct Ctx<'a> {
     pub plan: &'a dyn PlanView,
     /// X = P^{-1}.
     pub x: Var,
-    /// M_j = F_j X.
-    pub m: Vec<Var>,
+    /// M_j = F_j X, one per rule.
+    pub m: Vec<GainTerm>,
     /// The sector variables, if the saturation objective declared them.
     pub sector: Option<Sector>,
 }
@@ -217,7 +245,7 @@ impl Ctx<'_> {
         let n = self.model.n;
         let (a, b) = (&self.model.rules[i].a, &self.model.rules[i].b);
         let ax = Expr::product(a, self.x, &DMatrix::identity(n, n))?;
-        let bm = Expr::product(b, self.m[j], &DMatrix::identity(n, n))?;
+        let bm = self.m[j].times(b, self.x, n)?;
         let he = ax.add(bm)?.he()?;
         if shift == 0.0 {
             Ok(he)

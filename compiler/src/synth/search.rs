@@ -12,6 +12,10 @@ use tsf_lmi::{Problem, Solution, SolveStatus};
 
 /// With `linf <= g`, the largest xi tried is g (1 - XI_CAP_REL).
 const XI_CAP_REL: f64 = 1e-6;
+/// The xi hint's SDP computes the linear-region level with this factor.
+const XI_HINT_LEVEL_FACTOR: f64 = 1.1;
+/// After a feasible xi from the hint, xi times this is tried next.
+const XI_PROBE: f64 = 0.9;
 
 /// (largest feasible, smallest infeasible) value found by a bisection.
 pub(super) type Bracket = (f64, f64);
@@ -63,11 +67,7 @@ impl Runner<'_> {
             return Ok(Attempt::Trouble(SolveStatus::NumericalError));
         };
         let p = chol.inverse();
-        let gains = built
-            .m
-            .iter()
-            .map(|&mv| values_of(mv).map(|m| chol.solve(&m.transpose()).transpose()))
-            .collect::<Result<Vec<_>, _>>()?;
+        let gains = built.gains(values_of, &chol)?;
         let values = built
             .problem
             .vars()
@@ -92,6 +92,7 @@ impl Runner<'_> {
             approximate,
             trigger: None,
             sampled: None,
+            verdicts: Vec::new(),
         })))
     }
 
@@ -174,9 +175,13 @@ impl Runner<'_> {
     }
 
     /// Smallest fixed xi for which `plan` is feasible (L-inf with saturation and
-    /// a bounded disturbance, where xi enters the linear-region level):
-    /// (design, (largest infeasible, smallest feasible)).
-    fn min_xi(&mut self, plan: &Plan) -> Result<Option<(Design, Bracket)>, SynthError> {
+    /// a bounded disturbance, where xi enters the linear-region level), by
+    /// bisection. The bracket is placed by one SDP that minimizes xi with the
+    /// level computed at a bound (see [`Runner::xi_hint`]); a step of
+    /// [`XI_PROBE`] below the first feasible xi usually closes it from below.
+    /// Without a hint the bracket grows from 1e-3. Every design returned is
+    /// solved at a fixed xi. (design, (largest infeasible, smallest feasible)).
+    fn min_xi(&mut self, plan: &Plan, tau: f64) -> Result<Option<(Design, Bracket)>, SynthError> {
         let with = |xi: f64| {
             let mut p = plan.clone();
             if let Some(l) = p.get_mut::<Linf>() {
@@ -191,23 +196,48 @@ impl Runner<'_> {
             Some(Bound::Fixed(g)) => g * (1.0 - XI_CAP_REL),
             _ => 1e8,
         };
-        let (mut lo, mut hi) = (0.0, 1e-3f64.min(cap));
-        let mut best = None;
+        let tol = self.settings.bisection_rel_tol;
+        let hint = self.xi_hint(plan, cap, tau)?;
+        let mut candidates: Vec<f64> = hint
+            .map(|h| (h * (1.0 + tol)).min(cap))
+            .into_iter()
+            .collect();
+        let mut grow = 1e-3f64.min(cap);
         loop {
-            if let Attempt::Solved(d) = self.attempt(&with(hi))? {
-                best = Some(*d);
+            candidates.push(grow);
+            if grow >= cap {
                 break;
             }
-            if hi >= cap {
-                break;
-            }
-            lo = hi;
-            hi = (hi * 4.0).min(cap);
+            grow = (grow * 4.0).min(cap);
         }
-        let Some(mut best) = best else {
+        let (mut lo, mut found) = (0.0f64, None);
+        for (k, xi) in candidates.into_iter().enumerate() {
+            match self.attempt(&with(xi))? {
+                Attempt::Solved(d) => {
+                    found = Some((*d, xi, k == 0 && hint.is_some()));
+                    break;
+                }
+                _ if found.is_none() && xi > lo && k > 0 => lo = xi,
+                _ => {}
+            }
+        }
+        let Some((mut best, mut hi, hinted)) = found else {
             return Ok(None);
         };
-        while hi - lo > self.settings.bisection_rel_tol * hi {
+        if lo >= hi {
+            lo = 0.0;
+        }
+        if hinted {
+            let probe = hi * XI_PROBE;
+            match self.attempt(&with(probe))? {
+                Attempt::Solved(d) => {
+                    best = *d;
+                    hi = probe;
+                }
+                _ => lo = lo.max(probe),
+            }
+        }
+        while hi - lo > tol * hi {
             let mid = 0.5 * (lo + hi);
             match self.attempt(&with(mid))? {
                 Attempt::Solved(d) => {
@@ -218,6 +248,33 @@ impl Runner<'_> {
             }
         }
         Ok(Some((best, (lo, hi))))
+    }
+
+    /// One SDP that minimizes xi with the linear-region level computed at the
+    /// bound xi <= xi_bar (level factor [`XI_HINT_LEVEL_FACTOR`]); its xi only
+    /// places the bisection's bracket, so an `AlmostSolved` iterate is taken.
+    fn xi_hint(&mut self, plan: &Plan, cap: f64, tau: f64) -> Result<Option<f64>, SynthError> {
+        let Some(linf) = plan.get::<Linf>() else {
+            return Ok(None);
+        };
+        if tau <= 0.0 {
+            return Ok(None);
+        }
+        let mut p = plan.clone();
+        if let Some(l) = p.get_mut::<Linf>() {
+            l.xi_bound = Some(((XI_HINT_LEVEL_FACTOR - 1.0) * linf.phi / (tau * tau)).min(cap));
+            l.minimize_xi = true;
+        }
+        let keep = std::mem::replace(&mut self.accept_almost, true);
+        let attempt = self.attempt(&p);
+        self.accept_almost = keep;
+        Ok(match attempt? {
+            Attempt::Solved(d) => d
+                .achieved
+                .get(super::achieved::Quantity::LinfXi)
+                .filter(|x| x.is_finite() && *x > 0.0),
+            _ => None,
+        })
     }
 
     /// Solves `plan` as the goal says (no diagnosis).
@@ -241,7 +298,11 @@ impl Runner<'_> {
             if phi_free {
                 return Err(SynthError::Unsupported("L-inf with saturation and a bounded disturbance needs a fixed phi (`with phi = ...`): the linear-region level depends on xi / phi".into()));
             }
-            return Ok(self.min_xi(plan)?.map(|(mut d, (lo, hi))| {
+            let tau = plan
+                .get::<super::objectives::Saturation>()
+                .and_then(|s| s.disturbance_bound)
+                .unwrap_or(0.0);
+            return Ok(self.min_xi(plan, tau)?.map(|(mut d, (lo, hi))| {
                 d.notes.push(format!("xi minimized by bisection (the linear-region level depends on it): feasible at {hi:.6}, not at {lo:.6}"));
                 d
             }));

@@ -5,10 +5,12 @@
 //! loop ([`crate::sim`]).
 
 mod error;
+mod factored;
 mod sensor;
 pub mod sym;
 
 pub use error::TablesError;
+pub use factored::FactoredTerms;
 pub use sensor::{SensorLaw, SensorTables};
 
 use crate::certify::Certificate;
@@ -39,6 +41,11 @@ pub struct Header {
     pub objectives: Vec<(String, String)>,
     /// Certificate's minimum margin.
     pub min_margin: f64,
+    /// Floating-point type the tables are stored in.
+    pub precision: Precision,
+    /// Worst margin of the certificate re-checked with the tables as stored
+    /// (`None` if the certificate carries no stored-precision check).
+    pub stored_margin: Option<f64>,
     /// Relaxation used.
     pub relaxation: String,
     /// Certified sampling intervals [h_min, h_max] in s (equal: a period) of a
@@ -72,6 +79,9 @@ pub struct Tables {
     pub premise: PremiseCode,
     /// Rule premises.
     pub terms: Vec<Vec<TermSpec>>,
+    /// The rule premises over their distinct terms (what generated code
+    /// evaluates: each distinct term once per step).
+    pub factored: FactoredTerms,
     /// Rule centres (R x P).
     pub centres: Vec<Vec<f64>>,
     /// Gains F_j as rows (R x M x N).
@@ -100,7 +110,7 @@ fn achieved_objectives(a: &Achieved) -> Vec<(String, String)> {
 
 /// The premise code of the model: `z = L x` when every premise component is
 /// linear in x, else one scalar expression per component.
-fn premise_code(model: &TsModel) -> Result<PremiseCode, TablesError> {
+pub(crate) fn premise_code(model: &TsModel) -> Result<PremiseCode, TablesError> {
     let spec = &model.spec;
     let mut entries = Vec::new();
     for p in &spec.premises {
@@ -153,6 +163,8 @@ pub fn tables(
             spec_sha256: spec_sha256.to_string(),
             objectives: achieved_objectives(&design.achieved),
             min_margin: cert.min_margin,
+            precision: spec.precision,
+            stored_margin: cert.stored.as_ref().map(|s| s.worst_margin),
             relaxation: spec.relaxation.node.to_string(),
             sampling: design.sampled.as_ref().map(|s| s.plan.sampling),
         },
@@ -165,6 +177,7 @@ pub fn tables(
         rule_names: model.rules.iter().map(|r| r.name.clone()).collect(),
         premise,
         terms: model.terms.clone(),
+        factored: FactoredTerms::new(&model.terms),
         centres: model.centers.clone(),
         gains: design
             .gains

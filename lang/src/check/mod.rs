@@ -3,7 +3,7 @@
 //! Each item is checked on its own, so independent mistakes are all reported.
 //! One module per item kind: [`decls`] (version, controller, functions,
 //! constants, signals), [`model`] (outputs and the matrices A, B, D),
-//! [`premises`], [`rules`], [`objectives`], [`relaxation`], [`trigger`],
+//! [`premises`], [`rules`] (and their given [`gains`]), [`objectives`], [`relaxation`], [`trigger`],
 //! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`]; premises
 //! must be [`generatable`], and [`combinations`] rejects valid items the
 //! compiler cannot do together.
@@ -14,6 +14,7 @@ mod combinations;
 mod decls;
 mod dynamics;
 mod env;
+mod gains;
 mod generatable;
 mod model;
 mod monte_carlo;
@@ -201,6 +202,8 @@ impl<'a> Checker<'a> {
         self.check_model(&draft, dims);
         let premises = self.premises(&draft.premise_items, &draft.rule_items);
         let rules = self.rules(&draft.rule_items, &premises, dims);
+        self.gains_all_or_none(&draft.rule_items);
+        self.gains_with_trigger(&draft.rule_items, &draft);
         let objectives = self.objectives(&draft.objective_items, dims.n, &draft.outputs);
         let relaxation =
             self.settle_relaxation(draft.relaxation.take(), &rules, draft.rule_items.len());

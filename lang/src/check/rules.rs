@@ -1,6 +1,7 @@
 //! Rules: premise clauses (`z is set`, `z is about p`), the operating point
 //! `at(...)` and matrices given directly in the rule.
 
+use super::gains::GAIN;
 use super::{Checker, Dims};
 use crate::ast::{Clause, Ident, Item, ItemKind, NamedArg, SetRef};
 use crate::diag::Diagnostic;
@@ -10,6 +11,12 @@ use crate::span::Span;
 use crate::spec::{ClauseSet, Premise, RuleClause, RuleSpec};
 use crate::suggest::suggest;
 use std::collections::HashMap;
+
+/// What a rule gives directly: model matrices by name, and its gain `F`.
+struct RuleMatrices {
+    overrides: Vec<(String, Mat, Span)>,
+    gain: Option<(Mat, Span)>,
+}
 
 /// One clause of a rule's premise, comparable and hashable: the premise's
 /// index and the set's index or the bits of its `about` point.
@@ -72,7 +79,8 @@ impl Checker<'_> {
             if at.is_some() && at_point.is_none() {
                 ok = false;
             }
-            let (overrides, matrices_ok) = self.overrides(name, matrices, dims);
+            let (RuleMatrices { overrides, gain }, matrices_ok) =
+                self.overrides(name, matrices, dims);
             if !(ok && matrices_ok) {
                 continue;
             }
@@ -96,6 +104,7 @@ impl Checker<'_> {
                 clauses: rc,
                 at: at_point,
                 overrides,
+                gain,
                 span: it.span,
             });
         }
@@ -291,28 +300,45 @@ impl Checker<'_> {
         good.then_some((x, aspan))
     }
 
-    /// Matrices given in the rule (`A = ...`), each of the model's shape and given once.
+    /// Matrices given in the rule (`A = ...`), each of the model's shape and
+    /// given once, and the rule's gain `F = ...` if it gives one.
     fn overrides(
         &mut self,
         name: &Ident,
         matrices: &[NamedArg],
         dims: Dims,
-    ) -> (Vec<(String, Mat, Span)>, bool) {
+    ) -> (RuleMatrices, bool) {
         let Dims { n, m, q } = dims;
         let mut ok = true;
         let mut overrides = Vec::new();
+        let mut gain: Option<(Mat, Span)> = None;
         for mat in matrices {
             let (rows, cols) = match mat.name.node.as_str() {
                 "A" => (n, n),
                 "B" => (n, m),
                 "D" => (n, q),
+                GAIN if gain.is_some() => {
+                    self.err(Diagnostic::error(
+                        mat.name.span,
+                        format!("`F` is given twice in rule {}", name.node),
+                    ));
+                    ok = false;
+                    continue;
+                }
+                GAIN => {
+                    match self.gain(name, mat, dims) {
+                        Some(f) => gain = Some((f, mat.value.span)),
+                        None => ok = false,
+                    }
+                    continue;
+                }
                 other => {
                     self.err(
                         Diagnostic::error(
                             mat.name.span,
                             format!("unknown model matrix `{other}` in rule"),
                         )
-                        .with_label("a rule may give A, B or D"),
+                        .with_label("a rule may give A, B, D and its gain F"),
                     );
                     ok = false;
                     continue;
@@ -352,7 +378,7 @@ impl Checker<'_> {
             }
             overrides.push((mat.name.node.clone(), v, mat.value.span));
         }
-        (overrides, ok)
+        (RuleMatrices { overrides, gain }, ok)
     }
 }
 

@@ -2,7 +2,7 @@
 //! every kind of premise term, with holes (far from the centres no rule fires).
 #![allow(dead_code)]
 
-use tsf_runtime::{Controller, Membership, Rule, Term};
+use tsf_runtime::{Controller, FactoredController, Membership, Rule, Term};
 
 pub const N: usize = 4;
 pub const M: usize = 2;
@@ -63,6 +63,22 @@ pub fn controller(
             Rule::new(&R2),
             Rule::new(&R3),
         ],
+        centres: CENTRES,
+        gains,
+        u_max,
+    }
+}
+
+/// The fixture as a [`FactoredController`] (its rules share no term: the
+/// seven terms in rule order).
+pub fn factored(
+    gains: [[[f64; N]; M]; R],
+    u_max: [f64; M],
+) -> FactoredController<'static, f64, N, M, P, R, 7> {
+    FactoredController {
+        premise_map: MAP,
+        terms: [R0[0], R0[1], R1[0], R1[1], R2[0], R2[1], R3[0]],
+        rules: [&[0, 1], &[2, 3], &[4, 5], &[6]],
         centres: CENTRES,
         gains,
         u_max,

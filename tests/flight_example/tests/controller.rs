@@ -80,3 +80,79 @@ fn pendulum_premise_is_the_sector_function() {
     // (B = [0; -a cos(theta)/den] < 0, so a positive theta needs positive u).
     assert!(u[0] > 0.0, "u = {u:?}");
 }
+
+/// The generated tables list each distinct premise term once; expanded back
+/// into one term list per rule they make a `tsf_runtime::Controller` whose
+/// step is bit for bit the generated controller's, at random states.
+fn agrees_with_per_rule_terms<
+    const N: usize,
+    const M: usize,
+    const P: usize,
+    const R: usize,
+    const D: usize,
+>(
+    table: &tsf_runtime::FactoredController<'static, f64, N, M, P, R, D>,
+    premises: impl Fn(&[f64; N]) -> [f64; P],
+    step: impl Fn(&[f64; N]) -> ([f64; M], [f64; R]),
+    scale: f64,
+) {
+    use tsf_runtime::{Controller, Rule, Term};
+    let per_rule: Vec<Vec<Term<'static, f64>>> = table
+        .rules
+        .iter()
+        .map(|rule| rule.iter().map(|&k| table.terms[k]).collect())
+        .collect();
+    let reference = Controller {
+        premise_map: table.premise_map,
+        rules: std::array::from_fn(|i| Rule::new(&per_rule[i])),
+        centres: table.centres,
+        gains: table.gains,
+        u_max: table.u_max,
+    };
+    let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for _ in 0..2000 {
+        let x: [f64; N] = std::array::from_fn(|_| scale * next());
+        let want = reference.step_with_premises(&x, &premises(&x));
+        let (u, h) = step(&x);
+        assert_eq!(u.map(f64::to_bits), want.u.map(f64::to_bits), "u at {x:?}");
+        assert_eq!(h.map(f64::to_bits), want.h.map(f64::to_bits), "h at {x:?}");
+    }
+}
+
+#[test]
+fn factored_tables_step_like_per_rule_terms() {
+    use flight_example::{event_triggered as xu, pendulum};
+    agrees_with_per_rule_terms(
+        &TABLE,
+        |x| tsf_runtime::premises_linear(&TABLE.premise_map, x),
+        |x| {
+            let mut c = Controller::new();
+            (c.step(x), *c.strengths())
+        },
+        0.2,
+    );
+    agrees_with_per_rule_terms(
+        &xu::TABLE,
+        |x| tsf_runtime::premises_linear(&xu::TABLE.premise_map, x),
+        |x| {
+            let mut c = xu::Controller::new();
+            (c.step(x), *c.strengths())
+        },
+        1.0,
+    );
+    agrees_with_per_rule_terms(
+        &pendulum::TABLE,
+        pendulum::premises,
+        |x| {
+            let mut c = pendulum::Controller::new();
+            (c.step(x), *c.strengths())
+        },
+        1.5,
+    );
+}

@@ -50,11 +50,12 @@ impl Gen<'_> {
         let _ = write!(
             s,
             r#"//
-// Semantics are those of tsf-runtime's `Controller::step` (runtime/README.md),
+// Semantics are those of tsf-runtime's `FactoredController::step` (runtime/README.md),
 // computed by tsf_runtime.c (written next to this file: compile and link it
 // once per image): non-finite state or premise -> u = 0, h = 0 and a fault
 // flag; no rule fired -> the nearest rule centre's gain alone and a flag;
-// |u_s| <= u_max_s always; rules with h_j == 0 are skipped in the blend.
+// |u_s| <= u_max_s always; rules with h_j == 0 are skipped in the blend;
+// each distinct premise term is evaluated once per step.
 // exp, sqrt, sin and cos come from libm here and from tsf-runtime in Rust:
 // results agree to ~1e-15 relative (a few ulp per call; tested to 1e-12);
 // atan is the runtime's, bit for bit.

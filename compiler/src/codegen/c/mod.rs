@@ -3,7 +3,7 @@
 //! trigger, and the fixed runtime `tsf_runtime.h/.c` they include.
 //!
 //! The runtime (`runtime/c` in the repository, embedded here by
-//! [`runtime`]) does every computation of `tsf_runtime::Controller::step` and
+//! [`runtime`]) does every computation of `tsf_runtime::FactoredController::step` and
 //! of the trigger state machines, operation by operation; generated files
 //! hold only what depends on the spec: dimensions, const tables, the premise
 //! function and thin wrappers passing the tables to the runtime.

@@ -258,7 +258,7 @@ fn sensor_source(g: &Gen<'_>, s: &SensorTables) -> String {
 }}
 
 const {real} *{p}last(const {p}t *t) {{
-    return t->has_last ? t->last : 0;
+    return (t->has_last != 0) ? t->last : NULL;
 }}
 "#
     );

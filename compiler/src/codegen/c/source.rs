@@ -6,7 +6,7 @@
 use super::{flat_rows, list, lit, Gen};
 use crate::model::TermSpec;
 use crate::tables::sym::Sym;
-use crate::tables::PremiseCode;
+use crate::tables::{PremiseCode, Tables};
 use std::fmt::Write as _;
 use tsf_lang::spec::SetShape;
 
@@ -77,48 +77,63 @@ impl Gen<'_> {
             "/* Saturation levels (INFINITY = unlimited). */\nstatic const {real} {p}u_max[{u}M] = {};\n",
             list(&t.u_max)
         );
-        let mut terms = Vec::new();
-        let mut firsts = vec![0usize];
+        let f = &t.factored;
         let mut points: Vec<f64> = Vec::new();
-        for (rule, name) in t.terms.iter().zip(&t.rule_names) {
-            for term in rule {
-                terms.push(term_entry(term, name, &mut points));
-            }
-            firsts.push(terms.len());
-        }
+        let mut terms: Vec<String> = f
+            .terms
+            .iter()
+            .enumerate()
+            .map(|(k, term)| term_entry(term, &users(t, k), &mut points))
+            .collect();
         if terms.is_empty() {
             terms.push("    {TSF_TERM_TRAP, 0, 0, 0, {0.0, 0.0, 0.0, 0.0}} /* unused */".into());
         }
         if points.is_empty() {
             points.push(0.0);
         }
-        let firsts: Vec<String> = firsts.iter().map(|f| f.to_string()).collect();
+        let mut factors: Vec<String> = Vec::new();
+        let mut firsts = vec!["0".to_string()];
+        for rule in &f.rules {
+            factors.extend(rule.iter().map(usize::to_string));
+            firsts.push(factors.len().to_string());
+        }
+        if factors.is_empty() {
+            factors.push("0".into());
+        }
         let _ = write!(
             s,
-            r#"/* Rule premises (tsf_term in tsf_runtime.h). */
+            r#"/* The distinct rule-premise terms (tsf_term in tsf_runtime.h), each
+   evaluated once per step. */
 static const {u}RT(tsf_term) {p}terms[{nt}] = {{
 {terms}
 }};
 
-/* Terms of rule i: {p}terms[{p}rule_terms[i] .. {p}rule_terms[i + 1]]. */
-static const int {p}rule_terms[{u}R + 1] = {{{firsts}}};
+/* Every rule's premise as indices into {p}terms, rule after rule (the
+   weight is the product of the degrees, in this order). */
+static const int {p}factors[{nf}] = {{{factors}}};
+
+/* Terms of rule i: {p}factors[{p}rule_factors[i] .. {p}rule_factors[i + 1]]. */
+static const int {p}rule_factors[{u}R + 1] = {{{firsts}}};
 
 /* Operating points of `about` terms. */
 static const {real} {p}about_points[{np}] = {pts};
 
 /* Everything the runtime's step reads. */
 static const {u}RT(tsf_controller) {p}tables = {{
-    {u}N, {u}M, {u}P, {u}R,
-    {p}terms, {p}rule_terms, {p}about_points,
+    {u}N, {u}M, {u}P, {u}R, {d},
+    {p}terms, {p}factors, {p}rule_factors, {p}about_points,
     {p}centres, {p}gains, {p}u_max
 }};
 
 "#,
             nt = terms.len(),
             terms = terms.join(",\n"),
+            nf = factors.len(),
+            factors = factors.join(", "),
             firsts = firsts.join(", "),
             np = points.len(),
             pts = list(&points),
+            d = f.terms.len(),
         );
         s
     }
@@ -228,9 +243,22 @@ fn padded(rows: &[Vec<f64>], width: usize) -> Vec<Vec<f64>> {
     out
 }
 
-/// One entry of the term table (a `tsf_term` initializer); `about` points
-/// are appended to `points`.
-fn term_entry(term: &TermSpec, rule: &str, points: &mut Vec<f64>) -> String {
+/// The rules using distinct term `k`, for the term table's comments.
+fn users(t: &Tables, k: usize) -> String {
+    let names: Vec<&str> = t
+        .factored
+        .rules
+        .iter()
+        .zip(&t.rule_names)
+        .filter(|(rule, _)| rule.contains(&k))
+        .map(|(_, name)| name.as_str())
+        .collect();
+    names.join(", ")
+}
+
+/// One entry of the term table (a `tsf_term` initializer) with a comment
+/// naming the rules that use it; `about` points are appended to `points`.
+fn term_entry(term: &TermSpec, rules: &str, points: &mut Vec<f64>) -> String {
     let (kind, var, len, point, prm) = match term {
         TermSpec::Is { var, set } => {
             let (kind, prm) = match *set {
@@ -252,7 +280,7 @@ fn term_entry(term: &TermSpec, rule: &str, points: &mut Vec<f64>) -> String {
         }
     };
     format!(
-        "    {{TSF_TERM_{kind}, {var}, {len}, {point}, {}}} /* {rule} */",
+        "    {{TSF_TERM_{kind}, {var}, {len}, {point}, {}}} /* {rules} */",
         list(&prm)
     )
 }

@@ -10,6 +10,7 @@ impl Gen<'_> {
         let (p, u) = (&self.p, &self.u);
         let real = format!("{u}REAL");
         let pd = self.pd;
+        let dd = self.t.factored.terms.len().max(1);
         format!(
             r#"void {p}init({p}t *s) {{
     int i;
@@ -20,7 +21,8 @@ impl Gen<'_> {
 }}
 
 void {p}step_with_premises({p}t *s, const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
-    s->flags = {u}RT(tsf_step_with_premises)(&{p}tables, x, z, s->h, u);
+    {real} deg[{dd}]; /* degrees of the distinct premise terms */
+    s->flags = {u}RT(tsf_step_with_premises)(&{p}tables, x, z, deg, s->h, u);
 }}
 
 void {p}step({p}t *s, const {real} x[{u}N], {real} u[{u}M]) {{
@@ -34,15 +36,15 @@ uint8_t {p}flags(const {p}t *s) {{
 }}
 
 int {p}is_fault(const {p}t *s) {{
-    return (s->flags & ({u}FLAG_STATE_NONFINITE | {u}FLAG_PREMISE_NONFINITE)) != 0;
+    return (s->flags & ({u}FLAG_STATE_NONFINITE | {u}FLAG_PREMISE_NONFINITE)) != 0u;
 }}
 
 int {p}no_rule_fired(const {p}t *s) {{
-    return (s->flags & {u}FLAG_NO_RULE_FIRED) != 0;
+    return (s->flags & {u}FLAG_NO_RULE_FIRED) != 0u;
 }}
 
 int {p}saturated(const {p}t *s) {{
-    return (s->flags & {u}FLAG_SATURATED) != 0;
+    return (s->flags & {u}FLAG_SATURATED) != 0u;
 }}
 
 const {real} *{p}strengths(const {p}t *s) {{

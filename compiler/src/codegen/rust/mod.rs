@@ -64,49 +64,53 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         Literal::usize_unsuffixed(t.p),
         Literal::usize_unsuffixed(t.r),
     );
-    // Rule premises: one static term array per rule (and point arrays for `about`).
+    // Rule premises: the distinct terms (each evaluated once per step) and
+    // one static index array per rule.
     let mut statics = Vec::new();
-    let mut rule_refs = Vec::new();
-    for (ri, terms) in t.terms.iter().enumerate() {
-        let terms_ident = format_ident!("TERMS_{}", ri + 1);
-        let mut items = Vec::new();
-        for (ti, term) in terms.iter().enumerate() {
-            match term {
-                TermSpec::Is { var, set } => {
-                    let var = Literal::usize_unsuffixed(*var);
-                    let set = membership(set, prec);
-                    items.push(quote!(Term::Is { var: #var, set: #set }));
-                }
-                TermSpec::About {
-                    first,
-                    point,
-                    sigma,
-                } => {
-                    let pt = format_ident!("POINT_{}_{}", ri + 1, ti + 1);
-                    let len = Literal::usize_unsuffixed(point.len());
-                    let vals = array(point, prec);
-                    statics.push(quote! {
-                        #[allow(clippy::approx_constant, clippy::excessive_precision)]
-                        static #pt: [#ty; #len] = #vals;
-                    });
-                    let first = Literal::usize_unsuffixed(*first);
-                    let sigma = float(*sigma, prec);
-                    items.push(quote!(Term::About { first: #first, point: &#pt, sigma: #sigma }));
-                }
+    let mut term_items = Vec::new();
+    for (k, term) in t.factored.terms.iter().enumerate() {
+        match term {
+            TermSpec::Is { var, set } => {
+                let var = Literal::usize_unsuffixed(*var);
+                let set = membership(set, prec);
+                term_items.push(quote!(Term::Is { var: #var, set: #set }));
+            }
+            TermSpec::About {
+                first,
+                point,
+                sigma,
+            } => {
+                let pt = format_ident!("POINT_{}", k + 1);
+                let len = Literal::usize_unsuffixed(point.len());
+                let vals = array(point, prec);
+                let doc = format!(" Operating point of `about` term {k} of `TABLE.terms`.");
+                statics.push(quote! {
+                    #[doc = #doc]
+                    #[allow(clippy::approx_constant, clippy::excessive_precision)]
+                    static #pt: [#ty; #len] = #vals;
+                });
+                let first = Literal::usize_unsuffixed(*first);
+                let sigma = float(*sigma, prec);
+                term_items.push(quote!(Term::About { first: #first, point: &#pt, sigma: #sigma }));
             }
         }
-        let count = Literal::usize_unsuffixed(items.len());
+    }
+    let mut rule_refs = Vec::new();
+    for (ri, indices) in t.factored.rules.iter().enumerate() {
+        let ident = format_ident!("RULE_{}", ri + 1);
+        let count = Literal::usize_unsuffixed(indices.len());
+        let items = indices.iter().map(|k| Literal::usize_unsuffixed(*k));
         let doc = format!(
-            "Premise of rule {}.",
+            " Premise of rule {}: indices into `TABLE.terms`, multiplied in order.",
             t.rule_names.get(ri).map_or("?", String::as_str)
         );
         statics.push(quote! {
             #[doc = #doc]
-            #[allow(clippy::approx_constant, clippy::excessive_precision)]
-            static #terms_ident: [Term<'static, #ty>; #count] = [#(#items),*];
+            static #ident: [usize; #count] = [#(#items),*];
         });
-        rule_refs.push(quote!(Rule::new(&#terms_ident)));
+        rule_refs.push(quote!(&#ident));
     }
+    let d = Literal::usize_unsuffixed(t.factored.terms.len());
     let (premise_map, step_body, premise_fn) = match &t.premise {
         PremiseCode::Linear(l) => (matrix(l, prec), quote!(TABLE.step(x)), quote!()),
         PremiseCode::Exprs(exprs) => {
@@ -135,19 +139,20 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     let input_doc = format!("Input order: {}.", t.input_names.join(", "));
     let uses_real = matches!(t.premise, PremiseCode::Exprs(_));
     let uses_membership = t
+        .factored
         .terms
         .iter()
-        .flatten()
         .any(|x| matches!(x, TermSpec::Is { .. }));
-    let mut imports = vec![quote!(Flags)];
+    let mut imports = vec![quote!(FactoredController), quote!(Flags)];
     if uses_membership {
         imports.push(quote!(Membership));
     }
     if uses_real {
         imports.push(quote!(Real));
     }
-    imports.push(quote!(Rule));
-    imports.push(quote!(Term));
+    if !t.factored.terms.is_empty() {
+        imports.push(quote!(Term));
+    }
     let sampling = sampling_consts(t.header.sampling);
     let tokens = quote! {
         use tsf_runtime::{#(#imports),*};
@@ -160,14 +165,17 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         pub const P: usize = #p;
         /// Number of rules.
         pub const R: usize = #r;
+        /// Number of distinct premise terms (each evaluated once per step).
+        pub const D: usize = #d;
         #sampling
 
         #(#statics)*
 
         /// The controller's tables, certified by tsfc.
         #[allow(clippy::approx_constant, clippy::excessive_precision, clippy::unreadable_literal)]
-        pub static TABLE: tsf_runtime::Controller<'static, #ty, N, M, P, R> = tsf_runtime::Controller {
+        pub static TABLE: FactoredController<'static, #ty, N, M, P, R, D> = FactoredController {
             premise_map: #premise_map,
+            terms: [#(#term_items),*],
             rules: [#(#rule_refs),*],
             centres: #centres,
             gains: #gains,

@@ -157,10 +157,11 @@ impl Builder {
 
     /// The tape computing `outputs` (and every guard), or `None` when it
     /// needs more than [`REGISTERS`] registers. Registers: inputs, constants,
-    /// results. A product used once, by a sum or difference, is fused into
-    /// it (`x + a * b`, rounded as two operations); instructions are ordered
-    /// by level (longest path from the inputs) and, within a level, by kind,
-    /// and runs of one kind form a batch.
+    /// results. Products and sums of up to three products read once, by a
+    /// sum or difference, are fused into it (`x + a * b`, `a * b + c * d`,
+    /// ..., each operation rounded as before); instructions are ordered by
+    /// level (longest path from the inputs) and, within a level, by kind, and
+    /// runs of one kind form a batch.
     pub fn finish(self, outputs: &[Id]) -> Option<Tape> {
         let count = self.nodes.len();
         let mut uses = vec![0u32; count];
@@ -189,45 +190,71 @@ impl Builder {
         if self.inputs + live_count > REGISTERS {
             return None;
         }
-        // A product `a * b` read once, by a sum or difference.
-        let fusible = |id: Id| match self.nodes[id.0 as usize] {
-            Node::Bin(Binary::Mul, a, b) if uses[id.0 as usize] == 1 => Some((a, b)),
-            _ => None,
-        };
-        let mut fused = vec![false; count];
-        // (kind, node, operands) of every instruction, in creation order.
-        let mut instrs: Vec<(Kind, usize, [Id; 3])> = Vec::new();
+        // Each live operation becomes an instruction; a product or sum of
+        // products read only by a sum or difference is absorbed into it.
+        let mut at: Vec<Option<usize>> = vec![None; count];
+        let mut slots: Vec<Option<Pending>> = Vec::new();
         for (k, node) in self.nodes.iter().enumerate() {
             if !live[k] {
                 continue;
             }
-            let instr = match *node {
-                Node::Input(_) | Node::Const(_) => continue,
-                Node::Un(Unary::Neg, a) => (Kind::Neg, [a, a, a]),
-                Node::Un(f, a) => (Kind::Call(f), [a, a, a]),
-                Node::Bin(Binary::Add, x, y) => match (fusible(y), fusible(x)) {
-                    (Some((a, b)), _) => {
-                        fused[y.0 as usize] = true;
-                        (Kind::MulAdd, [x, a, b])
-                    }
-                    (None, Some((a, b))) => {
-                        fused[x.0 as usize] = true;
-                        (Kind::MulAdd, [y, a, b])
-                    }
-                    _ => (Kind::Add, [x, y, y]),
-                },
-                Node::Bin(Binary::Sub, x, y) => match fusible(y) {
-                    Some((a, b)) => {
-                        fused[y.0 as usize] = true;
-                        (Kind::MulSub, [x, a, b])
-                    }
-                    None => (Kind::Sub, [x, y, y]),
-                },
-                Node::Bin(f, a, b) => (Kind::of(f), [a, b, b]),
+            // The instruction of a single-use operand, to absorb.
+            let peek = |slots: &[Option<Pending>], id: Id| -> Option<(Kind, [Id; 6])> {
+                let i = at[id.0 as usize].filter(|_| uses[id.0 as usize] == 1)?;
+                slots[i].map(|(kind, _, ops)| (kind, ops))
             };
-            instrs.push((instr.0, k, instr.1));
+            let absorb = |slots: &mut Vec<Option<Pending>>, ids: &[Id]| {
+                for id in ids {
+                    if let Some(i) = at[id.0 as usize] {
+                        slots[i] = None;
+                    }
+                }
+            };
+            let (kind, ops) = match *node {
+                Node::Input(_) | Node::Const(_) => continue,
+                Node::Un(Unary::Neg, a) => (Kind::Neg, [a; 6]),
+                Node::Un(f, a) => (Kind::Call(f), [a; 6]),
+                Node::Bin(f @ (Binary::Add | Binary::Sub), x, y) => {
+                    let (px, py) = (peek(&slots, x), peek(&slots, y));
+                    let add = f == Binary::Add;
+                    match (px, py) {
+                        (Some((Kind::Mul, [a, b, ..])), Some((Kind::Mul, [c, e, ..]))) => {
+                            absorb(&mut slots, &[x, y]);
+                            let kind = if add { Kind::Dot2 } else { Kind::Dot2Sub };
+                            (kind, [a, b, c, e, e, e])
+                        }
+                        (Some((Kind::Dot2, [a, b, c, e, ..])), Some((Kind::Mul, [g, h, ..])))
+                        | (Some((Kind::Mul, [g, h, ..])), Some((Kind::Dot2, [a, b, c, e, ..])))
+                            if add =>
+                        {
+                            absorb(&mut slots, &[x, y]);
+                            (Kind::Dot3, [a, b, c, e, g, h])
+                        }
+                        (Some((Kind::MulAdd, [z, a, b, ..])), Some((Kind::Mul, [c, e, ..])))
+                        | (Some((Kind::Mul, [c, e, ..])), Some((Kind::MulAdd, [z, a, b, ..])))
+                            if add =>
+                        {
+                            absorb(&mut slots, &[x, y]);
+                            (Kind::MulAdd2, [z, a, b, c, e, e])
+                        }
+                        (_, Some((Kind::Mul, [a, b, ..]))) => {
+                            absorb(&mut slots, &[y]);
+                            let kind = if add { Kind::MulAdd } else { Kind::MulSub };
+                            (kind, [x, a, b, b, b, b])
+                        }
+                        (Some((Kind::Mul, [a, b, ..])), _) if add => {
+                            absorb(&mut slots, &[x]);
+                            (Kind::MulAdd, [y, a, b, b, b, b])
+                        }
+                        _ => (Kind::of(f), [x, y, y, y, y, y]),
+                    }
+                }
+                Node::Bin(f, a, b) => (Kind::of(f), [a, b, b, b, b, b]),
+            };
+            at[k] = Some(slots.len());
+            slots.push(Some((kind, k, ops)));
         }
-        instrs.retain(|(_, k, _)| !fused[*k]);
+        let mut instrs: Vec<Pending> = slots.into_iter().flatten().collect();
         // Levels: inputs and constants 0, an instruction one above its operands.
         let mut level = vec![0u32; count];
         for (_, k, ops) in &instrs {
@@ -257,7 +284,15 @@ impl Builder {
                 let r = |id: Id| reg[id.0 as usize];
                 Instr {
                     kind: *kind,
-                    regs: [reg[*k], r(ops[0]), r(ops[1]), r(ops[2])],
+                    regs: [
+                        reg[*k],
+                        r(ops[0]),
+                        r(ops[1]),
+                        r(ops[2]),
+                        r(ops[3]),
+                        r(ops[4]),
+                        r(ops[5]),
+                    ],
                 }
             })
             .collect();
@@ -271,6 +306,9 @@ impl Builder {
         })
     }
 }
+
+/// An instruction before registers are assigned: kind, node, operands.
+type Pending = (Kind, usize, [Id; 6]);
 
 /// Runs of one kind become batches; neighbouring runs of at most
 /// [`SHORT_RUN`] instructions are merged into one mixed batch.

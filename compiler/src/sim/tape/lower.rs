@@ -370,10 +370,9 @@ impl<'a> Lowerer<'a> {
     ) -> Lowered {
         let bound = |this: &mut Self, e: &Expr, max: usize| -> Result<usize, Unsupported> {
             let v = this.lower(e, scope, d, calls)?;
-            match (v.is_scalar(), this.b.value(v.data[0])) {
-                (true, Some(x)) if x.fract() == 0.0 && x >= 0.0 && x <= max as f64 => {
-                    Ok(x as usize)
-                }
+            let value = v.data.first().filter(|_| v.is_scalar());
+            match value.and_then(|&id| this.b.value(id)) {
+                Some(x) if x.fract() == 0.0 && x >= 0.0 && x <= max as f64 => Ok(x as usize),
                 _ => unsupported("state-dependent or invalid index"),
             }
         };

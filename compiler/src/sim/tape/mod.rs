@@ -143,8 +143,9 @@ pub const REGISTERS: usize = 1 << 16;
 /// A register file.
 pub type Registers = [f64; REGISTERS];
 
-/// What the instructions of a batch compute (operands `a, b, c` of
-/// `[d, a, b, c]`, result in register `d`).
+/// What an instruction computes from its operand registers `a, b, c, e, f,
+/// g` (of `[d, a, b, c, e, f, g]`; result in register `d`). Each product and
+/// sum is rounded on its own, as the separate operations would be.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
     /// `a + b`
@@ -163,6 +164,14 @@ enum Kind {
     MulAdd,
     /// `a - b * c` (two roundings)
     MulSub,
+    /// `(a + b * c) + e * f`
+    MulAdd2,
+    /// `a * b + c * e`
+    Dot2,
+    /// `a * b - c * e`
+    Dot2Sub,
+    /// `(a * b + c * e) + f * g`
+    Dot3,
     /// `f(a)`
     Call(Unary),
     /// `f(a, b)`
@@ -193,17 +202,21 @@ impl Kind {
             Kind::Neg => 5,
             Kind::MulAdd => 6,
             Kind::MulSub => 7,
-            Kind::Call(f) => 8 + f as u8,
+            Kind::MulAdd2 => 8,
+            Kind::Dot2 => 9,
+            Kind::Dot2Sub => 10,
+            Kind::Dot3 => 11,
+            Kind::Call(f) => 12 + f as u8,
             Kind::Call2(f) => 32 + f as u8,
         }
     }
 }
 
-/// One instruction: its kind and registers `[d, a, b, c]` (result `d`).
+/// One instruction: its kind and registers `[d, a, b, c, e, f, g]` (result `d`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Instr {
     kind: Kind,
-    regs: [u16; 4],
+    regs: [u16; 7],
 }
 
 /// Runs of one kind at most this long are merged into a mixed batch, where
@@ -279,8 +292,7 @@ impl Tape {
         // so the match folds away there).
         macro_rules! step {
             ($kind:expr, $regs:expr) => {{
-                let [d, a, b, c] = $regs;
-                let (d, a, b, c) = (d as usize, a as usize, b as usize, c as usize);
+                let [d, a, b, c, e, f, g] = $regs.map(usize::from);
                 regs[d] = match $kind {
                     Kind::Add => regs[a] + regs[b],
                     Kind::Sub => regs[a] - regs[b],
@@ -295,8 +307,12 @@ impl Tape {
                     Kind::Neg => -regs[a],
                     Kind::MulAdd => regs[a] + regs[b] * regs[c],
                     Kind::MulSub => regs[a] - regs[b] * regs[c],
-                    Kind::Call(f) => f.apply(regs[a]),
-                    Kind::Call2(f) => f.apply(regs[a], regs[b]),
+                    Kind::MulAdd2 => (regs[a] + regs[b] * regs[c]) + regs[e] * regs[f],
+                    Kind::Dot2 => regs[a] * regs[b] + regs[c] * regs[e],
+                    Kind::Dot2Sub => regs[a] * regs[b] - regs[c] * regs[e],
+                    Kind::Dot3 => (regs[a] * regs[b] + regs[c] * regs[e]) + regs[f] * regs[g],
+                    Kind::Call(h) => h.apply(regs[a]),
+                    Kind::Call2(h) => h.apply(regs[a], regs[b]),
                 };
             }};
         }
@@ -323,8 +339,12 @@ impl Tape {
                 Some(Kind::Neg) => each!(Kind::Neg),
                 Some(Kind::MulAdd) => each!(Kind::MulAdd),
                 Some(Kind::MulSub) => each!(Kind::MulSub),
-                Some(Kind::Call(f)) => each!(Kind::Call(f)),
-                Some(Kind::Call2(f)) => each!(Kind::Call2(f)),
+                Some(Kind::MulAdd2) => each!(Kind::MulAdd2),
+                Some(Kind::Dot2) => each!(Kind::Dot2),
+                Some(Kind::Dot2Sub) => each!(Kind::Dot2Sub),
+                Some(Kind::Dot3) => each!(Kind::Dot3),
+                Some(Kind::Call(h)) => each!(Kind::Call(h)),
+                Some(Kind::Call2(h)) => each!(Kind::Call2(h)),
             }
         }
         Ok(())

@@ -72,7 +72,7 @@ impl Objective for Hinf {
                     vec![
                         Some(ctx.upsilon(i, j, 0.0)?),
                         Some(Expr::constant(&ch.d[i])?),
-                        Some(ch.output_map(ctx.x, ctx.m[j], model.n)?.transpose()),
+                        Some(ch.output_map(ctx.x, &ctx.m[j], model.n)?.transpose()),
                     ],
                     vec![
                         None,

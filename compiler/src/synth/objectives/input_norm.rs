@@ -52,10 +52,14 @@ impl Objective for InputNorm {
             Bound::Fixed(mu) => mu * mu,
             _ => 0.0,
         };
-        for (j, &mj) in ctx.m.iter().enumerate() {
+        let (m, n) = (ctx.model.m, ctx.model.n);
+        for (j, mj) in ctx.m.iter().enumerate() {
             let e = Expr::sym_blocks(vec![
-                vec![Some(Expr::var(ctx.x)), Some(Expr::var(mj).transpose())],
-                vec![None, Some(scalar_times_identity(s, fixed, ctx.model.m)?)],
+                vec![
+                    Some(Expr::var(ctx.x)),
+                    Some(mj.expr(ctx.x, m, n)?.transpose()),
+                ],
+                vec![None, Some(scalar_times_identity(s, fixed, m)?)],
             ])?;
             lmis.nonstrict(&format!("input norm [{}]", j + 1), e)?;
         }

@@ -32,16 +32,24 @@ pub struct Linf {
     pub phi: f64,
     /// Whether the spec fixes phi.
     pub phi_fixed: bool,
-    /// xi fixed by the spec (or by the xi search), or a variable.
+    /// xi fixed by the spec, or a variable.
     pub xi: Option<f64>,
+    /// With a variable xi: the bound xi <= xi_bar the linear-region level is
+    /// computed with (set by the level iteration of the search).
+    pub xi_bound: Option<f64>,
+    /// Minimize xi instead of gamma (the first stage of the xi-level search).
+    pub minimize_xi: bool,
 }
 
 impl Linf {
     /// The factor by which a disturbance bounded by `tau` enlarges the level
     /// set V <= 1 that the state can reach: 1 + xi tau^2 / phi (Xu & Huang
-    /// (19)/(40)); `None` when xi is a variable.
+    /// (19)/(40)), with xi's bound when xi is a variable (the factor grows with
+    /// xi, so the bound's is sound); `None` when xi is free and unbounded.
     pub fn level_factor(&self, tau: f64) -> Option<f64> {
-        self.xi.map(|xi| 1.0 + xi * tau * tau / self.phi)
+        self.xi
+            .or(self.xi_bound)
+            .map(|xi| 1.0 + xi * tau * tau / self.phi)
     }
 }
 
@@ -69,8 +77,8 @@ impl Objective for Linf {
     /// V stays below 1 + xi tau^2 / phi under ||w|| <= tau (Xu & Huang
     /// (19)/(40)): a fixed xi is needed to know that level.
     fn level_factor(&self, tau: f64) -> Option<Result<f64, BuildError>> {
-        Some(match self.xi {
-            Some(xi) => Ok(1.0 + xi * tau * tau / self.phi),
+        Some(match Linf::level_factor(self, tau) {
+            Some(f) => Ok(f),
             None => Err(BuildError::Unsupported("the saturation region with a bounded disturbance needs a fixed xi: write `objective linf(...) ... with xi = ...`".into())),
         })
     }
@@ -114,7 +122,7 @@ impl Objective for Linf {
                 vec![
                     Some(Expr::var(ctx.x).scale(phi)?),
                     None,
-                    Some(ch.output_map(ctx.x, ctx.m[j], n)?.transpose()),
+                    Some(ch.output_map(ctx.x, &ctx.m[j], n)?.transpose()),
                 ],
                 vec![
                     None,
@@ -129,9 +137,19 @@ impl Objective for Linf {
             let eps = lmis.eps;
             lmis.problem
                 .add_scalar("xi > 0", Expr::var(xi), Relation::Ge, eps)?;
+            if let Some(bound) = self.xi_bound {
+                lmis.problem.add_scalar(
+                    "xi < xi_bar (linear-region level)",
+                    Expr::var(xi),
+                    Relation::Le,
+                    bound - eps,
+                )?;
+            }
         }
-        if let (Some(g), Bound::Minimize) = (gamma, self.target) {
-            lmis.problem.minimize(Expr::var(g))?;
+        match (gamma, xi, self.target) {
+            (_, Some(xi), _) if self.minimize_xi => lmis.problem.minimize(Expr::var(xi))?,
+            (Some(g), _, Bound::Minimize) => lmis.problem.minimize(Expr::var(g))?,
+            _ => {}
         }
         Ok(())
     }

@@ -68,6 +68,8 @@ pub fn from_spec(o: &spec::Objective, spec: &Spec, default_phi: f64) -> Option<B
             phi: phi.unwrap_or(default_phi),
             phi_fixed: phi.is_some(),
             xi: *xi,
+            xi_bound: None,
+            minimize_xi: false,
         }),
         spec::Objective::InputNorm { target, initial } => Box::new(InputNorm {
             target: bound(*target),

@@ -6,7 +6,7 @@
 //! certified region of attraction.
 
 use crate::model::TsModel;
-use crate::synth::blocks::{region_block, var_row};
+use crate::synth::blocks::{region_block, row_selector, var_row};
 use crate::synth::objective::{BuildError, Ctx, Lmis, Objective, Sector};
 use nalgebra::DMatrix;
 use tsf_lang::spec::{InitialSet, ObjectiveKind};
@@ -66,9 +66,11 @@ impl Objective for Saturation {
             Some(tau) => ctx.plan.level_factor(tau)?,
             None => 1.0,
         };
-        for (j, (&mj, &zj)) in ctx.m.iter().zip(&sector.z).enumerate() {
+        for (j, (mj, &zj)) in ctx.m.iter().zip(&sector.z).enumerate() {
             for (k, level) in self.levels.iter().enumerate() {
-                let row = var_row(mj, k, m, n)?.sub(var_row(zj, k, m, n)?)?;
+                let row = mj
+                    .times(&row_selector(k, m), ctx.x, n)?
+                    .sub(var_row(zj, k, m, n)?)?;
                 let rhs = Expr::constant(&DMatrix::from_element(1, 1, level * level / shrink))?;
                 lmis.nonstrict(
                     &format!("linear region [{},{}]", j + 1, k + 1),

@@ -3,10 +3,17 @@
 //! eigenvalue computed with a dense symmetric eigen-solver. Gains are emitted
 //! only if every strict LMI holds beyond its floating-point error bound.
 
+pub mod stored;
+
 use crate::model::TsModel;
 use crate::synth::{build, Design, Reduction, SynthError};
 use serde::Serialize;
 use tsf_lmi::ConstraintKind;
+
+pub use stored::{MembershipBound, StoredPrecision};
+
+/// Named values of the variables of a problem.
+type Values = Vec<(String, nalgebra::DMatrix<f64>)>;
 
 /// The margin of one constraint.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -42,22 +49,30 @@ pub struct Certificate {
     pub worst: String,
     /// Every constraint.
     pub lmis: Vec<LmiMargin>,
+    /// The re-check with the tables as generated code stores them (reported
+    /// at the top of the report, not inside `certificate`); `None` when the
+    /// certificate at the solved values already fails.
+    #[serde(skip)]
+    pub stored: Option<StoredPrecision>,
 }
 
 /// Margins of every constraint of the full `problem` at the solved values.
 /// The reductions applied to the solved problem are inverted first (they
 /// restore the variables it did not have); a variable still without a value
-/// is an error, never silently zero.
+/// is an error, never silently zero. `substitute` then replaces values (the
+/// stored-precision check puts the stored gains and weight in).
 fn margins_of(
     problem: &tsf_lmi::Problem,
     nonstrict: &[String],
     solved: &[(String, nalgebra::DMatrix<f64>)],
     reductions: &[Reduction],
+    substitute: &dyn Fn(&mut Values),
 ) -> Result<Vec<LmiMargin>, SynthError> {
     let mut named = solved.to_vec();
     for r in reductions {
         r.invert(&mut named);
     }
+    substitute(&mut named);
     let mut values = problem.assignment();
     for (name, v) in problem.vars() {
         let Some((_, value)) = named.iter().find(|(n, _)| n == name) else {
@@ -98,8 +113,24 @@ fn margins_of(
         .collect())
 }
 
-/// Checks `design` against the full set of conditions of its plan.
+/// Checks `design` against the full set of conditions of its plan. With
+/// given gains the conditions are rebuilt with the rules' F_j (never a gain
+/// recovered from the solution), and the design must carry exactly those.
 pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthError> {
+    if let Some(given) = model.spec.given_gains() {
+        let same = given.len() == design.gains.len()
+            && given.iter().zip(&design.gains).all(|(f, g)| {
+                f.shape() == g.shape()
+                    && f.iter()
+                        .zip(g.iter())
+                        .all(|(a, b)| a.to_bits() == b.to_bits())
+            });
+        if !same {
+            return Err(SynthError::Internal(
+                "internal error: the design's gains are not the rules' given gains".into(),
+            ));
+        }
+    }
     let built = build(
         model,
         &design.plan,
@@ -112,9 +143,40 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
         &built.nonstrict,
         &design.values,
         &design.reductions,
+        &|_| {},
     )?;
     // The sampled loops (event-triggered, or every sample transmitted): the
     // gains checked are the design's (the ones emitted), not a copy.
+    lmis.extend(loop_margins(
+        model,
+        design,
+        &|plan| crate::synth::TriggerPlan {
+            gains: design.gains.clone(),
+            ..plan
+        },
+        &|_| {},
+    )?);
+    let mut cert = summarize(lmis);
+    if cert.ok {
+        let stored = stored::check(model, design)?;
+        if !stored.certified {
+            cert.ok = false;
+            cert.worst = stored.worst_lmi.clone();
+        }
+        cert.stored = Some(stored);
+    }
+    Ok(cert)
+}
+
+/// Margins of every LMI of the design's sampled loops (event-triggered, or
+/// every sample transmitted), each rebuilt from `plan(loop plan)` with its
+/// solved values passed through `substitute`.
+fn loop_margins(
+    model: &TsModel,
+    design: &Design,
+    plan: &dyn Fn(crate::synth::TriggerPlan) -> crate::synth::TriggerPlan,
+    substitute: &dyn Fn(&mut Values),
+) -> Result<Vec<LmiMargin>, SynthError> {
     let looped = design
         .trigger
         .iter()
@@ -125,14 +187,24 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
                 .iter()
                 .map(|s| (&s.plan, &s.values, &s.reductions)),
         );
-    for (plan, values, reductions) in looped {
-        let plan = crate::synth::TriggerPlan {
-            gains: design.gains.clone(),
-            ..plan.clone()
-        };
-        let tb = crate::synth::trigger::build(model, &plan, design.eps, false)?;
-        lmis.extend(margins_of(&tb.problem, &tb.nonstrict, values, reductions)?);
+    let mut lmis = Vec::new();
+    for (p, values, reductions) in looped {
+        let tb = crate::synth::trigger::build(model, &plan(p.clone()), design.eps, false)?;
+        lmis.extend(margins_of(
+            &tb.problem,
+            &tb.nonstrict,
+            values,
+            reductions,
+            substitute,
+        )?);
     }
+    Ok(lmis)
+}
+
+/// The certificate of a list of margins: the least strict margin, whether
+/// every condition passes, and the worst condition (a failing one if any,
+/// else the strict one with the least room).
+fn summarize(lmis: Vec<LmiMargin>) -> Certificate {
     let min_margin = lmis
         .iter()
         .filter(|l| l.strict)
@@ -158,11 +230,12 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
         })
         .map(|l| l.name.clone())
         .unwrap_or_default();
-    Ok(Certificate {
+    Certificate {
         rule: RULE,
         min_margin,
         ok,
         worst,
         lmis,
-    })
+        stored: None,
+    }
 }

@@ -1,0 +1,45 @@
+#!/bin/sh
+# Instructions per controller step of the Zhang & Zeng controller (9 rules,
+# n = 6, m = 3), counted by callgrind (deterministic, unlike timings on a
+# shared machine), for the generated Rust and the generated C.
+#
+#   sh bench/step/step_count.sh          # from the repository root
+#
+# Needs valgrind and a C compiler ($CC, default cc). Rust: the flight crate's
+# example `step_count` (1000 steps of `attitude::Controller::step`). C: the
+# controller compiled by `tsfc compile --emit c` into a temporary folder,
+# built with the flags of tests/tests/c_codegen.rs (-std=c99 -pedantic
+# -Wall -Wextra -Werror -O2, plus -ffp-contract=off) around
+# bench/step/step_count.c (1000 steps of zhang_multiobjective_step). Each
+# count covers the step function and everything it calls.
+set -eu
+
+CC=${CC:-cc}
+TARGET=${CARGO_TARGET_DIR:-target}
+SPEC=specs/zhang2013_multiobjective.tsf
+STEPS=1000
+
+per_step() {
+    # callgrind's "Collected" line / STEPS
+    awk -v steps="$STEPS" '/Collected/ { printf "%.1f\n", $4 / steps }'
+}
+
+cargo build --quiet --release -p tsfc --bin tsfc
+cargo build --quiet --release -p flight-example --example step_count
+rust=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null \
+    --toggle-collect='*attitude*Controller*step*' \
+    "$TARGET/release/examples/step_count" 2>&1 >/dev/null | per_step)
+
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+"$TARGET/release/tsfc" compile "$SPEC" --emit c --out "$dir" >/dev/null 2>&1
+"$CC" -std=c99 -pedantic -Wall -Wextra -Werror -O2 -ffp-contract=off -I"$dir" \
+    -o "$dir/step_count" bench/step/step_count.c "$dir/zhang_multiobjective.c" \
+    "$dir/tsf_runtime.c" -lm
+c=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null \
+    --toggle-collect='zhang_multiobjective_step' \
+    "$dir/step_count" 2>&1 >/dev/null | per_step)
+
+echo "instructions per step (callgrind, $SPEC):"
+echo "  Rust  $rust"
+echo "  C     $c"

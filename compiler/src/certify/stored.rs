@@ -1,0 +1,276 @@
+//! The certificate of the design as stored: every LMI of the certificate
+//! (continuous problem and sampled/event-triggered loops) re-checked with
+//! the quantities generated code stores, rounded exactly as it stores them,
+//! and a bound on the arithmetic of membership normalization and blending in
+//! that precision (docs/precision.md).
+//!
+//! Stored quantities: the gains F_j, the saturation levels, and for a sensor
+//! module the trigger weight Upsilon, the threshold ceiling nu and the
+//! sampling bounds. Generated Rust and C print f64 literals in shortest
+//! round-trip form, so `precision f64` stores every value exactly; with
+//! `precision f32` both store `v as f32` (Rust prints the f32 in its own
+//! shortest form, C converts the double literal to `float`, round to
+//! nearest). Lyapunov matrices, multipliers and sector gains are proof
+//! artefacts, not stored: they keep their solved values.
+
+use super::{loop_margins, margins_of, summarize, Values};
+use crate::model::TsModel;
+use crate::synth::objectives::Saturation;
+use crate::synth::{build, Design, SynthError, TriggerPlan};
+use nalgebra::DMatrix;
+use serde::Serialize;
+use tsf_lang::spec::{Precision, Trigger};
+
+/// The bound on membership normalization and blending in the stored
+/// precision, and the margin it asks of the continuous loop's LMIs.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct MembershipBound {
+    /// Unit roundoff u of the precision (2^-24 or 2^-53).
+    pub unit_roundoff: f64,
+    /// Bound on sum_j |h~_j - h_j| of the normalized weights (gamma_R).
+    pub weight_error: f64,
+    /// Bound eps_h on the blended gain's error relative to max_j ||F_j||_F,
+    /// normalization and blend arithmetic together.
+    pub relative_gain_error: f64,
+    /// Bound delta = eps_h max_j ||F_j||_F on the spectral norm of the
+    /// blended gain's error.
+    pub gain_error: f64,
+    /// Margin the closed-loop LMIs need: 2 r max_i ||B_i|| delta ||X||.
+    pub required_margin: f64,
+    /// Least margin of the continuous loop's closed-loop LMIs as stored.
+    pub available_margin: f64,
+    /// Whether `available_margin > required_margin`.
+    pub holds: bool,
+}
+
+/// The stored-precision certificate.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct StoredPrecision {
+    /// `f32` or `f64`.
+    pub precision: &'static str,
+    /// Every LMI holds with the stored quantities and the membership bound holds.
+    pub certified: bool,
+    /// Least margin over the strict LMIs re-checked with the stored quantities.
+    pub worst_margin: f64,
+    /// The condition closest to failing (or failing); `membership rounding`
+    /// when only the membership bound fails.
+    pub worst_lmi: String,
+    /// Conditions re-checked.
+    pub conditions: usize,
+    /// Largest change of a stored quantity by rounding, relative to its size.
+    pub max_relative_rounding: f64,
+    /// Membership normalization and blending in this precision.
+    pub membership_rounding_bound: MembershipBound,
+}
+
+/// A value as generated code stores it.
+pub fn stored(v: f64, precision: Precision) -> f64 {
+    match precision {
+        Precision::F64 => v,
+        Precision::F32 => f64::from(v as f32),
+    }
+}
+
+/// A matrix as generated code stores it.
+fn stored_mat(m: &DMatrix<f64>, precision: Precision) -> DMatrix<f64> {
+    m.map(|v| stored(v, precision))
+}
+
+/// The unit roundoff of a precision.
+pub fn unit_roundoff(precision: Precision) -> f64 {
+    match precision {
+        Precision::F64 => f64::EPSILON / 2.0,
+        Precision::F32 => f64::from(f32::EPSILON) / 2.0,
+    }
+}
+
+/// gamma_k = k u / (1 - k u) (Higham, "Accuracy and Stability of Numerical
+/// Algorithms", 2002, section 3.1).
+fn gamma(k: usize, u: f64) -> f64 {
+    let ku = k as f64 * u;
+    ku / (1.0 - ku)
+}
+
+/// Whether a constraint carries the closed-loop matrix (not a positivity
+/// constraint `... > 0` on one variable).
+fn closed_loop(name: &str) -> bool {
+    !name.ends_with("> 0")
+}
+
+/// The membership bound for `gains` (stored) with `x` the solved X.
+fn membership_bound(
+    model: &TsModel,
+    gains: &[DMatrix<f64>],
+    x: &DMatrix<f64>,
+    precision: Precision,
+    available_margin: f64,
+) -> MembershipBound {
+    let (n, r) = (model.n, model.r());
+    let u = unit_roundoff(precision);
+    let weight_error = gamma(r, u);
+    let relative_gain_error = weight_error + gamma(n + r + 1, u) * (1.0 + weight_error);
+    let f_max = gains.iter().map(|f| f.norm()).fold(0.0, f64::max);
+    let b_max = model
+        .rules
+        .iter()
+        .map(|l| spectral_norm(&l.b))
+        .fold(0.0, f64::max);
+    let gain_error = relative_gain_error * f_max;
+    let required_margin = 2.0 * r as f64 * b_max * gain_error * spectral_norm(x);
+    MembershipBound {
+        unit_roundoff: u,
+        weight_error,
+        relative_gain_error,
+        gain_error,
+        required_margin,
+        available_margin,
+        holds: available_margin > required_margin,
+    }
+}
+
+/// Largest singular value.
+fn spectral_norm(m: &DMatrix<f64>) -> f64 {
+    m.singular_values().iter().copied().fold(0.0, f64::max)
+}
+
+/// The largest relative change rounding makes to the entries of `m`.
+fn relative_rounding(m: &DMatrix<f64>, precision: Precision) -> f64 {
+    m.iter()
+        .filter(|v| v.is_finite() && **v != 0.0)
+        .map(|v| ((stored(*v, precision) - v) / v).abs())
+        .fold(0.0, f64::max)
+}
+
+/// The model with its given gains (if any) as stored.
+fn stored_model(model: &TsModel, precision: Precision) -> TsModel {
+    let mut m = model.clone();
+    for rule in &mut m.spec.rules {
+        if let Some((f, _)) = &mut rule.gain {
+            *f = stored_mat(f, precision);
+        }
+    }
+    m
+}
+
+/// Re-checks every LMI of the certificate of `design` with the stored
+/// quantities, and the membership bound.
+pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthError> {
+    let precision = model.spec.precision;
+    let gains: Vec<DMatrix<f64>> = design
+        .gains
+        .iter()
+        .map(|f| stored_mat(f, precision))
+        .collect();
+    let max_relative_rounding = design
+        .gains
+        .iter()
+        .map(|f| relative_rounding(f, precision))
+        .fold(0.0, f64::max);
+    // Continuous loop: given gains rounded in the spec; designed gains enter
+    // as M_j = F_j X, so M_j is replaced by (stored F_j) X.
+    let stored_model = stored_model(model, precision);
+    let mut plan = design.plan.clone();
+    if let Some(s) = plan.get_mut::<Saturation>() {
+        s.levels = s.levels.iter().map(|v| stored(*v, precision)).collect();
+    }
+    let built = build(
+        &stored_model,
+        &plan,
+        model.spec.relaxation.node,
+        design.eps,
+        false,
+    )?;
+    let x_value = std::cell::RefCell::new(None);
+    let substitute_gains = |values: &mut Values| {
+        let x = values
+            .iter()
+            .find(|(n, _)| n == "X")
+            .map(|(_, v)| v.clone());
+        if let Some(x) = &x {
+            for (j, f) in gains.iter().enumerate() {
+                let name = format!("M{}", j + 1);
+                if let Some((_, m)) = values.iter_mut().find(|(n, _)| *n == name) {
+                    *m = f * x;
+                }
+            }
+        }
+        *x_value.borrow_mut() = x;
+    };
+    let mut lmis = margins_of(
+        &built.problem,
+        &built.nonstrict,
+        &design.values,
+        &design.reductions,
+        &substitute_gains,
+    )?;
+    let available = lmis
+        .iter()
+        .filter(|l| l.strict && closed_loop(&l.name))
+        .map(|l| l.margin)
+        .fold(f64::INFINITY, f64::min);
+    let Some(x) = x_value.into_inner() else {
+        return Err(SynthError::Internal(
+            "internal error: the certified problem has no X".into(),
+        ));
+    };
+    let membership = membership_bound(model, &gains, &x, precision, available);
+    // Sampled loops: gains, levels, threshold ceiling, sampling bounds of a
+    // sensor module and the trigger weight as stored.
+    let sensor = matches!(
+        model.spec.trigger.as_ref().map(|t| &t.node),
+        Some(Trigger::Aperiodic { .. })
+    );
+    let weight = design
+        .trigger
+        .as_ref()
+        .map(|t| stored_mat(&t.weight, precision));
+    let max_relative_rounding = design
+        .trigger
+        .iter()
+        .map(|t| relative_rounding(&t.weight, precision))
+        .fold(max_relative_rounding, f64::max);
+    lmis.extend(loop_margins(
+        model,
+        design,
+        &|p| {
+            let s = |v: f64| stored(v, precision);
+            TriggerPlan {
+                gains: gains.clone(),
+                levels: p.levels.iter().map(|v| s(*v)).collect(),
+                nu: s(p.nu),
+                sampling: if sensor {
+                    (s(p.sampling.0), s(p.sampling.1))
+                } else {
+                    p.sampling
+                },
+                ..p
+            }
+        },
+        &|values| {
+            if let Some(w) = &weight {
+                if let Some((_, v)) = values.iter_mut().find(|(n, _)| n == "Upsilon") {
+                    *v = w.clone();
+                }
+            }
+        },
+    )?);
+    let cert = summarize(lmis);
+    let certified = cert.ok && membership.holds;
+    let worst_lmi = if cert.ok && !membership.holds {
+        "membership rounding".to_string()
+    } else {
+        cert.worst
+    };
+    Ok(StoredPrecision {
+        precision: match precision {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+        },
+        certified,
+        worst_margin: cert.min_margin,
+        worst_lmi,
+        conditions: cert.lmis.len(),
+        max_relative_rounding,
+        membership_rounding_bound: membership,
+    })
+}

@@ -1,0 +1,125 @@
+#!/usr/bin/env bash
+# Flight audit of the generated C (issue 18): for every shipped spec, in f64 and f32,
+#  - cross-compiles the generated controller, sensor and runtime files for a Cortex-M4
+#    with hardware single-precision floats (arm-none-eabi-gcc -Os, -fstack-usage);
+#  - reports .text / .rodata / .data / .bss of the objects, the .text of the functions the
+#    controller's entry points really reach, and the worst stack path from GCC's call graph
+#    (-fcallgraph-info=su; every frame static, no recursion: callgraph.py checks both);
+#  - runs cppcheck's MISRA C:2012 addon on the generated files and lists the deviations by
+#    rule; every rule that occurs must have a written rationale in misra-rationale.md;
+#  - enforces the budgets below (exit 1 when one is exceeded or a deviation has no rationale).
+# Needs: a built `tsfc` (release), gcc-arm-none-eabi and cppcheck (Debian packages).
+# Usage: tests/audit/flight_audit.sh [OUT.md]   (the markdown table also goes to stdout);
+#        AUDIT_SPECS='specs/a.tsf specs/b.tsf' audits those specs only (default: specs/*.tsf).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+here=tests/audit
+out_md=${1:-}
+
+# Budgets (bytes): the .text reachable from the Zhang controller's entry points, and the
+# worst call-chain stack of every build (library routines such as libgcc's soft-double
+# helpers are listed, their own frames are the toolchain's).
+# An f32 build is what a Cortex-M4 (single-precision FPU) flies; an f64 build runs its
+# arithmetic in libgcc's software double routines and gets the larger budgets.
+declare -A TEXT_BUDGET_ZHANG=([f32]=4096 [f64]=6144)
+declare -A STACK_BUDGET=([f32]=256 [f64]=512)
+
+tsfc=target/release/tsfc
+[ -x "$tsfc" ] || cargo build --release -p tsfc --quiet
+for tool in arm-none-eabi-gcc arm-none-eabi-size cppcheck; do
+    command -v "$tool" >/dev/null || { echo "audit: $tool not found (apt-get install gcc-arm-none-eabi cppcheck)" >&2; exit 2; }
+done
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cflags=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -Os -std=c99
+        -ffunction-sections -fdata-sections -fcallgraph-info=su -Wall -Wextra -Werror -c)
+
+# Sum of the sizes of the sections whose names start with $2 in object $1 (SysV format).
+section_sum() {
+    arm-none-eabi-size -A "$1" | awk -v p="$2" '$1 == p || index($1, p ".") == 1 { s += $2 } END { print s + 0 }'
+}
+
+status=0
+rows=()
+declare -A misra_count
+for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
+    name=$(basename "$spec" .tsf)
+    for precision in f64 f32; do
+        dir="$work/$name-$precision"
+        mkdir -p "$dir"
+        src="$dir/$name.tsf"
+        if grep -q '^precision ' "$spec"; then
+            sed "s/^precision .*;/precision $precision;/" "$spec" > "$src"
+        else
+            { cat "$spec"; echo "precision $precision;"; } > "$src"
+        fi
+        if ! "$tsfc" compile "$src" --out "$dir/gen" > "$dir/compile.log" 2>&1; then
+            echo "audit: $name ($precision) did not compile as certified:" >&2
+            tail -5 "$dir/compile.log" >&2
+            status=1
+            continue
+        fi
+        text=0; rodata=0; data=0; bss=0
+        for c in "$dir"/gen/*.c; do
+            o="$dir/$(basename "$c" .c).o"
+            (cd "$dir" && arm-none-eabi-gcc "${cflags[@]}" -I"$dir/gen" "$c" -o "$o")
+            text=$((text + $(section_sum "$o" .text)))
+            rodata=$((rodata + $(section_sum "$o" .rodata)))
+            data=$((data + $(section_sum "$o" .data)))
+            bss=$((bss + $(section_sum "$o" .bss)))
+        done
+        entries=$(cd "$dir/gen" && ls *.c | grep -v '^tsf_runtime\.c$')
+        # shellcheck disable=SC2086
+        read -r reach_text stack path library < <(python3 "$here/callgraph.py" $entries -- "$dir"/*.ci -- "$dir"/*.o)
+        # MISRA C:2012 on the generated files (the runtime is audited with them).
+        cppcheck --addon=misra --std=c99 --quiet --error-exitcode=0 \
+            --template='{id}' "$dir"/gen/*.c "$dir"/gen/*.h 2> "$dir/misra.txt" || true
+        rules=$(grep -o 'misra-c2012-[0-9.]*' "$dir/misra.txt" | sed 's/misra-c2012-//' | sort -V | uniq -c |
+                awk '{ printf "%s%s x%s", (NR > 1 ? ", " : ""), $2, $1 }')
+        while read -r count rule; do
+            [ -n "$rule" ] || continue
+            misra_count[$rule]=$(( ${misra_count[$rule]:-0} + count ))
+        done < <(grep -o 'misra-c2012-[0-9.]*' "$dir/misra.txt" | sed 's/misra-c2012-//' | sort | uniq -c)
+        rows+=("| $name | $precision | $text | $reach_text | $rodata | $data | $bss | $stack | ${path//>/ > } | ${library//,/, } | ${rules:-none} |")
+        if [ "$stack" -gt "${STACK_BUDGET[$precision]}" ]; then
+            echo "audit: $name ($precision): worst stack path $stack B over the budget ${STACK_BUDGET[$precision]} B" >&2
+            status=1
+        fi
+        if [[ "$name" == zhang2013* ]] && [ "$reach_text" -gt "${TEXT_BUDGET_ZHANG[$precision]}" ]; then
+            echo "audit: $name ($precision): reachable .text $reach_text B over the budget ${TEXT_BUDGET_ZHANG[$precision]} B" >&2
+            status=1
+        fi
+    done
+done
+
+{
+    echo "| spec | precision | .text B (all) | .text B (reached) | .rodata B | .data B | .bss B | worst stack B | worst path | library calls | MISRA C:2012 deviations (rule x count) |"
+    echo "|---|---|---:|---:|---:|---:|---:|---:|---|---|---|"
+    printf '%s\n' "${rows[@]}"
+    echo
+    echo "Budgets: worst stack ${STACK_BUDGET[f32]} B (f32) / ${STACK_BUDGET[f64]} B (f64) for every spec; Zhang's reachable .text ${TEXT_BUDGET_ZHANG[f32]} B (f32) / ${TEXT_BUDGET_ZHANG[f64]} B (f64)."
+    echo "Compiler: $(arm-none-eabi-gcc --version | head -1); flags: ${cflags[*]}"
+    echo "cppcheck: $(cppcheck --version)"
+} | tee "${out_md:-/dev/null}"
+
+# The Rust side: the flight example crate (the three generated no_std modules) for a
+# bare-metal Cortex-M4F target, when the toolchain has it (rustup target add thumbv7em-none-eabihf).
+if rustup target list --installed 2>/dev/null | grep -qx thumbv7em-none-eabihf; then
+    if cargo build --release --quiet -p flight-example --lib --target thumbv7em-none-eabihf; then
+        echo "Rust: flight-example (generated no_std modules) builds for thumbv7em-none-eabihf."
+    else
+        echo "audit: flight-example does not build for thumbv7em-none-eabihf" >&2
+        status=1
+    fi
+else
+    echo "Rust: thumbv7em-none-eabihf is not installed: the no_std modules are built for the host only."
+fi
+
+for rule in "${!misra_count[@]}"; do
+    if ! grep -q "^| $rule |" "$here/misra-rationale.md"; then
+        echo "audit: MISRA rule $rule (${misra_count[$rule]} deviations) has no rationale in $here/misra-rationale.md" >&2
+        status=1
+    fi
+done
+exit $status
