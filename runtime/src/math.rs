@@ -643,6 +643,18 @@ pub fn cos(x: f64) -> f64 {
     }
 }
 
+/// `sign(v)`: 1 above 0, -1 below, 0 at (either) zero; NaN gives 0 (the
+/// language's `sign`, shared by its evaluator and the simulator's tape).
+pub fn sign(v: f64) -> f64 {
+    if v > 0.0 {
+        1.0
+    } else if v < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
 /// Below this `|v|`, [`sinc`] uses `1 - v^2/6` (the next Taylor term
 /// `v^4/120 < 2^-59` is below a quarter ulp of 1).
 pub const SINC_SMALL: f64 = 1.220703125e-4; // 2^-13

@@ -181,15 +181,7 @@ pub(super) fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mod
                 "exp" => f64::exp,
                 "log" => f64::ln,
                 "abs" => f64::abs,
-                "sign" => |v: f64| {
-                    if v > 0.0 {
-                        1.0
-                    } else if v < 0.0 {
-                        -1.0
-                    } else {
-                        0.0
-                    }
-                },
+                "sign" => tsf_runtime::math::sign,
                 // The runtime's sinc, so that model and generated code agree.
                 _ => tsf_runtime::math::sinc,
             };

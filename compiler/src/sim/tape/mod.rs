@@ -66,15 +66,7 @@ impl Unary {
             Unary::Exp => v.exp(),
             Unary::Ln => v.ln(),
             Unary::Abs => v.abs(),
-            Unary::Sign => {
-                if v > 0.0 {
-                    1.0
-                } else if v < 0.0 {
-                    -1.0
-                } else {
-                    0.0
-                }
-            }
+            Unary::Sign => tsf_runtime::math::sign(v),
             Unary::Sinc => tsf_runtime::math::sinc(v),
         }
     }
