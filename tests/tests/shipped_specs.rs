@@ -32,3 +32,22 @@ fn inverted_pendulum_checks_clean() {
         "A1(2,1) = {a21}"
     );
 }
+
+#[test]
+fn amrr2019_specs_check_clean() {
+    for name in [
+        "amrr2019_flexible_mixed_trigger.tsf",
+        "amrr2019_tsfc_design.tsf",
+    ] {
+        let m = check(name);
+        assert_eq!((m.n, m.m, m.q, m.r()), (6, 3, 3, 2), "{name}");
+        assert!(m.coverage.covered, "{name}");
+        // The radial factorization: at w = 0 the rules' local models carry
+        // 1/4 (1 + p'p) I in the kinematic block, 1/4 I at p'p = 0, 1/2 I at p'p = 1.
+        for (rule, g) in m.rules.iter().zip([0.25, 0.5]) {
+            for i in 0..3 {
+                assert_eq!(rule.a[(i, 3 + i)], g, "{name}: A({i}, {})", 3 + i);
+            }
+        }
+    }
+}
