@@ -162,7 +162,11 @@ fn main() -> ExitCode {
             (Some(dirs), _) => merge_shards(&dirs, &out),
             (None, Some(spec)) if sweep => {
                 let cfg = tsfc::sim::sweep::Config { jobs };
-                let runs = Runs { x0, horizon, report: report.as_deref() };
+                let runs = Runs {
+                    x0,
+                    horizon,
+                    report: report.as_deref(),
+                };
                 run_sweep(&spec, &compare, &out, &runs, &cfg)
             }
             (None, Some(spec)) => match monte_carlo {

@@ -226,7 +226,7 @@ pub enum SweepStmt {
     /// `columns { name = state; ... }`, with the block's span.
     Columns(Vec<(Ident, Ident)>, Span),
     /// `key = value;` (`window`).
-    Setting(Setting),
+    Setting(Box<Setting>),
 }
 
 /// How a `monte_carlo` statement perturbs its target.

@@ -61,9 +61,14 @@ fn given() -> &'static Prepared {
 }
 
 fn sweep(main: &Prepared, compare: &[Prepared], jobs: usize) -> Table {
-    run_sweep(main, compare, &Options::default(), &Config { jobs: Some(jobs) })
-        .unwrap_or_else(|e| panic!("{e}"))
-        .0
+    run_sweep(
+        main,
+        compare,
+        &Options::default(),
+        &Config { jobs: Some(jobs) },
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+    .0
 }
 
 /// Energy `sum_i T_i (F x_i)^2` of the periodic loop (the last interval
@@ -92,7 +97,10 @@ fn periodic_rows_match_the_closed_form() {
         // A transmission at t0 and one every period up to the end, inclusive.
         let expected = (HORIZON / t).floor() as u64 + 1;
         assert_eq!(row.transmissions, Some(expected), "T = {t}");
-        assert_eq!(row.mean_inter_event_s.map(|m| (m - t).abs() < 1e-9), Some(true));
+        assert_eq!(
+            row.mean_inter_event_s.map(|m| (m - t).abs() < 1e-9),
+            Some(true)
+        );
         let e = row.energy.expect("an energy");
         assert!(
             (e - energy(t)).abs() <= 1e-6 * energy(t),
@@ -120,7 +128,10 @@ fn a_law_the_certificate_does_not_cover_is_marked_and_still_run() {
             .unwrap_or_else(|| panic!("no row {n}"))
     };
     let fast = by_name("periodic every = 0.25");
-    assert!(fast.certified && fast.gains == Gains::GivenCertified, "{fast:?}");
+    assert!(
+        fast.certified && fast.gains == Gains::GivenCertified,
+        "{fast:?}"
+    );
     assert!(by_name("periodic every = 0.5").gains == Gains::Same);
     let slow = by_name("periodic every = 4");
     assert!(!slow.certified, "{slow:?}");
@@ -145,8 +156,13 @@ fn the_table_does_not_depend_on_the_thread_count() {
     let read = |jobs: usize| {
         let d = dir.join(jobs.to_string());
         std::fs::create_dir_all(&d).expect("out dir");
-        let (t, m) = run_sweep(given(), &[], &Options::default(), &Config { jobs: Some(jobs) })
-            .unwrap_or_else(|e| panic!("{e}"));
+        let (t, m) = run_sweep(
+            given(),
+            &[],
+            &Options::default(),
+            &Config { jobs: Some(jobs) },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
         let files = write_sweep(&t, &m, &d).unwrap_or_else(|e| panic!("{e}"));
         files
             .iter()

@@ -680,7 +680,7 @@ impl Cx {
                 }
                 Ok(SweepStmt::Columns(columns, sspan))
             }
-            _ => Ok(SweepStmt::Setting(self.setting(s)?)),
+            _ => Ok(SweepStmt::Setting(Box::new(self.setting(s)?))),
         }
     }
 

@@ -75,6 +75,9 @@ pub fn scenario_text(text: &str, spec: &Spec, sc: &SweepScenario) -> Option<Stri
     })
 }
 
+/// Longest refusal reason kept in a row (characters).
+const MAX_REASON_CHARS: usize = 400;
+
 /// The first line of an error, without `error: ` and the spec's name.
 fn short(message: &str, name: &str) -> String {
     let line = message
@@ -84,7 +87,11 @@ fn short(message: &str, name: &str) -> String {
         .unwrap_or("refused");
     let line = line.strip_prefix("error: ").unwrap_or(line);
     let line = line.strip_prefix(&format!("{name}: ")).unwrap_or(line);
-    line.chars().take(200).collect()
+    if line.chars().count() <= MAX_REASON_CHARS {
+        return line.to_string();
+    }
+    let cut: String = line.chars().take(MAX_REASON_CHARS).collect();
+    format!("{cut}...")
 }
 
 /// Compiles the spec of `p` with the scenario's law (the normal pipeline).
@@ -171,7 +178,12 @@ pub fn run_sweep(
             spec: k,
             scenario: None,
         });
-        let scenarios = p.model.spec.simulate.as_ref().and_then(|s| s.sweep.as_ref());
+        let scenarios = p
+            .model
+            .spec
+            .simulate
+            .as_ref()
+            .and_then(|s| s.sweep.as_ref());
         for sc in scenarios.map_or(&[][..], |s| s.scenarios.as_slice()) {
             jobs.push(Job {
                 spec: k,
@@ -232,7 +244,10 @@ pub fn run_sweep(
                     scenario,
                     refused,
                     gains,
-                    result.as_ref().map(|r| &r.metrics).map_err(|e| e.message.as_str()),
+                    result
+                        .as_ref()
+                        .map(|r| &r.metrics)
+                        .map_err(|e| e.message.as_str()),
                     norms.finish(),
                 );
                 let metrics = serde_json::json!({
@@ -274,10 +289,7 @@ pub fn write_sweep(
         (format!("{name}.sweep.json"), json(table)?),
         (format!("{name}.sweep.metrics.json"), json(&metrics)?),
     ];
-    files
-        .into_iter()
-        .map(|(f, b)| write(dir, f, &b))
-        .collect()
+    files.into_iter().map(|(f, b)| write(dir, f, &b)).collect()
 }
 
 #[cfg(test)]
@@ -287,7 +299,10 @@ mod tests {
     #[test]
     fn a_refusal_reason_is_one_line_without_prefixes() {
         assert_eq!(
-            short("error: c [p]: not certified (LMI infeasible)\nmore", "c [p]"),
+            short(
+                "error: c [p]: not certified (LMI infeasible)\nmore",
+                "c [p]"
+            ),
             "not certified (LMI infeasible)"
         );
         assert_eq!(short("\n  error: bad\n", "c"), "bad");

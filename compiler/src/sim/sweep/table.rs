@@ -206,8 +206,15 @@ impl Table {
             self.window_s.1
         );
         let mut head = vec![
-            "spec", "scenario", "trigger", "certified", "gains", "transmissions",
-            "mean T_i (s)", "min T_i (s)", "energy",
+            "spec",
+            "scenario",
+            "trigger",
+            "certified",
+            "gains",
+            "transmissions",
+            "mean T_i (s)",
+            "min T_i (s)",
+            "energy",
         ]
         .into_iter()
         .map(String::from)
@@ -341,7 +348,15 @@ mod tests {
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 3);
         assert!(lines[0].ends_with(",\"s\",converged,failed,why"));
-        assert!(lines[2].contains("false,\"not certified (\"\"x\"\")\""), "{}", lines[2]);
-        assert!(lines[1].contains(",6,2,2,1.5e-7,0.25,true,false,\"\""), "{}", lines[1]);
+        assert!(
+            lines[2].contains("false,\"not certified (\"\"x\"\")\""),
+            "{}",
+            lines[2]
+        );
+        assert!(
+            lines[1].contains(",6,2,2,1.5e-7,0.25,true,false,\"\""),
+            "{}",
+            lines[1]
+        );
     }
 }
