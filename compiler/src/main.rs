@@ -84,6 +84,12 @@ enum Command {
     /// runs the indices i with i mod K == k - 1 and writes OUT/<controller>.mc.shard-k-of-K.json;
     /// `--merge DIR...` merges shard files into the summary one whole run gives (no spec needed).
     /// Exit code 4 when some run failed.
+    ///
+    /// Sweep: `--sweep` runs the design and every scenario of the spec's `sweep { }` block (and
+    /// of each `--compare` spec) in parallel and writes one table OUT/<controller>.sweep.{md,csv,json}
+    /// and the per-scenario metrics OUT/<controller>.sweep.metrics.json. A scenario's law is
+    /// compiled on its own; a row it does not certify is marked NOT CERTIFIED. Exit code 4 when
+    /// some row's run failed.
     Simulate {
         /// Spec file.
         #[arg(required_unless_present = "merge")]
@@ -110,9 +116,15 @@ enum Command {
         /// Campaign seed (default: the scenario's `seed`).
         #[arg(long, requires = "monte_carlo")]
         seed: Option<u64>,
-        /// Worker threads (default: all cores).
-        #[arg(long, requires = "monte_carlo")]
+        /// Worker threads of --monte-carlo or --sweep (default: all cores).
+        #[arg(long)]
         jobs: Option<usize>,
+        /// Run the sweep of triggering laws and write its comparison table.
+        #[arg(long, conflicts_with_all = ["monte_carlo", "merge"])]
+        sweep: bool,
+        /// Specs whose designs and sweep scenarios join the table (same plant and scenario).
+        #[arg(long, value_name = "SPEC", num_args = 1.., requires = "sweep")]
+        compare: Vec<PathBuf>,
         /// Merge the shard files (*.mc.shard-k-of-K.json) found in these folders into OUT.
         #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["monte_carlo", "x0", "report"])]
         merge: Option<Vec<PathBuf>>,
@@ -140,8 +152,23 @@ fn main() -> ExitCode {
             seed,
             jobs,
             merge,
+            sweep,
+            compare,
         } => match (merge, spec) {
+            _ if jobs.is_some() && monte_carlo.is_none() && !sweep => {
+                eprintln!("error: --jobs needs --monte-carlo or --sweep");
+                ExitCode::from(exit::IO)
+            }
             (Some(dirs), _) => merge_shards(&dirs, &out),
+            (None, Some(spec)) if sweep => {
+                let cfg = tsfc::sim::sweep::Config { jobs };
+                let runs = Runs {
+                    x0,
+                    horizon,
+                    report: report.as_deref(),
+                };
+                run_sweep(&spec, &compare, &out, &runs, &cfg)
+            }
             (None, Some(spec)) => match monte_carlo {
                 Some(n) => {
                     let cfg = tsfc::sim::campaign::Config {
@@ -382,6 +409,63 @@ fn campaign(
         }
         let (s, files) = campaign::write_campaign(&part, out)?;
         Ok(campaign_done(&s, &files))
+    };
+    run().unwrap_or_else(|e| report_error(&e))
+}
+
+/// The scenario overrides of the command line.
+struct Runs<'a> {
+    x0: Option<Vec<f64>>,
+    horizon: Option<f64>,
+    report: Option<&'a std::path::Path>,
+}
+
+fn run_sweep(
+    path: &std::path::Path,
+    compare: &[PathBuf],
+    out: &std::path::Path,
+    runs: &Runs,
+    cfg: &tsfc::sim::sweep::Config,
+) -> ExitCode {
+    use tsfc::sim::sweep;
+    let run = || -> Result<ExitCode, tsfc::sim::SimError> {
+        let main = prepare(path, runs.report, out)?;
+        let others = compare
+            .iter()
+            .map(|p| prepare(p, None, out))
+            .collect::<Result<Vec<_>, _>>()?;
+        let opts = tsfc::sim::Options {
+            x0: runs.x0.clone(),
+            horizon: runs.horizon,
+            ..tsfc::sim::Options::default()
+        };
+        let started = std::time::Instant::now();
+        let (table, metrics) = sweep::run_sweep(&main, &others, &opts, cfg)?;
+        let files = sweep::write_sweep(&table, &metrics, out)?;
+        let refused = table.rows.iter().filter(|r| !r.certified).count();
+        let failed = table.rows.iter().filter(|r| r.failed).count();
+        eprintln!(
+            "sweep `{}`: {} rows in {:.2} s, {refused} not certified, {failed} failed",
+            table.name,
+            table.rows.len(),
+            started.elapsed().as_secs_f64()
+        );
+        for f in files {
+            eprintln!("  wrote                {}", f.display());
+        }
+        for r in table.rows.iter().filter(|r| r.failed) {
+            eprintln!(
+                "error: `{}` {}: {}",
+                r.spec,
+                r.scenario,
+                r.why.as_deref().unwrap_or("failed")
+            );
+        }
+        Ok(if table.any_failed() {
+            ExitCode::from(4)
+        } else {
+            ExitCode::SUCCESS
+        })
     };
     run().unwrap_or_else(|e| report_error(&e))
 }

@@ -42,6 +42,16 @@ pub fn read(path: &Path) -> Result<Front, Error> {
 }
 
 impl Front {
+    /// Checks a source held in memory; reports and headers name it `name`.
+    pub fn from_source(source: Source, name: String) -> Front {
+        let checked = frontend::check(&source);
+        Front {
+            source,
+            checked,
+            name,
+        }
+    }
+
     /// The diagnostics, rendered for a terminal.
     pub fn render(&self, color: bool) -> String {
         tsf_lang::diag::render(

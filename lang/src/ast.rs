@@ -207,6 +207,26 @@ pub enum SimStmt {
     Dynamics(Vec<Spanned<DynStmt>>, Span),
     /// `monte_carlo { ... }`
     MonteCarlo(Vec<McStmt>, Span),
+    /// `sweep { ... }`
+    Sweep(Vec<SweepStmt>, Span),
+}
+
+/// A statement inside `sweep { ... }`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SweepStmt {
+    /// `trigger kind { settings }`: a triggering law whose list-valued fields expand.
+    Trigger {
+        /// The law's kind.
+        kind: Ident,
+        /// Its settings as written.
+        settings: Vec<Setting>,
+        /// The whole statement.
+        span: Span,
+    },
+    /// `columns { name = state; ... }`, with the block's span.
+    Columns(Vec<(Ident, Ident)>, Span),
+    /// `key = value;` (`window`).
+    Setting(Box<Setting>),
 }
 
 /// How a `monte_carlo` statement perturbs its target.

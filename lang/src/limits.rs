@@ -45,6 +45,9 @@ pub const MAX_SHOWN_LINE: usize = 120;
 /// `tsfc simulate --monte-carlo N`).
 pub const MAX_MONTE_CARLO_RUNS: u64 = 1_000_000;
 
+/// Most scenarios one `sweep { }` block expands to (all its triggers together).
+pub const MAX_SWEEP_SCENARIOS: usize = 256;
+
 /// Largest degree d of `relaxation polya(d = ..)`.
 pub const MAX_POLYA_DEGREE: usize = 4;
 

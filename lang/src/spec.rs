@@ -459,6 +459,51 @@ pub struct Simulation {
     pub dynamics: Option<Dynamics>,
     /// Declared uncertainty for Monte Carlo campaigns, if given.
     pub monte_carlo: Option<MonteCarlo>,
+    /// Scenarios of `tsfc simulate --sweep`, if given.
+    pub sweep: Option<Sweep>,
+    /// Where the block is.
+    pub span: Span,
+}
+
+/// One scenario of a `sweep`: a triggering law, checked by the same checker
+/// as the top-level `trigger` item.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepScenario {
+    /// Its name in the table: the law's kind and the expanded values
+    /// (`periodic every = 2`).
+    pub name: String,
+    /// The law.
+    pub trigger: Trigger,
+    /// The design method of a synthesized trigger weight, as for the item.
+    pub trigger_synthesis: Option<TriggerSynthesis>,
+    /// How to write the scenario as a `trigger` item of the spec's text: the
+    /// sweep statement's span, and for each expanded field the span of its
+    /// list and of the element that replaces it.
+    pub source: (Span, Vec<(Span, Span)>),
+}
+
+/// A column of the sweep table: the largest Euclidean norm of a state group
+/// over the steady-state window.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepColumn {
+    /// The column's name.
+    pub name: String,
+    /// The state group as written (`x`, a state, or an extra state of `dynamics`).
+    pub group: String,
+    /// `(offset, len)` of the group in the plant state (controller states, then extra states).
+    pub at: (usize, usize),
+}
+
+/// The `sweep { }` block of the scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    /// The expanded scenarios, in source order (at most
+    /// [`crate::limits::MAX_SWEEP_SCENARIOS`]).
+    pub scenarios: Vec<SweepScenario>,
+    /// The steady-state window `(start, end)` of the norm columns (default: the whole span).
+    pub window: Option<(f64, f64)>,
+    /// The norm columns.
+    pub columns: Vec<SweepColumn>,
     /// Where the block is.
     pub span: Span,
 }

@@ -143,6 +143,54 @@ pub fn norm(v: &[f64]) -> f64 {
     scale * v.iter().map(|a| (a / scale).powi(2)).sum::<f64>().sqrt()
 }
 
+/// The largest Euclidean norm of state groups over a time window, sample by
+/// sample (the steady-state columns of a sweep table).
+#[derive(Debug, Clone)]
+pub struct WindowedNorms {
+    window: (f64, f64),
+    groups: Vec<(usize, usize)>,
+    max: Vec<f64>,
+    seen: bool,
+}
+
+impl WindowedNorms {
+    /// Norms of the groups `(offset, len)` of the plant state over `window` (both ends included).
+    pub fn new(window: (f64, f64), groups: Vec<(usize, usize)>) -> Self {
+        let max = vec![0.0; groups.len()];
+        WindowedNorms {
+            window,
+            groups,
+            max,
+            seen: false,
+        }
+    }
+
+    /// Records the state `x` at time `t`.
+    pub fn sample(&mut self, t: f64, x: &[f64]) {
+        if t < self.window.0 || t > self.window.1 {
+            return;
+        }
+        self.seen = true;
+        for (m, &(at, len)) in self.max.iter_mut().zip(&self.groups) {
+            let r = x.get(at..at + len).map_or(f64::NAN, norm);
+            // A non-finite norm sticks (NaN is not absorbed by `max`).
+            *m = if r.is_nan() || m.is_nan() {
+                f64::NAN
+            } else {
+                m.max(r)
+            };
+        }
+    }
+
+    /// Per group the largest norm (`None`: no sample in the window, or not finite).
+    pub fn finish(&self) -> Vec<Option<f64>> {
+        self.max
+            .iter()
+            .map(|m| (self.seen && m.is_finite()).then_some(*m))
+            .collect()
+    }
+}
+
 /// `V(x1) / V(x0)` with `V(x) = x' P x`, computed on unit vectors so that
 /// large finite states do not overflow; `None` when `V(x0)` is 0 or a value
 /// is not finite.
@@ -453,5 +501,19 @@ mod tests {
         let m = tally(&[f64::MAX, f64::MAX], &norms, &sent, None);
         assert_eq!(m.convergence_tolerance, f64::INFINITY);
         assert!(!m.converged && m.settle_time_s.is_none());
+    }
+
+    #[test]
+    fn windowed_norms_take_the_largest_norm_inside_the_window() {
+        let mut w = WindowedNorms::new((1.0, 2.0), vec![(0, 2), (2, 1)]);
+        w.sample(0.5, &[10.0, 10.0, 10.0]);
+        w.sample(1.0, &[3.0, 4.0, -1.0]);
+        w.sample(2.0, &[0.0, 1.0, -2.0]);
+        w.sample(2.5, &[10.0, 10.0, 10.0]);
+        assert_eq!(w.finish(), vec![Some(5.0), Some(2.0)]);
+        w.sample(1.5, &[f64::NAN, 0.0, 0.0]);
+        assert_eq!(w.finish(), vec![None, Some(2.0)]);
+        let empty = WindowedNorms::new((3.0, 4.0), vec![(0, 1)]);
+        assert_eq!(empty.finish(), vec![None]);
     }
 }

@@ -15,7 +15,9 @@
 //! and the run's size is bounded by [`limits`]. Samples outside the premise
 //! region ([`region`]) are counted; errors caused by a spec item point into
 //! the spec ([`source`]). A certified report of the same spec gives the
-//! design without solving again ([`reuse`]).
+//! design without solving again ([`reuse`]). Monte Carlo campaigns
+//! ([`campaign`]) and sweeps of triggering laws with a comparison table
+//! ([`sweep`]) run many scenarios on a worker pool.
 
 pub mod campaign;
 pub mod controller;
@@ -31,6 +33,7 @@ pub mod reuse;
 pub mod scenario;
 pub mod signal;
 pub mod source;
+pub mod sweep;
 pub mod tape;
 pub mod trigger;
 

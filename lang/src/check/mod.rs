@@ -4,7 +4,8 @@
 //! One module per item kind: [`decls`] (version, controller, functions,
 //! constants, signals), [`model`] (outputs and the matrices A, B, D),
 //! [`premises`], [`rules`] (and their given [`gains`]), [`objectives`], [`relaxation`], [`trigger`],
-//! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`]; premises
+//! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`], [`monte_carlo`] and
+//! [`sweep`]; premises
 //! must be [`generatable`], and [`combinations`] rejects valid items the
 //! compiler cannot do together.
 //! Environments and constant evaluation are shared by all of them
@@ -24,6 +25,7 @@ mod premises;
 mod relaxation;
 mod rules;
 mod simulate;
+mod sweep;
 mod targets;
 mod trigger;
 mod values;

@@ -1,8 +1,9 @@
 //! The `simulate` scenario: initial state, time span, seed, integrator,
-//! disturbance signals of `t`, and the truth `dynamics` (see [`super::dynamics`]).
+//! disturbance signals of `t`, the truth `dynamics` (see [`super::dynamics`]),
+//! the `monte_carlo` uncertainty and the `sweep` scenarios (see [`super::sweep`]).
 
 use super::{unknown_choice, Checker, Draft};
-use crate::ast::{Expr, ExprKind, Ident, Item, McStmt, Setting, SimStmt, Value};
+use crate::ast::{Expr, ExprKind, Ident, Item, McStmt, Setting, SimStmt, SweepStmt, Value};
 use crate::diag::Diagnostic;
 use crate::eval::Mat;
 use crate::span::Span;
@@ -18,6 +19,8 @@ struct Scenario<'a> {
     dynamics: Option<Dynamics>,
     /// The `monte_carlo` block (checked once the rest of the scenario is known).
     monte_carlo: Option<(&'a [McStmt], Span)>,
+    /// The `sweep` block (checked once the rest of the scenario is known).
+    sweep: Option<(&'a [SweepStmt], Span)>,
     /// False once a statement failed (missing settings are then not reported).
     ok: bool,
     /// Setting keys given so far.
@@ -48,6 +51,7 @@ impl Checker<'_> {
             integrator: Integrator::Rk4,
             dynamics: None,
             monte_carlo: None,
+            sweep: None,
             ok: true,
             seen: Vec::new(),
         };
@@ -65,6 +69,13 @@ impl Checker<'_> {
                         sc.ok = false;
                     }
                     sc.monte_carlo = Some((body, *mspan));
+                }
+                SimStmt::Sweep(body, sspan) => {
+                    if sc.sweep.is_some() {
+                        self.err(Diagnostic::error(*sspan, "`sweep` is given twice"));
+                        sc.ok = false;
+                    }
+                    sc.sweep = Some((body, *sspan));
                 }
                 SimStmt::Dynamics(body, dspan) => {
                     sc.dynamics = self.dynamics(body, *dspan);
@@ -102,8 +113,17 @@ impl Checker<'_> {
             }
             None => None,
         };
+        let sweep = match sc.sweep {
+            Some((body, sspan)) => {
+                let sw = self.sweep(body, sspan, n, sc.dynamics.as_ref(), time);
+                sc.ok &= sw.is_some();
+                sw
+            }
+            None => None,
+        };
         sc.ok.then_some(Simulation {
             monte_carlo,
+            sweep,
             x0,
             time,
             signals: sc.signals,

@@ -180,6 +180,10 @@ fn rule_name(r: &Rule) -> Option<&'static str> {
         Rule::sim_stmt => "a simulate statement",
         Rule::monte_carlo_block => "`monte_carlo { ... }`",
         Rule::mc_stmt => "a monte_carlo statement",
+        Rule::sweep_block => "`sweep { ... }`",
+        Rule::sweep_stmt => "a sweep statement (`trigger`, `columns` or `window`)",
+        Rule::sweep_columns => "`columns { ... }`",
+        Rule::sweep_column => "a column `name = state;`",
         Rule::mc_vary => "`name scale|offset|in uniform(lo, hi);`",
         Rule::mc_converged => "`converged |x| <= tol by t;`",
         Rule::mc_how | Rule::kw_scale | Rule::kw_offset => "`scale`, `offset` or `in`",
@@ -354,14 +358,7 @@ impl Cx {
                 ItemKind::Relaxation(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)
             }
             Rule::trigger_decl => {
-                let name = self.ident(next(&mut it, span)?);
-                let settings = match it.next() {
-                    Some(block) => block
-                        .into_inner()
-                        .map(|s| self.setting(s))
-                        .collect::<PResult<_>>()?,
-                    None => Vec::new(),
-                };
+                let (name, settings) = self.trigger_decl(it, span)?;
                 ItemKind::Trigger(name, settings)
             }
             Rule::emit_decl => ItemKind::Emit(
@@ -607,6 +604,14 @@ impl Cx {
                     .collect::<PResult<_>>()?;
                 Ok(SimStmt::MonteCarlo(stmts, mspan))
             }
+            Rule::sweep_block => {
+                let sspan = self.span(&s);
+                let stmts = s
+                    .into_inner()
+                    .map(|p| self.sweep_stmt(p))
+                    .collect::<PResult<_>>()?;
+                Ok(SimStmt::Sweep(stmts, sspan))
+            }
             _ => {
                 let dspan = self.span(&s);
                 let mut stmts = Vec::new();
@@ -634,6 +639,51 @@ impl Cx {
 }
 
 impl Cx {
+    /// The kind and settings of a `trigger` declaration (item or sweep statement).
+    fn trigger_decl<'i>(
+        &self,
+        mut it: impl Iterator<Item = Pair<'i, Rule>>,
+        span: Span,
+    ) -> PResult<(Ident, Vec<Setting>)> {
+        let name = self.ident(next(&mut it, span)?);
+        let settings = match it.next() {
+            Some(block) => block
+                .into_inner()
+                .map(|s| self.setting(s))
+                .collect::<PResult<_>>()?,
+            None => Vec::new(),
+        };
+        Ok((name, settings))
+    }
+
+    fn sweep_stmt(&self, p: Pair<Rule>) -> PResult<SweepStmt> {
+        let span = self.span(&p);
+        let s = first(p, span)?;
+        let sspan = self.span(&s);
+        match s.as_rule() {
+            Rule::trigger_decl => {
+                let (kind, settings) = self.trigger_decl(s.into_inner(), sspan)?;
+                Ok(SweepStmt::Trigger {
+                    kind,
+                    settings,
+                    span: sspan,
+                })
+            }
+            Rule::sweep_columns => {
+                let mut columns = Vec::new();
+                for c in s.into_inner() {
+                    let cspan = self.span(&c);
+                    let mut parts = c.into_inner();
+                    let name = self.ident(next(&mut parts, cspan)?);
+                    let group = self.ident(next(&mut parts, cspan)?);
+                    columns.push((name, group));
+                }
+                Ok(SweepStmt::Columns(columns, sspan))
+            }
+            _ => Ok(SweepStmt::Setting(Box::new(self.setting(s)?))),
+        }
+    }
+
     fn mc_stmt(&self, p: Pair<Rule>) -> PResult<McStmt> {
         let span = self.span(&p);
         let s = first(p, span)?;

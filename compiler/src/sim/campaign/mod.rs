@@ -166,10 +166,7 @@ pub fn run_campaign(
         }
         rec
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(cfg.jobs.unwrap_or(0))
-        .build()
-        .map_err(|e| SimError::usage(format!("cannot start the worker threads: {e}")))?;
+    let pool = pool(cfg.jobs)?;
     let (mut records, envelope) = pool.install(|| {
         indices
             .into_par_iter()
@@ -208,6 +205,14 @@ pub fn run_campaign(
         envelope,
         nominal,
     })
+}
+
+/// A pool of `jobs` worker threads (default: all cores).
+pub(crate) fn pool(jobs: Option<usize>) -> Result<rayon::ThreadPool, SimError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.unwrap_or(0))
+        .build()
+        .map_err(|e| SimError::usage(format!("cannot start the worker threads: {e}")))
 }
 
 /// Run `i`: its draw, the closed loop, its record; widens `env`.
@@ -271,14 +276,15 @@ fn one_run(
 }
 
 /// Writes `bytes` to `dir/file` atomically.
-fn write(dir: &Path, file: String, bytes: &[u8]) -> Result<PathBuf, SimError> {
+pub(crate) fn write(dir: &Path, file: String, bytes: &[u8]) -> Result<PathBuf, SimError> {
     let path = dir.join(file);
     crate::report::write_atomic(&path, bytes)
         .map_err(|e| SimError::usage(format!("cannot write `{}`: {e}", path.display())))?;
     Ok(path)
 }
 
-fn json<T: serde::Serialize>(v: &T) -> Result<Vec<u8>, SimError> {
+/// `v` as pretty JSON with a final newline.
+pub(crate) fn json<T: serde::Serialize>(v: &T) -> Result<Vec<u8>, SimError> {
     serde_json::to_string_pretty(v)
         .map(|s| (s + "\n").into_bytes())
         .map_err(|e| SimError::usage(format!("cannot serialize: {e}")))
