@@ -5,6 +5,7 @@
 //! whose data were clipped ([`super::scale`]) say so in red.
 
 use super::font::{self, FAMILY};
+use super::glyphs::Typeset;
 use super::scale::{self, YRange};
 use crate::sim::SimError;
 use plotters::coord::Shift;
@@ -189,7 +190,7 @@ fn draw_panel<DB: DrawingBackend>(
     let blank = |_: &f64| String::new();
     let mut mesh = chart.configure_mesh();
     mesh.x_labels(10)
-        .y_labels(6)
+        .y_labels(if p.y == YAxis::Raster { 0 } else { 6 })
         .x_label_formatter(&scale::tick)
         .y_label_formatter(if p.y == YAxis::Raster { &blank } else { &scale::tick })
         .label_style((FAMILY, 14))
@@ -307,7 +308,8 @@ fn caption_lines(fig: &Figure) -> Vec<String> {
 
 fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure) -> Result<(), SimError> {
     root.fill(&WHITE).map_err(err)?;
-    let body = root
+    let (_, root_body) = root.split_vertically(8);
+    let body = root_body
         .titled(&fig.title, (FAMILY, 22).into_font().style(FontStyle::Bold))
         .map_err(err)?;
     let lines = caption_lines(fig);
@@ -337,7 +339,8 @@ pub(crate) fn render(fig: &Figure) -> Result<(Vec<u8>, Vec<u8>), SimError> {
     let (w, h) = size;
     let mut rgb = vec![0u8; (w * h * 3) as usize];
     {
-        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+        let bitmap = BitMapBackend::with_buffer(&mut rgb, size);
+        let root = Typeset::new(bitmap, font::faces()?).into_drawing_area();
         draw(&root, fig)?;
     }
     Ok((s.into_bytes(), encode_png(&rgb, size)?))

@@ -5,6 +5,7 @@
 //! looked up (the build has no font-kit, fontconfig or freetype).
 
 use crate::sim::SimError;
+use ab_glyph::FontRef;
 use plotters::style::{register_font, FontStyle};
 use std::sync::OnceLock;
 
@@ -33,6 +34,18 @@ pub(crate) fn ensure() -> Result<(), SimError> {
         })
         .clone()
         .map_err(SimError::usage)
+}
+
+/// The embedded regular and bold faces, parsed for [`super::glyphs`].
+pub(crate) fn faces() -> Result<(FontRef<'static>, FontRef<'static>), SimError> {
+    let parse = |bytes: &'static [u8]| {
+        FontRef::try_from_slice(bytes)
+            .map_err(|e| SimError::usage(format!("plot: the embedded DejaVu Sans: {e}")))
+    };
+    Ok((
+        parse(dejavu::sans::regular())?,
+        parse(dejavu::sans::bold())?,
+    ))
 }
 
 #[cfg(test)]

@@ -24,6 +24,7 @@
 
 pub(crate) mod chart;
 pub(crate) mod font;
+pub(crate) mod glyphs;
 pub(crate) mod scale;
 
 use super::scenario::Outcome;
@@ -188,7 +189,7 @@ fn events(o: &Outcome) -> Figure {
         o,
         "inter-event time [s]",
         vec![Mark::labelled(
-            "time since the previous",
+            "since the previous one",
             colour(1),
             Shape::Dots(tr.gaps.clone()),
         )],

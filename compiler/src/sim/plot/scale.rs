@@ -78,17 +78,18 @@ pub(crate) fn stretches(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64
 /// A tick label: at most four significant digits, trailing zeros dropped,
 /// scientific notation for very large or small magnitudes.
 pub(crate) fn tick(v: &f64) -> String {
-    let v = *v;
+    // Four significant digits first, so 0.00099999 reads as 0.001.
+    let v = format!("{:.3e}", *v).parse::<f64>().unwrap_or(*v);
     let a = v.abs();
     if a < 1e-12 {
         return "0".into();
     }
-    if !(1e-3..1e4).contains(&a) {
-        let s = format!("{v:.2e}");
+    if !(1e-4..1e5).contains(&a) {
+        let s = format!("{v:.3e}");
         let (m, e) = s.split_once('e').unwrap_or((&s, "0")); // ok: `{:e}` always has an exponent
         return format!("{}e{e}", trim(m));
     }
-    let decimals = (3 - a.log10().floor() as i32).clamp(0, 6) as usize;
+    let decimals = (3 - a.log10().floor() as i32).clamp(0, 8) as usize;
     trim(&format!("{v:.decimals$}")).to_string()
 }
 
@@ -118,8 +119,10 @@ mod tests {
         assert_eq!(tick(&0.30000000000000004), "0.3");
         assert_eq!(tick(&-2.5), "-2.5");
         assert_eq!(tick(&1500.0), "1500");
+        assert_eq!(tick(&0.00099999999), "0.001");
         assert_eq!(tick(&1.5e7), "1.5e7");
         assert_eq!(tick(&2e-5), "2e-5");
+        assert_eq!(tick(&0.12345678), "0.1235");
         assert_eq!(tick(&1e-15), "0");
     }
 
