@@ -71,6 +71,8 @@ pub(crate) struct Mark {
     pub colour: RGBColor,
     /// Geometry.
     pub shape: Shape,
+    /// Drawn before the other marks (under them).
+    pub beneath: bool,
 }
 
 /// The geometry of a [`Mark`].
@@ -96,6 +98,15 @@ impl Mark {
             label: None,
             colour,
             shape,
+            beneath: false,
+        }
+    }
+
+    /// The mark, drawn under the others (a limit behind the data).
+    pub fn beneath(self) -> Self {
+        Mark {
+            beneath: true,
+            ..self
         }
     }
 
@@ -105,6 +116,7 @@ impl Mark {
             label: Some(label.into()),
             colour,
             shape,
+            beneath: false,
         }
     }
 }
@@ -203,7 +215,8 @@ fn draw_panel<DB: DrawingBackend>(
     }
     mesh.draw().map_err(err)?;
     let inside = |s: &Series| scale::stretches(s, r.lo, r.hi);
-    for m in &p.marks {
+    let beneath = p.marks.iter().filter(|m| m.beneath);
+    for m in beneath.chain(p.marks.iter().filter(|m| !m.beneath)) {
         let c = m.colour;
         match &m.shape {
             Shape::Line(s) => {
@@ -257,9 +270,9 @@ fn draw_panel<DB: DrawingBackend>(
             }
         }
     }
-    let notes = p.notes.iter().cloned().chain(r.clipped.iter().map(|m| {
-        let (lo, hi) = (scale::num(r.lo), scale::num(r.hi));
-        format!("clipped to {lo} .. {hi} (values reach {})", scale::num(*m))
+    let notes = p.notes.iter().cloned().chain(r.clipped.iter().map(|&(cap, m)| {
+        let (cap, m) = (scale::num(cap), scale::num(m));
+        format!("y clipped at +-{cap}: the values reach {m} (runaway)")
     }));
     for (i, n) in notes.enumerate() {
         let style = (FAMILY, 14).into_font().color(&RED);

@@ -69,11 +69,31 @@ fn caption(o: &Outcome) -> Vec<String> {
             num(m.convergence_tolerance)
         )
     };
-    vec![
+    let mut lines = vec![
         format!("trigger: {}", m.trigger),
         format!("plant: {}; {}", m.plant, m.integrator),
         outcome,
-    ]
+    ];
+    if span(o) != m.time_s {
+        lines.push(format!(
+            "time axis cut at {} s of the run's {} .. {} s: the state is not finite after t = {} s",
+            num(span(o).1),
+            num(m.time_s.0),
+            num(m.time_s.1),
+            num(m.nonfinite_at_s.unwrap_or(f64::NAN))
+        ));
+    }
+    lines
+}
+
+/// The time axis: the whole run, or up to shortly after the state went
+/// non-finite (nothing is left to see after that instant).
+fn span(o: &Outcome) -> (f64, f64) {
+    let (t0, t1) = o.metrics.time_s;
+    match o.metrics.nonfinite_at_s {
+        Some(t) if t > t0 && t < t1 => (t0, t1.min(t0 + 1.25 * (t - t0))),
+        _ => (t0, t1),
+    }
 }
 
 fn zero(span: (f64, f64)) -> Mark {
@@ -81,7 +101,7 @@ fn zero(span: (f64, f64)) -> Mark {
 }
 
 fn panel(o: &Outcome, y_label: &str, marks: Vec<Mark>) -> Panel {
-    let span = o.metrics.time_s;
+    let span = span(o);
     let mut all = vec![zero(span)];
     all.extend(marks);
     if let Some(t) = o.metrics.nonfinite_at_s {
@@ -125,7 +145,7 @@ fn states(o: &Outcome) -> Figure {
 }
 
 fn inputs(o: &Outcome) -> Figure {
-    let (t0, t1) = o.metrics.time_s;
+    let (t0, t1) = span(o);
     let tr = &o.trace;
     let panels = tr
         .input_names
@@ -137,7 +157,8 @@ fn inputs(o: &Outcome) -> Figure {
             if let Some(&ub) = o.u_max.get(s).filter(|v| v.is_finite()) {
                 for (sign, v) in [("+", ub), ("-", -ub)] {
                     let line = Shape::Line(vec![(t0, v), (t1, v)]);
-                    marks.push(Mark::labelled(format!("{sign}u_bar = {}", num(v)), RED, line));
+                    let label = format!("{sign}u_bar = {}", num(v));
+                    marks.push(Mark::labelled(label, RED, line).beneath());
                 }
             }
             panel(o, name, marks)
@@ -175,7 +196,7 @@ fn events(o: &Outcome) -> Figure {
         }
     ));
     let raster = Panel {
-        x: m.time_s,
+        x: span(o),
         y_label: "transmissions".into(),
         y: YAxis::Raster,
         marks: vec![Mark::labelled(

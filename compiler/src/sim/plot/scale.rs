@@ -17,14 +17,16 @@ pub(crate) struct YRange {
     pub lo: f64,
     /// Upper end.
     pub hi: f64,
-    /// `Some(m)`: values were clipped; `m` is the largest finite magnitude.
-    pub clipped: Option<f64>,
+    /// `Some((cap, m))`: values were clipped at `+-cap`; `m` is the largest
+    /// finite magnitude.
+    pub clipped: Option<(f64, f64)>,
 }
 
-/// The y-range of the points `(t, y)` over the time span `span`, zero always
-/// included; non-finite values are ignored.
+/// The y-range of the points `(t, y)` shown over the time span `span`, zero
+/// always included; non-finite values and points outside `span` are ignored.
 pub(crate) fn y_range(points: &[(f64, f64)], span: (f64, f64)) -> YRange {
-    let finite = || points.iter().filter(|p| p.0.is_finite() && p.1.is_finite());
+    let shown = |t: f64| span.0 <= t && t <= span.1;
+    let finite = || points.iter().filter(|p| shown(p.0) && p.1.is_finite());
     let (lo, hi) = finite().fold((0.0f64, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
     let largest = lo.abs().max(hi.abs());
     let half = span.0 + 0.5 * (span.1 - span.0);
@@ -36,7 +38,7 @@ pub(crate) fn y_range(points: &[(f64, f64)], span: (f64, f64)) -> YRange {
     } else {
         ABS_CAP
     };
-    let clipped = (largest > cap).then_some(largest);
+    let clipped = (largest > cap).then_some((cap, largest));
     let (lo, hi) = if clipped.is_some() {
         (lo.max(-cap), hi.min(cap))
     } else {
