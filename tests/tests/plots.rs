@@ -25,7 +25,16 @@ fn texts(files: &[(String, Vec<u8>)], name: &str) -> Vec<String> {
     let svg = String::from_utf8(bytes.clone()).expect("SVG is UTF-8");
     svg.split("<text")
         .skip(1)
-        .filter_map(|t| Some(t.split_once('>')?.1.split_once("</text>")?.0.trim().to_string()))
+        .filter_map(|t| {
+            Some(
+                t.split_once('>')?
+                    .1
+                    .split_once("</text>")?
+                    .0
+                    .trim()
+                    .to_string(),
+            )
+        })
         .collect()
 }
 
@@ -36,7 +45,11 @@ fn has(texts: &[String], want: &str) -> bool {
 fn png_ok(files: &[(String, Vec<u8>)]) {
     for (name, bytes) in files.iter().filter(|f| f.0.ends_with(".png")) {
         assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "{name}");
-        assert!(bytes.len() > 10_000, "{name}: {} bytes, no drawing?", bytes.len());
+        assert!(
+            bytes.len() > 10_000,
+            "{name}: {} bytes, no drawing?",
+            bytes.len()
+        );
     }
 }
 
@@ -59,7 +72,10 @@ fn run_figures_have_titles_axis_labels_and_legends() {
     // Tick labels: numbers on both axes.
     assert!(states.iter().filter(|t| t.parse::<f64>().is_ok()).count() >= 10);
     let inputs = texts(&files, "inverted_pendulum.inputs.svg");
-    assert!(has(&inputs, "control inputs") && has(&inputs, "u"), "{inputs:?}");
+    assert!(
+        has(&inputs, "control inputs") && has(&inputs, "u"),
+        "{inputs:?}"
+    );
     let events = texts(&files, "inverted_pendulum.events.svg");
     for want in [
         "transmission instants and inter-event times",
@@ -78,7 +94,10 @@ fn saturation_limits_are_in_the_legend() {
     o.u_max = vec![40.0];
     let files = plots(&o).unwrap_or_else(|e| panic!("{e}"));
     let inputs = texts(&files, "inverted_pendulum.inputs.svg");
-    assert!(has(&inputs, "+u_bar = 40") && has(&inputs, "-u_bar = -40"), "{inputs:?}");
+    assert!(
+        has(&inputs, "+u_bar = 40") && has(&inputs, "-u_bar = -40"),
+        "{inputs:?}"
+    );
 }
 
 #[test]
@@ -106,7 +125,10 @@ fn a_diverging_nan_trace_still_plots_and_says_it_was_clipped() {
     // The tick labels stay finite and moderate.
     let ticks: Vec<f64> = states.iter().filter_map(|t| t.parse().ok()).collect();
     assert!(ticks.len() >= 10, "{states:?}");
-    assert!(ticks.iter().all(|v| v.is_finite() && v.abs() < 1e12), "{ticks:?}");
+    assert!(
+        ticks.iter().all(|v| v.is_finite() && v.abs() < 1e12),
+        "{ticks:?}"
+    );
 }
 
 #[test]
@@ -145,15 +167,28 @@ fn campaign_figures_have_bands_histograms_and_the_convergence_marker() {
     let files = campaign_plots(&part).unwrap_or_else(|e| panic!("{e}"));
     png_ok(&files);
     let env = texts(&files, "mc_plot.mc.envelope.svg");
-    for want in ["state envelope (12 runs", "x1 min..max", "x1 nominal", "time [s]"] {
+    for want in [
+        "state envelope (12 runs",
+        "x1 min..max",
+        "x1 nominal",
+        "time [s]",
+    ] {
         assert!(has(&env, want), "envelope: no `{want}` in {env:?}");
     }
     let settle = texts(&files, "mc_plot.mc.settle.svg");
-    for want in ["settle times", "settle time [s]", "runs", "declared time 3.5 s"] {
+    for want in [
+        "settle times",
+        "settle time [s]",
+        "runs",
+        "convergence time 3.5 s",
+    ] {
         assert!(has(&settle, want), "settle: no `{want}` in {settle:?}");
     }
     let tx = texts(&files, "mc_plot.mc.transmissions.svg");
-    assert!(has(&tx, "transmissions per run") && has(&tx, "runs per bin"), "{tx:?}");
+    assert!(
+        has(&tx, "transmissions per run") && has(&tx, "runs per bin"),
+        "{tx:?}"
+    );
     // Counts above the bars add up to the runs.
     let again = campaign_plots(&part).unwrap_or_else(|e| panic!("{e}"));
     assert!(files == again, "campaign plots are not deterministic");

@@ -40,8 +40,12 @@ fn envelope(p: &Partial) -> Figure {
             let mut marks = vec![Mark::plain(GREY, Shape::Line(vec![(t0, 0.0), (t1, 0.0)]))];
             for (c, &i) in idx.iter().enumerate() {
                 let name = &p.state_names[i];
-                let band: Vec<usize> = (0..bins).filter(|&k| env.lo[k][i] <= env.hi[k][i]).collect();
-                let edge = |v: &Vec<Vec<f64>>| -> Series { band.iter().map(|&k| (mid(k), v[k][i])).collect() };
+                let band: Vec<usize> = (0..bins)
+                    .filter(|&k| env.lo[k][i] <= env.hi[k][i])
+                    .collect();
+                let edge = |v: &Vec<Vec<f64>>| -> Series {
+                    band.iter().map(|&k| (mid(k), v[k][i])).collect()
+                };
                 marks.push(Mark::labelled(
                     format!("{name} min..max"),
                     colour(c),
@@ -53,7 +57,15 @@ fn envelope(p: &Partial) -> Figure {
             }
             for (c, &i) in idx.iter().enumerate() {
                 let line = (0..bins)
-                    .map(|k| (mid(k), p.nominal.get(k).and_then(|r| *r.get(i)?).unwrap_or(f64::NAN)))
+                    .map(|k| {
+                        (
+                            mid(k),
+                            p.nominal
+                                .get(k)
+                                .and_then(|r| *r.get(i)?)
+                                .unwrap_or(f64::NAN),
+                        )
+                    })
                     .collect();
                 let label = format!("{} nominal", p.state_names[i]);
                 marks.push(Mark::labelled(label, colour(c), Shape::Line(line)));
@@ -83,11 +95,13 @@ fn envelope(p: &Partial) -> Figure {
 
 /// A histogram of `values` (30 bins from the smallest to the largest), the
 /// x-range widened to show `mark`.
-fn histogram(values: &[f64], x_label: &str, mark: Option<Mark>) -> (Panel, String) {
+fn histogram(values: &[f64], mark: Option<Mark>) -> (Panel, String) {
     let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
     let (mut lo, mut hi) = finite
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
     if finite.is_empty() {
         (lo, hi) = (0.0, 1.0);
     }
@@ -105,17 +119,28 @@ fn histogram(values: &[f64], x_label: &str, mark: Option<Mark>) -> (Panel, Strin
         .collect();
     let mut x = (lo - w, hi + w);
     let mut marks = vec![Mark::labelled("runs per bin", colour(0), Shape::Bars(bars))];
-    if let Some(m) = mark {
-        if let Shape::VLine(t) = m.shape {
-            x = (x.0.min(t - w), x.1.max(t + w));
-        }
-        marks.push(m);
+    let mut notes = Vec::new();
+    if finite.is_empty() {
+        notes.push("no run to count".to_string());
     }
-    let notes = if finite.is_empty() {
-        vec!["no run to count".to_string()]
-    } else {
-        Vec::new()
-    };
+    // The marker widens the axis at most to twice the values' range, so the
+    // bars stay readable; farther out, a note says where it is.
+    if let Some(m) = mark {
+        match m.shape {
+            Shape::VLine(t) if t > x.1 + (hi - lo) => notes.push(format!(
+                "{}: right of the axis",
+                m.label.unwrap_or_default()
+            )),
+            Shape::VLine(t) if t < x.0 - (hi - lo) => {
+                notes.push(format!("{}: left of the axis", m.label.unwrap_or_default()))
+            }
+            Shape::VLine(t) => {
+                x = (x.0.min(t - w), x.1.max(t + w));
+                marks.push(m);
+            }
+            _ => marks.push(m),
+        }
+    }
     let stats = format!(
         "{} values, from {} to {}; bin width {}",
         finite.len(),
@@ -130,7 +155,6 @@ fn histogram(values: &[f64], x_label: &str, mark: Option<Mark>) -> (Panel, Strin
         marks,
         notes,
     };
-    let _ = x_label;
     (panel, stats)
 }
 
@@ -138,11 +162,11 @@ fn settle(p: &Partial) -> Figure {
     let values: Vec<f64> = p.runs.iter().filter_map(|r| r.settle_time_s).collect();
     let (signal, bound, t) = &p.converged_rule;
     let mark = Mark::labelled(
-        format!("declared time {} s", num(*t)),
+        format!("convergence time {} s", num(*t)),
         RED,
         Shape::VLine(*t),
     );
-    let (panel, stats) = histogram(&values, "settle time [s]", Some(mark));
+    let (panel, stats) = histogram(&values, Some(mark));
     Figure {
         title: title(p, "settle times"),
         caption: vec![
@@ -160,10 +184,14 @@ fn settle(p: &Partial) -> Figure {
 
 fn transmissions(p: &Partial) -> Figure {
     let values: Vec<f64> = p.runs.iter().map(|r| r.transmissions as f64).collect();
-    let (panel, stats) = histogram(&values, "transmissions per run", None);
+    let (panel, stats) = histogram(&values, None);
     Figure {
         title: title(p, "transmissions per run"),
-        caption: vec![format!("transmissions to the actuators over {} .. {} s; {stats}", num(p.time_s.0), num(p.time_s.1))],
+        caption: vec![format!(
+            "transmissions to the actuators over {} .. {} s; {stats}",
+            num(p.time_s.0),
+            num(p.time_s.1)
+        )],
         x_label: "transmissions per run".into(),
         panels: vec![panel],
     }

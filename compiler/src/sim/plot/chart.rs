@@ -190,7 +190,11 @@ fn draw_panel<DB: DrawingBackend>(
 ) -> Result<(), SimError> {
     let (w, _) = area.dim_in_pixel();
     let (plot_area, legend_area) = area.split_horizontally(w.saturating_sub(LEGEND_W));
-    let (x0, x1) = if p.x.1 > p.x.0 { p.x } else { (p.x.0, p.x.0 + 1.0) };
+    let (x0, x1) = if p.x.1 > p.x.0 {
+        p.x
+    } else {
+        (p.x.0, p.x.0 + 1.0)
+    };
     let r = y_range(p);
     let mut chart = ChartBuilder::on(&plot_area)
         .margin(8)
@@ -204,7 +208,11 @@ fn draw_panel<DB: DrawingBackend>(
     mesh.x_labels(10)
         .y_labels(if p.y == YAxis::Raster { 0 } else { 6 })
         .x_label_formatter(&scale::tick)
-        .y_label_formatter(if p.y == YAxis::Raster { &blank } else { &scale::tick })
+        .y_label_formatter(if p.y == YAxis::Raster {
+            &blank
+        } else {
+            &scale::tick
+        })
         .label_style((FAMILY, 14))
         .axis_desc_style((FAMILY, 16))
         .y_desc(p.y_label.as_str())
@@ -236,9 +244,10 @@ fn draw_panel<DB: DrawingBackend>(
                 }
             }
             Shape::Ticks(xs) => {
-                let ticks = xs.iter().filter(|x| x.is_finite()).map(|&x| {
-                    PathElement::new(vec![(x, 0.15), (x, 0.85)], c.stroke_width(1))
-                });
+                let ticks = xs
+                    .iter()
+                    .filter(|x| x.is_finite())
+                    .map(|&x| PathElement::new(vec![(x, 0.15), (x, 0.85)], c.stroke_width(1)));
                 chart.draw_series(ticks).map_err(err)?;
             }
             Shape::Dots(s) => {
@@ -270,10 +279,14 @@ fn draw_panel<DB: DrawingBackend>(
             }
         }
     }
-    let notes = p.notes.iter().cloned().chain(r.clipped.iter().map(|&(cap, m)| {
-        let (cap, m) = (scale::num(cap), scale::num(m));
-        format!("y clipped at +-{cap}: the values reach {m} (runaway)")
-    }));
+    let notes = p
+        .notes
+        .iter()
+        .cloned()
+        .chain(r.clipped.iter().map(|&(cap, m)| {
+            let (cap, m) = (scale::num(cap), scale::num(m));
+            format!("y clipped at +-{cap}: the values reach {m} (runaway)")
+        }));
     for (i, n) in notes.enumerate() {
         let style = (FAMILY, 14).into_font().color(&RED);
         let at = EmptyElement::at((x0, r.hi)) + Text::new(n, (8, 6 + 18 * i as i32), style);
@@ -282,18 +295,35 @@ fn draw_panel<DB: DrawingBackend>(
     draw_legend(&legend_area, p)
 }
 
-fn draw_legend<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> Result<(), SimError> {
-    let entries = p.marks.iter().filter_map(|m| Some((m.label.as_deref()?, m)));
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    p: &Panel,
+) -> Result<(), SimError> {
+    let entries = p
+        .marks
+        .iter()
+        .filter_map(|m| Some((m.label.as_deref()?, m)));
     for (i, (label, m)) in entries.enumerate() {
         let y = 14 + 22 * i as i32;
         let c = m.colour;
         match m.shape {
-            Shape::Band { .. } | Shape::Bars(_) => area
-                .draw(&Rectangle::new([(4, y - 6), (30, y + 6)], c.mix(0.3).filled()))
+            Shape::Band { .. } => area
+                .draw(&Rectangle::new(
+                    [(4, y - 6), (30, y + 6)],
+                    c.mix(0.3).filled(),
+                ))
                 .map_err(err)?,
-            Shape::Dots(_) => area.draw(&Circle::new((17, y), 4, c.filled())).map_err(err)?,
+            Shape::Bars(_) => area
+                .draw(&Rectangle::new([(4, y - 6), (30, y + 6)], c.filled()))
+                .map_err(err)?,
+            Shape::Dots(_) => area
+                .draw(&Circle::new((17, y), 4, c.filled()))
+                .map_err(err)?,
             Shape::Ticks(_) => area
-                .draw(&PathElement::new(vec![(17, y - 7), (17, y + 7)], c.stroke_width(2)))
+                .draw(&PathElement::new(
+                    vec![(17, y - 7), (17, y + 7)],
+                    c.stroke_width(2),
+                ))
                 .map_err(err)?,
             _ => area
                 .draw(&PathElement::new(vec![(4, y), (30, y)], c.stroke_width(2)))
@@ -312,7 +342,10 @@ fn draw_legend<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> 
 /// The figure's size: [`WIDTH`] wide, about 230 pixels per panel.
 pub(crate) fn size(fig: &Figure) -> (u32, u32) {
     let lines = caption_lines(fig).len() as u32;
-    (WIDTH, (70 + LINE_H * lines + 230 * fig.panels.len() as u32).max(500))
+    (
+        WIDTH,
+        (70 + LINE_H * lines + 230 * fig.panels.len() as u32).max(500),
+    )
 }
 
 fn caption_lines(fig: &Figure) -> Vec<String> {

@@ -164,7 +164,8 @@ impl<B: DrawingBackend> DrawingBackend for Typeset<B> {
             let (x, y) = (pos.0 + x, pos.1 + y);
             if x >= 0 && y >= 0 && x < w as i32 && y < h as i32 {
                 let alpha = color.alpha * f64::from(c.min(1.0));
-                self.inner.draw_pixel((x, y), BackendColor { alpha, ..color })?;
+                self.inner
+                    .draw_pixel((x, y), BackendColor { alpha, ..color })?;
             }
         }
         Ok(())
@@ -177,7 +178,10 @@ impl<B: DrawingBackend> DrawingBackend for Typeset<B> {
     ) -> Result<(u32, u32), DrawingErrorKind<B::ErrorType>> {
         let f = self.scaled(style);
         let (_, width) = layout(&f, text);
-        Ok((width.ceil() as u32, (f.ascent() - f.descent()).ceil() as u32))
+        Ok((
+            width.ceil() as u32,
+            (f.ascent() - f.descent()).ceil() as u32,
+        ))
     }
 
     fn blit_bitmap(

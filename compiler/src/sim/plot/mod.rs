@@ -59,10 +59,14 @@ fn caption(o: &Outcome) -> Vec<String> {
     let outcome = if m.failed {
         format!("RUN FAILED: {}", m.failures().join("; "))
     } else {
-        let settled = m
-            .settle_time_s
-            .map_or("did not settle".into(), |t| format!("settled at t = {} s", num(t)));
-        let verdict = if m.converged { "converged" } else { "did not converge" };
+        let settled = m.settle_time_s.map_or("did not settle".into(), |t| {
+            format!("settled at t = {} s", num(t))
+        });
+        let verdict = if m.converged {
+            "converged"
+        } else {
+            "did not converge"
+        };
         format!(
             "{verdict} ({settled}; final ||x|| = {}, tolerance {})",
             num(m.final_state_norm),
@@ -121,7 +125,9 @@ fn panel(o: &Outcome, y_label: &str, marks: Vec<Mark>) -> Panel {
 }
 
 fn column(o: &Outcome, get: impl Fn(usize) -> f64) -> Series {
-    (0..o.trace.t.len()).map(|k| (o.trace.t[k], get(k))).collect()
+    (0..o.trace.t.len())
+        .map(|k| (o.trace.t[k], get(k)))
+        .collect()
 }
 
 fn states(o: &Outcome) -> Figure {

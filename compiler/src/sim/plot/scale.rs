@@ -136,13 +136,20 @@ mod tests {
         let r = y_range(&pts, (0.0, 99.0));
         assert!(r.clipped.is_some());
         assert!(r.hi < 1e9 && r.hi > 1.0, "{r:?}");
-        let calm: Vec<(f64, f64)> = (0..100).map(|k| (k as f64, (-0.1 * k as f64).exp())).collect();
+        let calm: Vec<(f64, f64)> = (0..100)
+            .map(|k| (k as f64, (-0.1 * k as f64).exp()))
+            .collect();
         assert_eq!(y_range(&calm, (0.0, 99.0)).clipped, None);
     }
 
     #[test]
     fn non_finite_samples_split_the_line() {
-        let pts = [(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0), (3.0, f64::INFINITY)];
+        let pts = [
+            (0.0, 1.0),
+            (1.0, f64::NAN),
+            (2.0, 3.0),
+            (3.0, f64::INFINITY),
+        ];
         let r = y_range(&pts, (0.0, 3.0));
         assert!(r.lo.is_finite() && r.hi.is_finite());
         assert_eq!(stretches(&pts, -10.0, 10.0).len(), 2);
