@@ -23,6 +23,8 @@ use tsf_runtime::Flags;
 pub struct Outcome {
     /// Controller name (file stem of the outputs).
     pub name: String,
+    /// The spec file's stem (plot titles; empty for a design built without a file).
+    pub spec: String,
     /// The trajectory at the sampling instants, thinned for the plots.
     pub trace: Trace,
     /// Figures of merit.
@@ -405,6 +407,10 @@ pub fn run_truth(
     metrics.wall_time_s = started.elapsed().as_secs_f64();
     Ok(Outcome {
         name: spec.controller.node.clone(),
+        spec: std::path::Path::new(&prepared.source.name)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         trace,
         metrics,
         u_max: tables.u_max.clone(),
