@@ -360,13 +360,21 @@ pub(super) fn certify_loop(
     let (g, residual, points) = image(model, signal, gains).map_err(SynthError::Unsupported)?;
     let (gn, ginv) = norms(&g);
     let (b1, b0) = (beta * gn * ginv, rho * ginv);
-    let bound = |tau: f64, lambda: f64, eps: f64| tau * (1.0 + 1.0 / eps) * b0 * b0 / lambda;
+    let bound = |tau: f64, lambda: f64, eps: f64| {
+        if b0 == 0.0 {
+            0.0
+        } else {
+            tau * (1.0 + 1.0 / eps) * b0 * b0 / lambda
+        }
+    };
+    // rho = 0 (b0 = 0): Young's inequality is not needed, eps = 0 is exact.
+    let eps0 = if b0 == 0.0 { 0.0 } else { 1.0 };
     // The largest lambda certified at eps = 1 (bracket grown, then bisected).
     let mut best: Option<(f64, f64, f64, DMatrix<f64>)> = None; // (lambda, eps, tau, P)
     let (mut lo, mut hi) = (0.0, 1e-3);
     let mut at_lo = None;
     loop {
-        match solve(runner, model, gains, hi, 1.0, b1)? {
+        match solve(runner, model, gains, hi, eps0, b1)? {
             Some(s) => {
                 at_lo = Some(s);
                 lo = hi;
@@ -379,16 +387,16 @@ pub(super) fn certify_loop(
         }
     }
     if let Some((p, tau)) = at_lo.clone() {
-        best = Some((lo, 1.0, tau, p));
+        best = Some((lo, eps0, tau, p));
     }
-    for _ in 0..8 {
+    for _ in 0..12 {
         if lo == 0.0 {
             break;
         }
         let mid = 0.5 * (lo + hi);
-        if let Some((p, tau)) = solve(runner, model, gains, mid, 1.0, b1)? {
+        if let Some((p, tau)) = solve(runner, model, gains, mid, eps0, b1)? {
             lo = mid;
-            best = Some((mid, 1.0, tau, p));
+            best = Some((mid, eps0, tau, p));
         } else {
             hi = mid;
         }
