@@ -322,3 +322,18 @@ fn per_step_monitoring_counts_replay_from_the_trace() {
         oc.metrics.failures()
     );
 }
+
+#[test]
+fn generated_sensor_modules_are_snapshotted() {
+    let text = format!(
+        "{TWO_RULES}trigger mixed {{ on = s; beta = 0.3; rho = 1e-4; monitor = continuous; }}\n"
+    );
+    let c = compiled("am.tsf", &text);
+    let t = tables(&c, "am.tsf", &text);
+    let rust = emit_rust_signal_sensor(&t).expect("rust");
+    syn::parse_file(&rust).expect("the Rust sensor module parses");
+    insta::assert_snapshot!("am_sensor.rs", rust);
+    let files = emit_c_signal_sensor(&t).expect("c");
+    insta::assert_snapshot!("am_sensor.h", files.header);
+    insta::assert_snapshot!("am_sensor.c", files.source);
+}
