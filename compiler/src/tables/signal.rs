@@ -67,7 +67,7 @@ pub(super) fn signal_sensor_tables(
             "continuous"
         },
         certificate: format!(
-            "certified by tsfc for continuous monitoring: V = x'Px decays at rate lambda = {:e} to x'Px <= {:e} (||x|| <= {:e})",
+            "certified by tsfc for continuous monitoring: V = x'Px decays at rate lambda = {:.4e} to x'Px <= {:.4e} (||x|| <= {:.4e})",
             cert.lambda, cert.v_inf, cert.x_bound
         ),
     }))
