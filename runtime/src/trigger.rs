@@ -263,7 +263,10 @@ impl<T: Real, const K: usize> MixedTrigger<T, K> {
         let xi = norm(&sub(&self.last, sigma));
         let threshold = self.beta * norm(sigma) + self.rho;
         // NaN anywhere: not `<`, so it transmits.
-        !(xi < threshold)
+        if xi < threshold {
+            return false;
+        }
+        true
     }
 
     /// Check the current `sigma`; on `true` it becomes `sigma(t_i)`.

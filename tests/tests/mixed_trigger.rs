@@ -6,6 +6,7 @@
 mod common;
 
 use common::model_of;
+use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tsf_runtime::SignalTrigger;
@@ -54,7 +55,10 @@ fn compiled(name: &str, text: &str) -> Compiled {
 fn certificate(c: &Compiled) -> Cert {
     let (design, cert) = c.outcome.as_ref().expect("certified");
     assert!(cert.ok, "{}", cert.worst);
-    design.signal_trigger.clone().expect("a mixed-trigger certificate")
+    design
+        .signal_trigger
+        .clone()
+        .expect("a mixed-trigger certificate")
 }
 
 #[test]
@@ -72,7 +76,9 @@ fn scalar_decay_rate_meets_the_worst_case_error() {
     assert_eq!((cert.v_inf, cert.x_bound), (0.0, 0.0));
     // The scalar LMI by its minors: M11 <= 0, M22 < 0, det >= 0.
     let p = cert.p[0][0];
-    let m11 = 2.0 * p * (a + b * f) + cert.lambda * p + cert.tau * (1.0 + cert.eps) * cert.b1.powi(2) * f * f;
+    let m11 = 2.0 * p * (a + b * f)
+        + cert.lambda * p
+        + cert.tau * (1.0 + cert.eps) * cert.b1.powi(2) * f * f;
     let (m12, m22) = (p * b, -cert.tau);
     assert!(m11 < 0.0 && m22 < 0.0 && m11 * m22 - m12 * m12 >= 0.0);
 }
@@ -85,7 +91,11 @@ fn scalar_ultimate_bound_covers_the_worst_case_equilibrium() {
     let c = compiled("sc.tsf", &scalar(a, b, f, beta, rho));
     let cert = certificate(&c);
     let b0 = rho * (1.0 / f).abs().recip();
-    assert!((cert.b0 - b0).abs() < 1e-12 * b0, "b0 = {} vs {b0}", cert.b0);
+    assert!(
+        (cert.b0 - b0).abs() < 1e-12 * b0,
+        "b0 = {} vs {b0}",
+        cert.b0
+    );
     let x_star = b.abs() * b0 / (-(a + b * f) - b.abs() * beta * f.abs());
     // Integrate the worst case from far away: it settles at x*.
     let mut x = 1.0f64;
@@ -95,7 +105,11 @@ fn scalar_ultimate_bound_covers_the_worst_case_equilibrium() {
     }
     assert!((x - x_star).abs() < 1e-6, "{x} vs {x_star}");
     assert!(cert.x_bound >= x_star, "{} < {x_star}", cert.x_bound);
-    assert!(cert.x_bound < 20.0 * x_star, "{} far above {x_star}", cert.x_bound);
+    assert!(
+        cert.x_bound < 20.0 * x_star,
+        "{} far above {x_star}",
+        cert.x_bound
+    );
     let v = cert.tau * (1.0 + 1.0 / cert.eps) * cert.b0.powi(2) / cert.lambda;
     assert!((cert.v_inf - v).abs() <= 1e-12 * v);
 }
@@ -104,7 +118,9 @@ fn scalar_ultimate_bound_covers_the_worst_case_equilibrium() {
 fn two_rule_signal_is_the_image_of_the_pdc_command() {
     let c = compiled(
         "am.tsf",
-        &format!("{TWO_RULES}trigger mixed {{ on = s; beta = 0.3; rho = 1e-4; monitor = step; }}\n"),
+        &format!(
+            "{TWO_RULES}trigger mixed {{ on = s; beta = 0.3; rho = 1e-4; monitor = step; }}\n"
+        ),
     );
     let cert = certificate(&c);
     assert!((cert.g[0][0] + 0.5).abs() < 1e-9, "G = {:?}", cert.g);
@@ -125,15 +141,18 @@ fn refusals_name_the_cause() {
             TWO_RULES.replace("signal s = w + 0.2 * p", "signal s = w + 0.3 * p")
         ),
     );
-    let e = c.outcome.err().expect("refused").to_string();
+    let e = c.outcome.expect_err("refused").to_string();
     assert!(e.contains("constant linear image"), "{e}");
     // The state (the default) is not an image of a scalar command either.
     let c = compiled(
         "am.tsf",
         &format!("{TWO_RULES}trigger mixed {{ beta = 0.3; rho = 1e-4; monitor = continuous; }}\n"),
     );
-    let e = c.outcome.err().expect("refused").to_string();
-    assert!(e.contains("full column rank") || e.contains("constant linear image"), "{e}");
+    let e = c.outcome.expect_err("refused").to_string();
+    assert!(
+        e.contains("full column rank") || e.contains("constant linear image"),
+        "{e}"
+    );
     // Saturation is not covered.
     let c = compiled(
         "am.tsf",
@@ -142,12 +161,14 @@ fn refusals_name_the_cause() {
             TWO_RULES.replace("input u;", "input u saturate 5;")
         ),
     );
-    let e = c.outcome.err().expect("refused").to_string();
+    let e = c.outcome.expect_err("refused").to_string();
     assert!(e.contains("saturation"), "{e}");
     // Negative beta is a check error.
     let source = tsfc::frontend::Source {
         name: "am.tsf".into(),
-        text: format!("{TWO_RULES}trigger mixed {{ on = s; beta = -0.3; rho = 1e-4; monitor = step; }}\n"),
+        text: format!(
+            "{TWO_RULES}trigger mixed {{ on = s; beta = -0.3; rho = 1e-4; monitor = step; }}\n"
+        ),
         bytes: Vec::new(),
     };
     let checked = tsfc::frontend::check(&source);
@@ -190,7 +211,8 @@ fn trajectory(seed: u64, len: usize) -> Vec<[f64; 2]> {
 
 #[test]
 fn runtime_rust_and_c_sensors_decide_alike() {
-    let text = format!("{TWO_RULES}trigger mixed {{ on = s; beta = 0.3; rho = 1e-4; monitor = step; }}\n");
+    let text =
+        format!("{TWO_RULES}trigger mixed {{ on = s; beta = 0.3; rho = 1e-4; monitor = step; }}\n");
     let c = compiled("am.tsf", &text);
     let t = tables(&c, "am.tsf", &text);
     let s = t.signal_trigger.as_ref().expect("signal sensor tables");
@@ -201,7 +223,7 @@ fn runtime_rust_and_c_sensors_decide_alike() {
     // Independent reference: the law written out here.
     let law = |last: &Option<f64>, v: f64| match last {
         None => true,
-        Some(l) => !((l - v).abs() < 0.3 * v.abs() + 1e-4),
+        Some(l) => (l - v).abs().partial_cmp(&(0.3 * v.abs() + 1e-4)) != Some(Ordering::Less),
     };
     // C: the sensor module and the runtime, driven over the same trajectories.
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mixed_trigger_c");
@@ -232,7 +254,10 @@ fn runtime_rust_and_c_sensors_decide_alike() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for seed in 1..=5u64 {
         let xs = trajectory(seed, 2000);
-        let input: String = xs.iter().map(|x| format!("{:e} {:e}\n", x[0], x[1])).collect();
+        let input: String = xs
+            .iter()
+            .map(|x| format!("{:e} {:e}\n", x[0], x[1]))
+            .collect();
         let inp = dir.join("input.txt");
         std::fs::write(&inp, input).expect("write input");
         let out = Command::new(&exe)
@@ -257,7 +282,11 @@ fn runtime_rust_and_c_sensors_decide_alike() {
             assert_eq!(c_dec[k], r, "C vs runtime at {k} (seed {seed})");
             if r {
                 let held = rt.last().map(|h| h.map(f64::to_bits));
-                assert_eq!(held, Some(x.map(f64::to_bits)), "the held value is the state");
+                assert_eq!(
+                    held,
+                    Some(x.map(f64::to_bits)),
+                    "the held value is the state"
+                );
             }
             sent += usize::from(r);
         }
@@ -294,7 +323,9 @@ fn per_step_monitoring_counts_replay_from_the_trace() {
         let (p, w) = (v(1), v(2));
         let sent = cols[cols.len() - 1].trim() == "1";
         let s = w + 0.2 * p + 0.2 * (p * p) * p;
-        let fire = last.is_none_or(|l| !((l - s).abs() < 0.3 * s.abs() + 1e-4));
+        let fire = last.is_none_or(|l| {
+            (l - s).abs().partial_cmp(&(0.3 * s.abs() + 1e-4)) != Some(Ordering::Less)
+        });
         assert_eq!(sent, fire, "row {rows}: {line}");
         if fire {
             last = Some(s);
@@ -314,7 +345,11 @@ fn per_step_monitoring_counts_replay_from_the_trace() {
     .expect("prepared");
     let oc = tsfc::sim::simulate(&cont, &tsfc::sim::Options::default()).expect("simulated");
     assert_eq!(oc.metrics.monitor.as_deref(), Some("continuous"));
-    assert!(oc.metrics.transmissions >= replayed * 9 / 10, "{} vs {replayed}", oc.metrics.transmissions);
+    assert!(
+        oc.metrics.transmissions >= replayed * 9 / 10,
+        "{} vs {replayed}",
+        oc.metrics.transmissions
+    );
     assert!(
         oc.metrics.final_state_norm < 0.25 * oc.metrics.initial_state_norm,
         "{} {:?}",

@@ -180,7 +180,7 @@ pub fn image(
              or use `trigger aperiodic {{ sampling = ..; threshold nu = ..; weight = synthesize; }}`"
         )
     };
-    if !(worst <= IMAGE_TOL) {
+    if worst.is_nan() || worst > IMAGE_TOL {
         return Err(why(format!(
             "the best G leaves a relative residual {worst:.3e} > {IMAGE_TOL:e} on {cols} states"
         )));
@@ -188,7 +188,7 @@ pub fn image(
     let sv = g.clone().svd(false, false).singular_values;
     let smin = sv.iter().copied().fold(f64::INFINITY, f64::min);
     let smax = sv.iter().copied().fold(0.0, f64::max);
-    if k < m || !(smin > 1e-9 * smax.max(1e-300)) {
+    if k < m || smin.is_nan() || smin <= 1e-9 * smax.max(1e-300) {
         return Err(why(format!(
             "G is {k}x{m} without full column rank: the command cannot be recovered from the signal"
         )));
@@ -373,17 +373,12 @@ pub(super) fn certify_loop(
     let mut best: Option<(f64, f64, f64, DMatrix<f64>)> = None; // (lambda, eps, tau, P)
     let (mut lo, mut hi) = (0.0, 1e-3);
     let mut at_lo = None;
-    loop {
-        match solve(runner, model, gains, hi, eps0, b1)? {
-            Some(s) => {
-                at_lo = Some(s);
-                lo = hi;
-                hi *= 4.0;
-                if hi > 1e4 {
-                    break;
-                }
-            }
-            None => break,
+    while let Some(sol) = solve(runner, model, gains, hi, eps0, b1)? {
+        at_lo = Some(sol);
+        lo = hi;
+        hi *= 4.0;
+        if hi > 1e4 {
+            break;
         }
     }
     if let Some((p, tau)) = at_lo.clone() {
