@@ -132,6 +132,23 @@ fn two_rule_signal_is_the_image_of_the_pdc_command() {
 }
 
 #[test]
+fn the_image_is_checked_on_the_premise_region_only() {
+    // The states are sampled in [-1.5, 1.5]^2 (the operating point p = 1.5): where
+    // q = p^2 > 1 rule R2 alone fires and u != -2 s, but that is outside `range 0 .. 1`.
+    let text = TWO_RULES.replace("at(p = 1)", "at(p = 1.5)")
+        + "trigger mixed { on = s; beta = 0.3; rho = 1e-4; monitor = step; }\n";
+    let cert = certificate(&compiled("am.tsf", &text));
+    assert!(cert.image_residual <= 1e-9 && cert.image_points > 100);
+    // Widening the declared range brings those states in: refused.
+    let wide = text.replace("range 0 .. 1", "range 0 .. 2");
+    let e = compiled("am.tsf", &wide)
+        .outcome
+        .expect_err("refused")
+        .to_string();
+    assert!(e.contains("constant linear image"), "{e}");
+}
+
+#[test]
 fn refusals_name_the_cause() {
     // A signal that is not a linear image of the command.
     let c = compiled(

@@ -4,8 +4,8 @@
 //!
 //! Route (PDC designs, given or synthesized gains):
 //! 1. the signal is a constant linear image of the PDC command, s(x) = G u_pdc(x),
-//!    u_pdc(x) = sum_j h_j(x) F_j x, checked on a grid of states where rules fire
-//!    (relative residual <= [`IMAGE_TOL`]); G has full column rank;
+//!    u_pdc(x) = sum_j h_j(x) F_j x, checked on a grid of states of the premise
+//!    region where rules fire (relative residual <= [`IMAGE_TOL`]); G has full column rank;
 //! 2. with continuous monitoring u = u_pdc(x(t_i)) = u_pdc(x) + e and
 //!    ||e|| <= ||G^+|| (beta ||G|| ||u_pdc|| + rho) = b1 ||u_pdc|| + b0;
 //! 3. per plant/controller rule pair (i, j), with ||u_pdc||^2 <= sum_j h_j ||F_j x||^2,
@@ -110,9 +110,19 @@ fn grid(model: &TsModel) -> Vec<Vec<f64>> {
     out
 }
 
-/// u_pdc(x) with the normalized rule weights at x, or `None` where no rule fires.
+/// u_pdc(x) with the normalized rule weights at x, or `None` where no rule
+/// fires or x is outside the premise region (a premise outside its range).
 fn pdc(model: &TsModel, gains: &[DMatrix<f64>], x: &[f64]) -> Option<DMatrix<f64>> {
     let z = premise_values(&model.spec, x).ok()?;
+    // The premise region only: the certificate (like the others) covers it.
+    let inside = model.premises.slots.iter().all(|slot| {
+        let (lo, hi) = slot.range;
+        z.get(slot.first..slot.first + slot.dim)
+            .is_some_and(|c| c.iter().all(|v| *v >= lo && *v <= hi))
+    });
+    if !inside {
+        return None;
+    }
     let w: Vec<f64> = model.terms.iter().map(|t| rule_weight(t, &z)).collect();
     let total: f64 = w.iter().sum();
     if !(total > 1e-6 && total.is_finite()) {
