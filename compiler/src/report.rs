@@ -253,6 +253,9 @@ pub struct Report {
     /// The certified sampled loop (periodic trigger, or aperiodic sampling
     /// without a threshold).
     pub sampled_loop: Option<SampledReport>,
+    /// The certified mixed trigger on a named signal (`trigger mixed { on = ..; }`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub signal_trigger: Option<crate::synth::signal_trigger::SignalTrigger>,
     /// Solver.
     pub solver: SolverInfo,
     /// Timings.
@@ -492,6 +495,9 @@ pub fn report(
             .filter(|_| certified)
             .and_then(|d| d.trigger.as_ref())
             .map(|t| trigger_report(model, t)),
+        signal_trigger: design
+            .filter(|_| certified)
+            .and_then(|d| d.signal_trigger.clone()),
         sampled_loop: design
             .filter(|_| certified)
             .and_then(|d| d.sampled.as_ref())

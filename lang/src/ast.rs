@@ -288,6 +288,8 @@ pub enum ItemKind {
     Disturbance(Vec<VarDecl>, Option<Expr>),
     /// `output name = expr;`
     Output(Ident, Expr),
+    /// `signal name = expr;` (a named vector expression of the state)
+    Signal(Ident, Expr),
     /// `A(x) = expr;` or `B = expr;`
     Matrix {
         /// Matrix name.

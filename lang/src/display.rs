@@ -5,7 +5,7 @@
 use crate::eval::Mat;
 use crate::num::Num;
 use crate::spec::{
-    Emit, InitialSet, Integrator, Precision, Relaxation, SetShape, Threshold, Trigger,
+    Emit, InitialSet, Integrator, Monitor, Precision, Relaxation, SetShape, Threshold, Trigger,
     TriggerSynthesis, Weight,
 };
 use std::fmt::{self, Display, Formatter};
@@ -196,16 +196,26 @@ impl Display for Trigger {
                 write!(f, " weight = {weight}; }}")
             }
             Trigger::Mixed {
-                sampling,
+                monitor,
                 beta,
                 rho,
-            } => write!(
-                f,
-                " {{ sampling = {}; beta = {}; rho = {}; }}",
-                range(*sampling),
-                Num(*beta),
-                Num(*rho)
-            ),
+                on,
+            } => {
+                f.write_str(" {")?;
+                if let Some(s) = on {
+                    write!(f, " on = {};", s.name)?;
+                }
+                if let Some(s) = monitor.sampling() {
+                    write!(f, " sampling = {};", range(s))?;
+                }
+                write!(f, " beta = {}; rho = {};", Num(*beta), Num(*rho))?;
+                match monitor {
+                    Monitor::Sampling(..) => {}
+                    Monitor::Step => f.write_str(" monitor = step;")?,
+                    Monitor::Continuous => f.write_str(" monitor = continuous;")?,
+                }
+                f.write_str(" }")
+            }
         }
     }
 }

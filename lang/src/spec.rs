@@ -391,15 +391,59 @@ pub enum Trigger {
         /// Weight U.
         weight: Weight,
     },
-    /// ||e|| >= beta ||sigma|| + rho.
+    /// ||sigma(t_i) - sigma|| >= beta ||sigma|| + rho (Amrr et al. 2019).
     Mixed {
-        /// h_min, h_max.
-        sampling: (f64, f64),
-        /// beta.
+        /// Where the law is checked.
+        monitor: Monitor,
+        /// beta >= 0.
         beta: f64,
-        /// rho.
+        /// rho >= 0.
         rho: f64,
+        /// The monitored signal (`on = name;`); `None`: the state.
+        on: Option<NamedSignal>,
     },
+}
+
+/// When a `trigger mixed` checks its law.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Monitor {
+    /// `sampling = h_min .. h_max;`: at aperiodic sampling instants.
+    Sampling(f64, f64),
+    /// `monitor = step;`: at every integration step (the controller rate).
+    Step,
+    /// `monitor = continuous;`: continuously (the simulator locates each crossing).
+    Continuous,
+}
+
+impl Monitor {
+    /// The sampling interval bounds, for `Sampling`.
+    pub fn sampling(&self) -> Option<(f64, f64)> {
+        match *self {
+            Monitor::Sampling(lo, hi) => Some((lo, hi)),
+            _ => None,
+        }
+    }
+}
+
+/// A named signal `signal name = expr;`: a vector expression of the state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedSignal {
+    /// Its name.
+    pub name: String,
+    /// The expression of the state.
+    pub expr: Expr,
+    /// Its length.
+    pub dim: usize,
+    /// Where it is declared.
+    pub span: Span,
+}
+
+impl NamedSignal {
+    /// The signal at the state `x`, or `None` when it cannot be evaluated.
+    pub fn eval(&self, spec: &Spec, x: &[f64]) -> Option<Vec<f64>> {
+        let v = spec.state_env(x, Mode::Exact).eval(&self.expr).ok()?;
+        Some(v.iter().copied().collect())
+    }
 }
 
 /// Code targets.
@@ -603,6 +647,8 @@ pub struct Spec {
     pub objectives: Vec<SpannedObjective>,
     /// Relaxation (default basic).
     pub relaxation: Spanned<Relaxation>,
+    /// Named signals (`signal name = expr;`), in source order.
+    pub signals: Vec<NamedSignal>,
     /// Trigger (default continuous).
     pub trigger: Option<Spanned<Trigger>>,
     /// How a synthesized trigger weight is designed (aperiodic trigger with

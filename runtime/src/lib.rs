@@ -45,4 +45,4 @@ pub use controller::{
 pub use factored::{factored_weights, term_degrees, FactoredController};
 pub use membership::{about_degree, Membership};
 pub use real::Real;
-pub use trigger::{AdaptiveTrigger, MixedTrigger, PeriodicTrigger, RelativeTrigger};
+pub use trigger::{AdaptiveTrigger, MixedTrigger, PeriodicTrigger, RelativeTrigger, SignalTrigger};

@@ -254,18 +254,67 @@ impl<T: Real, const K: usize> MixedTrigger<T, K> {
         }
     }
 
+    /// Whether [`Self::decide`] would transmit `sigma` now (nothing changes):
+    /// a monitor locating the crossing inside a step asks this.
+    pub fn would_transmit(&self, sigma: &[T; K]) -> bool {
+        if !self.has_last {
+            return true;
+        }
+        let xi = norm(&sub(&self.last, sigma));
+        let threshold = self.beta * norm(sigma) + self.rho;
+        // NaN anywhere: not `<`, so it transmits.
+        if xi < threshold {
+            return false;
+        }
+        true
+    }
+
     /// Check the current `sigma`; on `true` it becomes `sigma(t_i)`.
     pub fn decide(&mut self, sigma: &[T; K]) -> bool {
-        if self.has_last {
-            let xi = norm(&sub(&self.last, sigma));
-            let threshold = self.beta * norm(sigma) + self.rho;
-            if xi < threshold {
-                return false;
-            }
+        if !self.would_transmit(sigma) {
+            return false;
         }
         self.last = *sigma;
         self.has_last = true;
         true
+    }
+}
+
+/// The mixed trigger on a signal of the state (Amrr et al. 2019 with `sigma = s(x)`):
+/// the sensor computes `s(x)` each call, checks the law on it, and on a
+/// transmission sends (and holds) the **state** `x(t_i)`, from which the controller
+/// computes `u = PDC(x(t_i))`; `s(x(t_i))` is kept for the next comparisons.
+/// NaN policy of [`MixedTrigger`]: a NaN signal transmits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SignalTrigger<T, const N: usize, const K: usize> {
+    /// The law on the signal.
+    pub law: MixedTrigger<T, K>,
+    held: [T; N],
+}
+
+impl<T: Real, const N: usize, const K: usize> SignalTrigger<T, N, K> {
+    /// Trigger with `beta` and `rho`; nothing transmitted yet.
+    pub const fn new(beta: T, rho: T) -> Self {
+        SignalTrigger {
+            law: MixedTrigger::new(beta, rho),
+            held: [T::ZERO; N],
+        }
+    }
+
+    /// Checks state `x` with its signal `s = s(x)`: `Some(x)` when it is
+    /// transmitted (it becomes the held `x(t_i)`), `None` otherwise.
+    pub fn decide(&mut self, x: &[T; N], s: &[T; K]) -> Option<[T; N]> {
+        if self.law.decide(s) {
+            self.held = *x;
+            Some(*x)
+        } else {
+            None
+        }
+    }
+
+    /// The held state `x(t_i)`, if any was transmitted.
+    pub fn last(&self) -> Option<&[T; N]> {
+        self.law.last().map(|_| &self.held)
     }
 }
 

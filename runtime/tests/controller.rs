@@ -263,3 +263,21 @@ fn mixed_trigger() {
     assert!((s[0] - (0.1 + 0.2 + 2.0 * pp * 0.1)).abs() < 1e-16);
     assert!((s[1] - (0.4 + 2.0 * pp * 0.2)).abs() < 1e-16);
 }
+
+#[test]
+fn signal_trigger_holds_the_state_and_decides_on_the_signal() {
+    let mut t = SignalTrigger::<f64, 2, 1>::new(0.5, 0.01);
+    assert_eq!(t.last(), None);
+    // First call transmits; the held value is the state, not the signal.
+    assert_eq!(t.decide(&[1.0, 2.0], &[3.0]), Some([1.0, 2.0]));
+    assert_eq!(t.last(), Some(&[1.0, 2.0]));
+    // ||3 - 4|| = 1 < 0.5 * 4 + 0.01: held.
+    assert!(!t.law.would_transmit(&[4.0]));
+    assert_eq!(t.decide(&[9.0, 9.0], &[4.0]), None);
+    assert_eq!(t.last(), Some(&[1.0, 2.0]));
+    // ||3 - 0|| = 3 >= 0.01: transmits, and would_transmit changed nothing before.
+    assert!(t.law.would_transmit(&[0.0]));
+    assert_eq!(t.decide(&[0.5, 0.5], &[0.0]), Some([0.5, 0.5]));
+    // A NaN signal transmits (the NaN policy of the other triggers).
+    assert!(t.decide(&[0.5, 0.5], &[f64::NAN]).is_some());
+}

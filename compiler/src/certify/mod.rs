@@ -156,6 +156,7 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
         },
         &|_| {},
     )?);
+    lmis.extend(signal_margins(model, design, &design.gains, 1.0));
     let mut cert = summarize(lmis);
     if cert.ok {
         let stored = stored::check(model, design)?;
@@ -199,6 +200,35 @@ fn loop_margins(
         )?);
     }
     Ok(lmis)
+}
+
+/// Margins of the mixed-trigger certificate of `design`, if it has one, rebuilt
+/// with `gains` (the emitted ones or their stored rounding) and b1 scaled by `beta_scale`.
+fn signal_margins(
+    model: &TsModel,
+    design: &Design,
+    gains: &[nalgebra::DMatrix<f64>],
+    beta_scale: f64,
+) -> Vec<LmiMargin> {
+    let Some(cert) = &design.signal_trigger else {
+        return Vec::new();
+    };
+    crate::synth::signal_trigger::margins(model, gains, cert, beta_scale)
+        .into_iter()
+        .map(|(name, margin, error_bound, size)| LmiMargin {
+            // The image identity is a tolerance check, not a strict LMI.
+            ok: if size > 1 || name.ends_with("tau > 0") {
+                margin > error_bound
+            } else {
+                margin >= 0.0
+            },
+            strict: size > 1 || name.ends_with("tau > 0"),
+            name,
+            margin,
+            error_bound,
+            size,
+        })
+        .collect()
 }
 
 /// The certificate of a list of margins: the least strict margin, whether

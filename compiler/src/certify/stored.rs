@@ -13,7 +13,7 @@
 //! nearest). Lyapunov matrices, multipliers and sector gains are proof
 //! artefacts, not stored: they keep their solved values.
 
-use super::{loop_margins, margins_of, summarize, Values};
+use super::{loop_margins, margins_of, signal_margins, summarize, Values};
 use crate::model::TsModel;
 use crate::synth::objectives::Saturation;
 use crate::synth::{build, Design, SynthError, TriggerPlan};
@@ -254,6 +254,11 @@ pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthE
             }
         },
     )?);
+    let beta_scale = match model.spec.trigger.as_ref().map(|t| &t.node) {
+        Some(Trigger::Mixed { beta, .. }) if *beta > 0.0 => stored(*beta, precision) / beta,
+        _ => 1.0,
+    };
+    lmis.extend(signal_margins(&stored_model, design, &gains, beta_scale));
     let cert = summarize(lmis);
     let certified = cert.ok && membership.holds;
     let worst_lmi = if cert.ok && !membership.holds {

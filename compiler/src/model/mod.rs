@@ -9,7 +9,7 @@ mod premise;
 
 pub use consistency::{Consistency, MISMATCH_TOLERANCE};
 pub use coverage::{check_coverage, Coverage};
-pub use premise::{PremiseLayout, PremiseSlot, TermSpec};
+pub use premise::{premise_values, rule_weight, PremiseLayout, PremiseSlot, TermSpec};
 
 use nalgebra::DMatrix;
 use tsf_lang::spec::{Output, Spec};

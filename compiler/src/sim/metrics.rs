@@ -93,6 +93,13 @@ pub struct Metrics {
     pub trigger: String,
     /// Final relative threshold nu (relative/adaptive triggers).
     pub final_nu: Option<f64>,
+    /// How a mixed trigger on a signal is monitored: `step` or `continuous`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub monitor: Option<String>,
+    /// Its monitoring step (s): the integration step (`step`), or the time
+    /// tolerance to which each crossing is located inside the step (`continuous`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub monitor_step: Option<f64>,
     /// Sampling-pattern seed.
     pub seed: u64,
     /// Truth plant used.
@@ -411,6 +418,8 @@ impl Tally {
             rhs_evaluations: 0,
             trigger: String::new(),
             final_nu: None,
+            monitor: None,
+            monitor_step: None,
             seed: 0,
             plant: String::new(),
             wall_time_s: 0.0,

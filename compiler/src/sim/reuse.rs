@@ -171,6 +171,7 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
             .unwrap_or_else(|| vec![f64::INFINITY; m]),
         precision: spec.precision,
         trigger: None,
+        signal_trigger: None,
     };
     Ok(Prepared {
         model: model.clone(),

@@ -14,7 +14,7 @@ use super::trigger::sampler;
 use super::{Options, Prepared, Progress, SimError};
 use std::io::Write;
 use std::time::Instant;
-use tsf_lang::spec::{Integrator, Trigger};
+use tsf_lang::spec::{Integrator, Monitor, Trigger};
 use tsf_lang::Span;
 use tsf_runtime::Flags;
 
@@ -61,13 +61,21 @@ fn describe_trigger(t: Option<&Trigger>) -> String {
             )
         }
         Some(Trigger::Mixed {
-            sampling,
+            monitor,
             beta,
             rho,
-        }) => format!(
-            "aperiodic sampling in [{}, {}] s; mixed ||e|| >= {beta} ||x|| + {rho}",
-            sampling.0, sampling.1
-        ),
+            on,
+        }) => {
+            let s = on.as_ref().map_or("x", |s| s.name.as_str());
+            let law = format!("mixed ||{s}(t_i) - {s}|| >= {beta} ||{s}|| + {rho}");
+            match monitor {
+                Monitor::Sampling(lo, hi) => format!("aperiodic sampling in [{lo}, {hi}] s; {law}"),
+                Monitor::Step => format!("{law}, checked at every integration step"),
+                Monitor::Continuous => {
+                    format!("{law}, monitored continuously (crossings located by bisection)")
+                }
+            }
+        }
     }
 }
 
@@ -107,19 +115,25 @@ impl Origin<'_> {
     }
 }
 
+/// `lo` when the sampling interval `lo .. hi` is positive, finite and increasing.
+fn interval((lo, hi): (f64, f64)) -> Result<f64, String> {
+    if lo > 0.0 && hi >= lo && hi.is_finite() {
+        Ok(lo)
+    } else {
+        Err(format!(
+            "the sampling interval {lo} .. {hi} s must be positive, finite and increasing"
+        ))
+    }
+}
+
 /// The shortest sampling interval of `trigger` on a grid of step `h`.
 fn shortest_interval(trigger: Option<&Trigger>, h: f64) -> Result<f64, String> {
     match trigger {
-        Some(Trigger::Aperiodic { sampling, .. } | Trigger::Mixed { sampling, .. }) => {
-            let (lo, hi) = *sampling;
-            if lo > 0.0 && hi >= lo && hi.is_finite() {
-                Ok(lo)
-            } else {
-                Err(format!(
-                    "the sampling interval {lo} .. {hi} s must be positive, finite and increasing"
-                ))
-            }
-        }
+        Some(Trigger::Aperiodic { sampling, .. }) => interval(*sampling),
+        Some(Trigger::Mixed { monitor, .. }) => match monitor.sampling() {
+            Some(s) => interval(s),
+            None => Ok(h),
+        },
         Some(Trigger::Periodic { every }) => {
             let ticks = (every / h).round();
             if !(every.is_finite() && *every > 0.0) {
@@ -268,6 +282,7 @@ pub fn run_truth(
     let (t0, t1, h) = (plan.t0, plan.t1, plan.h);
     let mut x = plan.x0.clone();
     let mut sampler = sampler(
+        spec,
         plan.trigger,
         n,
         t0,
@@ -308,6 +323,8 @@ pub fn run_truth(
     let mut progress = Progress::new(opts.progress, t0, t1);
     let mut t = t0;
     let mut k = 0u64;
+    // Continuous monitoring: each crossing is located to this time tolerance.
+    let monitor_tol = (h * 1e-6).max(1e-12);
     let last_sent = loop {
         let sent = sampler.gate.decide(&x[..n]);
         let mut no_rule = false;
@@ -352,9 +369,35 @@ pub fn run_truth(
             let w = signals.at(tt)?;
             plant.rhs(tt, y, &u, w, dy)
         };
+        let start = sampler.continuous.then(|| x.clone());
         stepper.advance(&mut rhs, t, t_next, &mut x)?;
+        let mut located = false;
+        if let Some(x_start) = start {
+            if sampler.gate.would_transmit(&x[..n]) && t_next - t > monitor_tol {
+                // Bisect the crossing: re-integrate from the step's start state.
+                let (mut lo, mut hi) = (t, t_next);
+                let mut x_hi = x.clone();
+                while hi - lo > monitor_tol {
+                    let mid = 0.5 * (lo + hi);
+                    let mut y = x_start.clone();
+                    stepper.advance(&mut rhs, t, mid, &mut y)?;
+                    if sampler.gate.would_transmit(&y[..n]) {
+                        hi = mid;
+                        x_hi = y;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                located = hi < t_next;
+                t_next = hi;
+                x = x_hi;
+            }
+        }
         t = t_next;
-        k += 1;
+        // A located crossing ends the step early: the grid point is still ahead.
+        if !located {
+            k += 1;
+        }
         if !x.iter().all(|v| v.is_finite()) {
             nonfinite_at = Some(t);
         }
@@ -394,6 +437,13 @@ pub fn run_truth(
         metrics.trigger.push_str(src.describe());
     }
     metrics.final_nu = sampler.gate.nu();
+    if let Some(Trigger::Mixed { monitor, .. }) = plan.trigger {
+        (metrics.monitor, metrics.monitor_step) = match monitor {
+            Monitor::Step => (Some("step".into()), Some(h)),
+            Monitor::Continuous => (Some("continuous".into()), Some(monitor_tol)),
+            Monitor::Sampling(..) => (None, None),
+        };
+    }
     metrics.seed = plan.seed;
     let sim_dynamics = spec.simulate.as_ref().is_some_and(|s| s.dynamics.is_some());
     metrics.plant = if dim > n || sim_dynamics {

@@ -9,7 +9,7 @@
 
 use super::SimError;
 use nalgebra::DMatrix;
-use tsf_lang::spec::{Trigger, Weight};
+use tsf_lang::spec::{Monitor, NamedSignal, Spec, Trigger, Weight};
 use tsf_runtime::{AdaptiveTrigger, MixedTrigger, PeriodicTrigger, RelativeTrigger};
 
 /// SplitMix64 (Steele, Lea & Flood 2014): a tiny deterministic PRNG, enough
@@ -78,6 +78,45 @@ pub trait Gate {
     /// The current relative threshold, for triggers that have one.
     fn nu(&self) -> Option<f64> {
         None
+    }
+    /// Whether `decide(x)` would transmit now, without changing anything
+    /// (continuous monitoring bisects on it); `false` for gates that are not monitored.
+    fn would_transmit(&self, _x: &[f64]) -> bool {
+        false
+    }
+}
+
+/// Longest monitored signal (padding with zeros leaves its norms unchanged).
+const MAX_SIGNAL: usize = 16;
+
+/// The mixed trigger on a named signal of the state (or the state itself):
+/// the signal is evaluated from the spec each call.
+struct SignalGate {
+    spec: Spec,
+    signal: Option<NamedSignal>,
+    law: MixedTrigger<f64, MAX_SIGNAL>,
+}
+
+impl SignalGate {
+    /// The padded signal at `x` (NaN where it cannot be evaluated: it transmits).
+    fn signal(&self, x: &[f64]) -> [f64; MAX_SIGNAL] {
+        match &self.signal {
+            None => pad(x),
+            Some(s) => match s.eval(&self.spec, x) {
+                Some(v) => pad(&v),
+                None => [f64::NAN; MAX_SIGNAL],
+            },
+        }
+    }
+}
+
+impl Gate for SignalGate {
+    fn decide(&mut self, x: &[f64]) -> bool {
+        let s = self.signal(x);
+        self.law.decide(&s)
+    }
+    fn would_transmit(&self, x: &[f64]) -> bool {
+        self.law.would_transmit(&self.signal(x))
     }
 }
 
@@ -229,10 +268,15 @@ pub struct Sampler {
     pub gate: Box<dyn Gate>,
     /// Where the weight came from (relative and adaptive triggers).
     pub weight_source: Option<WeightSource>,
+    /// Whether the gate is monitored continuously: the run locates each
+    /// crossing inside the integration step ([`Gate::would_transmit`]).
+    pub continuous: bool,
 }
 
 /// Builds the sampler for `trigger` (`None`: continuous) on a grid of step `h`.
+#[allow(clippy::too_many_arguments)]
 pub fn sampler(
+    spec: &Spec,
     trigger: Option<&Trigger>,
     n: usize,
     t0: f64,
@@ -260,6 +304,7 @@ pub fn sampler(
                 schedule: grid,
                 gate: Box::new(PeriodicTrigger::new(ticks as u32)),
                 weight_source: None,
+                continuous: false,
             });
         }
         Some(Trigger::Aperiodic {
@@ -280,23 +325,52 @@ pub fn sampler(
             (random(*sampling), kind, Some(weight))
         }
         Some(Trigger::Mixed {
-            sampling,
+            monitor: Monitor::Sampling(lo, hi),
             beta,
             rho,
+            on: None,
         }) => (
-            random(*sampling),
+            random((*lo, *hi)),
             Some(EventKind::Mixed {
                 beta: *beta,
                 rho: *rho,
             }),
             None,
         ),
+        Some(Trigger::Mixed {
+            monitor,
+            beta,
+            rho,
+            on,
+        }) => {
+            let dim = on.as_ref().map_or(n, |s| s.dim);
+            if dim > MAX_SIGNAL {
+                return Err(SimError::unsupported(format!(
+                    "the monitored signal has {dim} components; the simulator monitors at most {MAX_SIGNAL}"
+                )));
+            }
+            let schedule = match monitor.sampling() {
+                Some(s) => random(s),
+                None => grid,
+            };
+            return Ok(Sampler {
+                schedule,
+                gate: Box::new(SignalGate {
+                    spec: spec.clone(),
+                    signal: on.clone(),
+                    law: MixedTrigger::new(*beta, *rho),
+                }),
+                weight_source: None,
+                continuous: *monitor == Monitor::Continuous,
+            });
+        }
     };
     let Some(kind) = kind else {
         return Ok(Sampler {
             schedule,
             gate: Box::new(Always),
             weight_source: None,
+            continuous: false,
         });
     };
     let (u, source) = match weight {
@@ -326,6 +400,7 @@ pub fn sampler(
         schedule,
         gate,
         weight_source: source,
+        continuous: false,
     })
 }
 

@@ -105,6 +105,8 @@ pub struct Design {
     /// The sampled-loop certificate (periodic trigger, or aperiodic sampling
     /// without a threshold).
     pub sampled: Option<SampledDesign>,
+    /// The certified mixed trigger on a named signal (`trigger mixed { on = ..; monitor = ..; }`).
+    pub signal_trigger: Option<super::signal_trigger::SignalTrigger>,
     /// Per-objective verdicts when the rules give their gains (analysis);
     /// empty when the gains were synthesized.
     pub verdicts: Vec<Verdict>,

@@ -27,6 +27,7 @@ pub mod relaxations;
 mod sampled;
 pub mod sampling;
 mod search;
+pub mod signal_trigger;
 pub mod trigger;
 
 pub use achieved::{Achieved, Quantity};
@@ -98,6 +99,15 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
                 let (t, notes) = given::looped(model, &mut d, given::EVENT_LOOP, out)?;
                 d.notes.extend(notes);
                 d.trigger = Some(t);
+            }
+            if signal_trigger::wanted(model).is_some() {
+                let gains = d.gains.clone();
+                let cert = signal_trigger::certify_loop(runner, model, &gains)?;
+                d.notes.push(format!(
+                    "mixed trigger on `{}`: certified with lambda = {:.4e}, tau = {:.4e}, eps = {}, ultimate bound ||x|| <= {:.4e}",
+                    cert.signal, cert.lambda, cert.tau, cert.eps, cert.x_bound
+                ));
+                d.signal_trigger = Some(cert);
             }
             if let Some(h) = sampling::wanted(model) {
                 let out = runner.sampled(&d, h);

@@ -38,8 +38,8 @@ pub fn wanted(model: &TsModel) -> Option<(f64, f64)> {
 /// is: compile refuses such a design instead of calling it certified.
 pub fn uncovered(model: &TsModel) -> Option<String> {
     match model.spec.trigger.as_ref().map(|t| &t.node)? {
-        Trigger::Mixed { .. } => Some(
-            "the `trigger mixed` law (||e|| >= beta ||sigma|| + rho) is not covered by a certificate yet: the certificate covers the continuous loop only; use `trigger aperiodic { sampling = ..; threshold nu = ..; weight = synthesize; }` (certified event trigger) or `trigger periodic { every = ..; }`".into(),
+        Trigger::Mixed { monitor, .. } if monitor.sampling().is_some() => Some(
+            "the `trigger mixed` law (||e|| >= beta ||sigma|| + rho) at aperiodic sampling instants (`sampling = ..`) is not covered by a certificate yet: the certificate covers the continuous loop only; write `monitor = continuous;` with `on = <signal>;` (a signal that is a linear image of the PDC command is certified), or use `trigger aperiodic { sampling = ..; threshold nu = ..; weight = synthesize; }` (certified event trigger) or `trigger periodic { every = ..; }`".into(),
         ),
         Trigger::Aperiodic {
             threshold: Some(_),

@@ -92,6 +92,7 @@ impl Runner<'_> {
             approximate,
             trigger: None,
             sampled: None,
+            signal_trigger: None,
             verdicts: Vec::new(),
         })))
     }

@@ -7,11 +7,13 @@
 mod error;
 mod factored;
 mod sensor;
+mod signal;
 pub mod sym;
 
 pub use error::TablesError;
 pub use factored::FactoredTerms;
 pub use sensor::{SensorLaw, SensorTables};
+pub use signal::SignalSensorTables;
 
 use crate::certify::Certificate;
 use crate::model::{TermSpec, TsModel};
@@ -94,6 +96,8 @@ pub struct Tables {
     /// networked loop is generated as a sensor module (this trigger) and the
     /// controller module (fed the transmitted state x(t_k)).
     pub trigger: Option<SensorTables>,
+    /// The sensor-side mixed trigger on a named signal (`trigger mixed { on = ..; }`).
+    pub signal_trigger: Option<SignalSensorTables>,
 }
 
 fn component_names(signals: &[tsf_lang::spec::Signal]) -> Vec<String> {
@@ -194,6 +198,7 @@ pub fn tables(
             .unwrap_or_else(|| vec![f64::INFINITY; model.m]),
         precision: spec.precision,
         trigger: sensor::sensor_tables(model, design)?,
+        signal_trigger: signal::signal_sensor_tables(model, design)?,
     })
 }
 

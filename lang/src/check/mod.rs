@@ -2,7 +2,7 @@
 //!
 //! Each item is checked on its own, so independent mistakes are all reported.
 //! One module per item kind: [`decls`] (version, controller, functions,
-//! constants, signals), [`model`] (outputs and the matrices A, B, D),
+//! constants, signals), [`model`] (outputs and the matrices A, B, D), named [`signals`],
 //! [`premises`], [`rules`] (and their given [`gains`]), [`objectives`], [`relaxation`], [`trigger`],
 //! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`], [`monte_carlo`] and
 //! [`sweep`]; premises
@@ -24,6 +24,7 @@ mod objectives;
 mod premises;
 mod relaxation;
 mod rules;
+mod signals;
 mod simulate;
 mod sweep;
 mod targets;
@@ -49,6 +50,7 @@ enum Kind {
     Disturbance,
     Output,
     Premise,
+    Named,
 }
 
 impl Kind {
@@ -61,6 +63,7 @@ impl Kind {
             Kind::Disturbance => "disturbance",
             Kind::Output => "output",
             Kind::Premise => "premise",
+            Kind::Named => "signal",
         }
     }
 
@@ -138,6 +141,10 @@ struct Draft<'a> {
     objective_items: Vec<&'a Item>,
     relaxation: Option<Spanned<Relaxation>>,
     trigger: Option<Spanned<Trigger>>,
+    /// The `on = name;` of a mixed trigger, resolved once every signal is checked.
+    trigger_on: Option<Ident>,
+    /// Named signals (`signal name = expr;`).
+    signals: Vec<NamedSignal>,
     trigger_synthesis: Option<TriggerSynthesis>,
     /// Where a synthesized trigger weight is asked for (when its design method checked).
     weight_span: Option<Span>,
@@ -201,6 +208,7 @@ impl<'a> Checker<'a> {
         for it in items {
             self.item(it, dims, &mut draft);
         }
+        self.resolve_trigger_signal(&mut draft);
         self.check_model(&draft, dims);
         let premises = self.premises(&draft.premise_items, &draft.rule_items);
         let rules = self.rules(&draft.rule_items, &premises, dims);
@@ -233,6 +241,7 @@ impl<'a> Checker<'a> {
             rules,
             objectives,
             relaxation,
+            signals: draft.signals,
             trigger: draft.trigger,
             trigger_synthesis: draft.trigger_synthesis,
             linf_paper: self.linf_paper,
@@ -246,6 +255,7 @@ impl<'a> Checker<'a> {
     fn item(&mut self, it: &'a Item, dims: Dims, draft: &mut Draft<'a>) {
         match &it.kind {
             ItemKind::Output(name, e) => self.output_item(name, e, dims, draft),
+            ItemKind::Signal(name, e) => self.signal_item(name, e, draft),
             ItemKind::Matrix { name, param, value } => {
                 self.matrix_item(it, name, param.as_ref(), value, draft)
             }

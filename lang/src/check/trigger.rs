@@ -1,12 +1,12 @@
 //! The triggering law: `trigger continuous;`, `periodic { every }`,
-//! `aperiodic { sampling, threshold, weight }`, `mixed { sampling, beta, rho }`,
+//! `aperiodic { sampling, threshold, weight }`, `mixed { on, beta, rho, monitor | sampling }`,
 //! and the design method of a synthesized weight.
 
 use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Expr, ExprKind, Ident, Item, Setting, Value};
 use crate::diag::Diagnostic;
 use crate::span::Spanned;
-use crate::spec::{Threshold, Trigger, TriggerSynthesis, Weight};
+use crate::spec::{Monitor, Threshold, Trigger, TriggerSynthesis, Weight};
 use std::collections::HashMap;
 
 impl Checker<'_> {
@@ -26,6 +26,18 @@ impl Checker<'_> {
         let Some(t) = self.trigger(kind, settings, n) else {
             return;
         };
+        if matches!(t, Trigger::Mixed { .. }) {
+            draft.trigger_on = settings
+                .iter()
+                .find(|s| s.key.node == "on")
+                .and_then(|s| match &s.value {
+                    Value::Expr(Expr {
+                        kind: ExprKind::Name(name),
+                        span,
+                    }) => Some(Spanned::new(name.clone(), *span)),
+                    _ => None,
+                });
+        }
         if matches!(
             t,
             Trigger::Aperiodic {
@@ -49,7 +61,7 @@ impl Checker<'_> {
             "continuous" => &[],
             "periodic" => &["every"],
             "aperiodic" => &["sampling", "threshold", "weight"],
-            "mixed" => &["sampling", "beta", "rho"],
+            "mixed" => &["on", "beta", "rho", "monitor", "sampling"],
             other => {
                 let kinds = ["continuous", "periodic", "aperiodic", "mixed"];
                 self.err(unknown_choice(
@@ -92,51 +104,149 @@ impl Checker<'_> {
             }
             s
         };
-        let t = match kind.node.as_str() {
-            "continuous" => Some(Trigger::Continuous),
-            "periodic" => {
-                let s = require(self, "every")?;
-                let v = self.setting_scalar(s)?;
-                if v <= 0.0 {
-                    self.err(Diagnostic::error(s.span, "the period must be positive"));
-                    return None;
+        let t =
+            match kind.node.as_str() {
+                "continuous" => Some(Trigger::Continuous),
+                "periodic" => {
+                    let s = require(self, "every")?;
+                    let v = self.setting_scalar(s)?;
+                    if v <= 0.0 {
+                        self.err(Diagnostic::error(s.span, "the period must be positive"));
+                        return None;
+                    }
+                    Some(Trigger::Periodic { every: v })
                 }
-                Some(Trigger::Periodic { every: v })
-            }
-            "aperiodic" => {
-                let s = require(self, "sampling")?;
-                let (lo, hi) = self.sampling(s)?;
-                let threshold = match get.get("threshold") {
-                    Some(s) => Some(self.threshold(s)?),
-                    None => None,
-                };
-                let weight = match get.get("weight") {
-                    None => Weight::Synthesize,
-                    Some(s) => self.weight(s, n)?,
-                };
-                Some(Trigger::Aperiodic {
-                    sampling: (lo, hi),
-                    threshold,
-                    weight,
-                })
-            }
-            _ => {
-                let s = require(self, "sampling")?;
-                let (lo, hi) = self.sampling(s)?;
-                let beta = require(self, "beta").and_then(|s| self.setting_nonnegative(s));
-                let rho = require(self, "rho").and_then(|s| self.setting_nonnegative(s));
-                Some(Trigger::Mixed {
-                    sampling: (lo, hi),
-                    beta: beta?,
-                    rho: rho?,
-                })
-            }
-        };
+                "aperiodic" => {
+                    let s = require(self, "sampling")?;
+                    let (lo, hi) = self.sampling(s)?;
+                    let threshold = match get.get("threshold") {
+                        Some(s) => Some(self.threshold(s)?),
+                        None => None,
+                    };
+                    let weight = match get.get("weight") {
+                        None => Weight::Synthesize,
+                        Some(s) => self.weight(s, n)?,
+                    };
+                    Some(Trigger::Aperiodic {
+                        sampling: (lo, hi),
+                        threshold,
+                        weight,
+                    })
+                }
+                _ => {
+                    let monitor = self.monitor(kind, &get, ok);
+                    let beta = require(self, "beta").and_then(|s| self.mixed_beta(s));
+                    let rho = require(self, "rho").and_then(|s| self.mixed_rho(s));
+                    if let Some(s) = get.get("on") {
+                        if !matches!(
+                            &s.value,
+                            Value::Expr(Expr {
+                                kind: ExprKind::Name(_),
+                                ..
+                            })
+                        ) {
+                            self.err(Diagnostic::error(s.span, "`on` names a signal").with_help(
+                                "write `on = sigma;` with `signal sigma = ...;` declared",
+                            ));
+                            return None;
+                        }
+                    }
+                    Some(Trigger::Mixed {
+                        monitor: monitor?,
+                        beta: beta?,
+                        rho: rho?,
+                        on: None,
+                    })
+                }
+            };
         if ok {
             t
         } else {
             None
         }
+    }
+
+    /// Where a mixed trigger checks its law: `sampling = a .. b;` or
+    /// `monitor = step | continuous;` (exactly one).
+    fn monitor(
+        &mut self,
+        kind: &Ident,
+        get: &HashMap<&str, &Setting>,
+        ok: bool,
+    ) -> Option<Monitor> {
+        match (get.get("sampling"), get.get("monitor")) {
+            (Some(s), None) => self.sampling(s).map(|(lo, hi)| Monitor::Sampling(lo, hi)),
+            (None, Some(s)) => match &s.value {
+                Value::Expr(Expr {
+                    kind: ExprKind::Name(w),
+                    ..
+                }) if w == "step" => Some(Monitor::Step),
+                Value::Expr(Expr {
+                    kind: ExprKind::Name(w),
+                    ..
+                }) if w == "continuous" => Some(Monitor::Continuous),
+                _ => {
+                    let word = match &s.value {
+                        Value::Expr(Expr {
+                            kind: ExprKind::Name(w),
+                            ..
+                        }) => w.clone(),
+                        _ => String::new(),
+                    };
+                    let span = match &s.value {
+                        Value::Expr(e) => e.span,
+                        Value::Range(..) => s.span,
+                    };
+                    self.err(unknown_choice(
+                        span,
+                        "monitor",
+                        "monitors",
+                        &word,
+                        &["step", "continuous"],
+                    ));
+                    None
+                }
+            },
+            (Some(a), Some(_)) => {
+                self.err(
+                    Diagnostic::error(a.span, "give `sampling` or `monitor`, not both")
+                        .with_help("`sampling = a .. b;` checks at aperiodic instants; `monitor = step;` at every integration step; `monitor = continuous;` continuously"),
+                );
+                None
+            }
+            (None, None) => {
+                if ok {
+                    self.err(
+                        Diagnostic::error(kind.span, "trigger `mixed` needs `monitor = continuous;` (or `step`) or `sampling = h_min .. h_max;`"),
+                    );
+                }
+                None
+            }
+        }
+    }
+
+    /// beta >= 0 of a mixed trigger; beta >= 1 is allowed with a warning.
+    fn mixed_beta(&mut self, s: &Setting) -> Option<f64> {
+        let beta = self.setting_nonnegative(s)?;
+        if beta >= 1.0 {
+            self.err(
+                Diagnostic::warning(s.span, format!("beta = {beta} >= 1: the held signal may differ from the current one by more than its size"))
+                    .with_note("no loop with beta >= 1 is certified (the certificate needs beta ||G|| ||G^-1|| < 1 in effect)"),
+            );
+        }
+        Some(beta)
+    }
+
+    /// rho >= 0 of a mixed trigger; rho = 0 is allowed with a warning.
+    fn mixed_rho(&mut self, s: &Setting) -> Option<f64> {
+        let rho = self.setting_nonnegative(s)?;
+        if rho == 0.0 {
+            self.err(
+                Diagnostic::warning(s.span, "rho = 0: Zeno behaviour (infinitely many transmissions in finite time) is not excluded")
+                    .with_help("give a small rho > 0 (Amrr et al. use 1e-6 .. 1e-4)"),
+            );
+        }
+        Some(rho)
     }
 
     /// `sampling = h_min .. h_max;` with h_min > 0.
@@ -284,7 +394,7 @@ impl Checker<'_> {
 #[cfg(test)]
 mod tests {
     use crate::check::testing::*;
-    use crate::spec::{Threshold, Trigger, TriggerSynthesis, Weight};
+    use crate::spec::{Monitor, Threshold, Trigger, TriggerSynthesis, Weight};
 
     fn trigger(body: &str) -> Trigger {
         let spec = spec_with(&format!("trigger {body}"));
@@ -301,9 +411,10 @@ mod tests {
         assert_eq!(
             trigger("mixed { sampling = 0.001 .. 0.1; beta = 0.1; rho = 0.001; }"),
             Trigger::Mixed {
-                sampling: (0.001, 0.1),
+                monitor: Monitor::Sampling(0.001, 0.1),
                 beta: 0.1,
-                rho: 0.001
+                rho: 0.001,
+                on: None
             }
         );
         let Trigger::Aperiodic {
@@ -333,6 +444,24 @@ mod tests {
         let (m, at) = only_error("trigger periodic { period = 1; }");
         assert_eq!(m, "trigger `periodic` has no setting `period`");
         assert_eq!(at, "period");
+        let (m, at) = only_error("trigger mixed { beta = -0.1; rho = 1e-6; monitor = step; }");
+        assert_eq!(
+            (m.as_str(), at.as_str()),
+            ("`beta` must not be negative", "-0.1")
+        );
+        let (m, _) = only_error("trigger mixed { beta = 0.1; rho = -1; monitor = step; }");
+        assert_eq!(m, "`rho` must not be negative");
+        let (m, at) = only_error("trigger mixed { beta = 0.1; rho = 1; monitor = often; }");
+        assert_eq!(
+            (m.as_str(), at.as_str()),
+            ("unknown monitor `often`", "often")
+        );
+        let (m, _) = only_error("trigger mixed { beta = 0.1; rho = 1; }");
+        assert!(m.starts_with("trigger `mixed` needs `monitor"), "{m}");
+        let (m, _) = only_error(
+            "trigger mixed { beta = 0.1; rho = 1; monitor = step; sampling = 0.1 .. 1; }",
+        );
+        assert_eq!(m, "give `sampling` or `monitor`, not both");
         let (m, at) = only_error("trigger periodic;");
         assert_eq!(m, "trigger `periodic` needs `every = ...;`");
         assert_eq!(at, "periodic");

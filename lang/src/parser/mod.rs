@@ -115,7 +115,7 @@ fn broken_item(text: &str, span: Span) -> BrokenItem {
     }
     let keyword = words.first().cloned().unwrap_or_default();
     let names = match keyword.as_str() {
-        "const" | "fn" | "output" | "rule" | "controller" => {
+        "const" | "fn" | "output" | "signal" | "rule" | "controller" => {
             words.get(1).cloned().into_iter().collect()
         }
         "state" | "input" | "disturbance" | "premise" => words
@@ -331,6 +331,10 @@ impl Cx {
             Rule::output_decl => {
                 let name = self.ident(next(&mut it, span)?);
                 ItemKind::Output(name, self.expr(next(&mut it, span)?)?)
+            }
+            Rule::signal_decl => {
+                let name = self.ident(next(&mut it, span)?);
+                ItemKind::Signal(name, self.expr(next(&mut it, span)?)?)
             }
             Rule::matrix_def => {
                 let name = self.ident(next(&mut it, span)?);

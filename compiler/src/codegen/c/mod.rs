@@ -36,10 +36,12 @@ use tsf_lang::spec::Emit;
 mod header;
 pub mod runtime;
 mod sensor;
+mod signal_sensor;
 mod source;
 mod step;
 
 pub use sensor::{c_sensor_file_names, emit_c_sensor};
+pub use signal_sensor::emit_c_signal_sensor;
 
 /// The C99 backend: `<name>.h` and `<name>.c`, `<name>_sensor.h` and
 /// `<name>_sensor.c` for an aperiodic event trigger, and the runtime
@@ -57,6 +59,9 @@ impl Backend for CBackend {
         let mut out = emit_c(t).named(c_file_names(t));
         if t.trigger.is_some() {
             out.extend(emit_c_sensor(t)?.named(c_sensor_file_names(t)));
+        }
+        if t.signal_trigger.is_some() {
+            out.extend(emit_c_signal_sensor(t)?.named(c_sensor_file_names(t)));
         }
         out.extend(runtime::files());
         Ok(out)

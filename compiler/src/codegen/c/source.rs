@@ -172,7 +172,7 @@ static const {u}RT(tsf_controller) {p}tables = {{
     /// the runtime evaluator's order: left operand first) and returns the
     /// operand naming its value. Iterative post-order walk (no recursion in
     /// the generator either: expressions can be deep).
-    fn expr(&self, e: &Sym, out: &mut String, next: &mut usize) -> String {
+    pub(super) fn expr(&self, e: &Sym, out: &mut String, next: &mut usize) -> String {
         let u = &self.u;
         enum Job<'s> {
             Visit(&'s Sym),

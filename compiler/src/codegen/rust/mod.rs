@@ -7,9 +7,11 @@
 //! the sensor-side module of an aperiodic event trigger.
 
 mod sensor;
+mod signal_sensor;
 mod tokens;
 
 pub use sensor::emit_rust_sensor;
+pub use signal_sensor::emit_rust_signal_sensor;
 
 use super::header::{marker, sensor_name};
 use super::{Backend, CodegenError, GeneratedFile};
@@ -39,6 +41,12 @@ impl Backend for RustBackend {
             out.push(GeneratedFile {
                 name: format!("{}.rs", sensor_name(t)),
                 text: emit_rust_sensor(t)?,
+            });
+        }
+        if t.signal_trigger.is_some() {
+            out.push(GeneratedFile {
+                name: format!("{}.rs", sensor_name(t)),
+                text: emit_rust_signal_sensor(t)?,
             });
         }
         Ok(out)
