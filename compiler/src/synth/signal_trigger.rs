@@ -351,6 +351,42 @@ fn solve(
     Ok(Some((pv, tv)))
 }
 
+/// Young's-inequality weights tried for the ultimate bound (the first one also
+/// brackets the decay rate).
+const EPS_GRID: [f64; 5] = [0.01, 0.05, 0.25, 1.0, 4.0];
+
+/// The smallest decay rate a certificate may claim.
+const LAMBDA_MIN: f64 = 1e-3;
+
+/// The largest beta (rounded down to 3 significant digits) for which the LMIs
+/// hold at `LAMBDA_MIN`, by bisection of `b1 = beta ||G|| ||G^+||` (feasibility is
+/// monotone in b1: a (P, tau) for b1 serves every smaller one); `None` if even
+/// beta -> 0 fails.
+fn largest_beta(
+    runner: &mut Runner<'_>,
+    model: &TsModel,
+    gains: &[DMatrix<f64>],
+    (beta, eps, gain): (f64, f64, f64),
+) -> Result<Option<f64>, SynthError> {
+    let (mut lo, mut hi) = (0.0, beta);
+    if solve(runner, model, gains, LAMBDA_MIN, eps, 1e-6 * beta * gain)?.is_none() {
+        return Ok(None);
+    }
+    for _ in 0..12 {
+        let mid = 0.5 * (lo + hi);
+        if solve(runner, model, gains, LAMBDA_MIN, eps, mid * gain)?.is_some() {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    if lo <= 0.0 {
+        return Ok(None);
+    }
+    let scale = 10f64.powi(2 - lo.log10().floor() as i32);
+    Ok(Some((lo * scale).floor() / scale))
+}
+
 /// Certifies the mixed-trigger loop for `gains`, or refuses naming why.
 pub(super) fn certify_loop(
     runner: &mut Runner<'_>,
@@ -378,10 +414,14 @@ pub(super) fn certify_loop(
         }
     };
     // rho = 0 (b0 = 0): Young's inequality is not needed, eps = 0 is exact.
-    let eps0 = if b0 == 0.0 { 0.0 } else { 1.0 };
-    // The largest lambda certified at eps = 1 (bracket grown, then bisected).
+    // Otherwise the bracket uses a small eps, so that (1 + eps) b1^2 is nearly
+    // b1^2 and feasibility is nearly that of rho = 0 (a large eps shrinks the
+    // certified beta: eps = 1 asks for beta * sqrt(2)); the grid below then trades
+    // lambda and eps for the smallest ultimate bound.
+    let eps0 = if b0 == 0.0 { 0.0 } else { EPS_GRID[0] };
+    // The largest lambda certified at eps0 (bracket grown, then bisected).
     let mut best: Option<(f64, f64, f64, DMatrix<f64>)> = None; // (lambda, eps, tau, P)
-    let (mut lo, mut hi) = (0.0, 1e-3);
+    let (mut lo, mut hi) = (0.0, LAMBDA_MIN);
     let mut at_lo = None;
     while let Some(sol) = solve(runner, model, gains, hi, eps0, b1)? {
         at_lo = Some(sol);
@@ -407,16 +447,20 @@ pub(super) fn certify_loop(
         }
     }
     let Some(mut pick) = best else {
+        let name = signal.map_or("the state", |s| s.name.as_str());
+        let advice = match largest_beta(runner, model, gains, (beta, eps0, gn * ginv))? {
+            Some(b) => format!("the largest beta certified is {b} (write `beta = {b};`)"),
+            None => "no beta > 0 is certified: the gains themselves need a margin".into(),
+        };
         return Err(SynthError::Unsupported(format!(
-            "the mixed-trigger loop on `{}` is not certified for these gains: no decay rate lambda >= 1e-3 satisfies the LMIs with b1 = beta ||G|| ||G^+|| = {b1:.4} (beta = {beta}); lower beta",
-            signal.map_or("the state", |s| s.name.as_str())
+            "the mixed-trigger loop on `{name}` is not certified for these gains: no decay rate lambda >= {LAMBDA_MIN:e} satisfies the LMIs with b1 = beta ||G|| ||G^+|| = {b1:.4} (beta = {beta}); {advice}"
         )));
     };
     if b0 > 0.0 {
         let lmax = pick.0;
         let mut score = bound(pick.2, pick.0, pick.1);
         for frac in [0.25, 0.5, 0.75] {
-            for eps in [0.25, 1.0, 4.0] {
+            for eps in EPS_GRID {
                 if let Some((p, tau)) = solve(runner, model, gains, frac * lmax, eps, b1)? {
                     let s = bound(tau, frac * lmax, eps);
                     if s < score {

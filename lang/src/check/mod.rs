@@ -126,6 +126,9 @@ struct Checker<'a> {
     budget: Budget,
     /// Whether running out of it was reported (it is reported once).
     budget_reported: bool,
+    /// The `on = name;` of each expanded sweep scenario, in scenario order,
+    /// resolved with the spec's own trigger once every signal is checked.
+    sweep_on: Vec<Option<Ident>>,
 }
 
 /// What the pass over the model, objective and setting items collects.
@@ -180,6 +183,7 @@ pub fn check(file: &File) -> (Option<Spec>, Vec<Diagnostic>) {
         linf_paper: None,
         budget: Budget::check(),
         budget_reported: false,
+        sweep_on: Vec::new(),
     };
     let spec = c.run();
     let has_error = c.diags.iter().any(Diagnostic::is_error);
@@ -209,6 +213,7 @@ impl<'a> Checker<'a> {
             self.item(it, dims, &mut draft);
         }
         self.resolve_trigger_signal(&mut draft);
+        self.resolve_sweep_signals(&mut draft);
         self.check_model(&draft, dims);
         let premises = self.premises(&draft.premise_items, &draft.rule_items);
         let rules = self.rules(&draft.rule_items, &premises, dims);

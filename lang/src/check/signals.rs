@@ -71,23 +71,7 @@ impl Checker<'_> {
         let Some(on) = draft.trigger_on.take() else {
             return;
         };
-        let found = draft.signals.iter().find(|s| s.name == on.node).cloned();
-        let Some(sig) = found else {
-            if self.poisoned.contains(&on.node) {
-                draft.trigger = None;
-                return;
-            }
-            let mut d = Diagnostic::error(on.span, format!("unknown signal `{}`", on.node))
-                .with_label("not a declared `signal`");
-            if let Some(s) = suggest(&on.node, draft.signals.iter().map(|s| s.name.as_str())) {
-                d = d.with_help(format!("did you mean `{s}`?"));
-            } else {
-                d = d.with_help(format!(
-                    "declare it: `signal {} = <expression of the state>;` (or leave `on` out to monitor the state)",
-                    on.node
-                ));
-            }
-            self.err(d);
+        let Some(sig) = self.declared_signal(&on, &draft.signals) else {
             draft.trigger = None;
             return;
         };
@@ -96,6 +80,56 @@ impl Checker<'_> {
                 *on = Some(sig);
             }
         }
+    }
+
+    /// Resolves the `on = name;` of every mixed law of the `sweep` scenarios
+    /// (recorded by the sweep checker in scenario order); an unknown name
+    /// drops the sweep with an error.
+    pub(super) fn resolve_sweep_signals(&mut self, draft: &mut Draft) {
+        let ons = std::mem::take(&mut self.sweep_on);
+        let Some(sweep) = draft.simulate.as_mut().and_then(|s| s.sweep.as_mut()) else {
+            return;
+        };
+        let mut ok = true;
+        for (sc, on) in sweep.scenarios.iter_mut().zip(ons) {
+            let Some(on) = on else { continue };
+            match self.declared_signal(&on, &draft.signals) {
+                Some(sig) => {
+                    if let Trigger::Mixed { on, .. } = &mut sc.trigger {
+                        *on = Some(sig);
+                    }
+                }
+                None => ok = false,
+            }
+        }
+        if !ok {
+            if let Some(s) = draft.simulate.as_mut() {
+                s.sweep = None;
+            }
+        }
+    }
+
+    /// The declared signal `on` names; an error (with a suggestion) if there is none.
+    fn declared_signal(&mut self, on: &Ident, signals: &[NamedSignal]) -> Option<NamedSignal> {
+        let found = signals.iter().find(|s| s.name == on.node).cloned();
+        let Some(sig) = found else {
+            if self.poisoned.contains(&on.node) {
+                return None;
+            }
+            let mut d = Diagnostic::error(on.span, format!("unknown signal `{}`", on.node))
+                .with_label("not a declared `signal`");
+            if let Some(s) = suggest(&on.node, signals.iter().map(|s| s.name.as_str())) {
+                d = d.with_help(format!("did you mean `{s}`?"));
+            } else {
+                d = d.with_help(format!(
+                    "declare it: `signal {} = <expression of the state>;` (or leave `on` out to monitor the state)",
+                    on.node
+                ));
+            }
+            self.err(d);
+            return None;
+        };
+        Some(sig)
     }
 }
 

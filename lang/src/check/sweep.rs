@@ -224,6 +224,7 @@ impl Checker<'_> {
             let Some(t) = draft.trigger.filter(|_| self.diags.len() == errors) else {
                 return false;
             };
+            self.sweep_on.push(draft.trigger_on.take());
             out.push(SweepScenario {
                 name,
                 trigger: t.node,

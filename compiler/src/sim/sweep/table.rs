@@ -163,6 +163,12 @@ pub struct Table {
 }
 
 /// A number for the Markdown table.
+/// Text safe inside a Markdown table cell: `|` escaped (trigger laws print
+/// norms as `||e||`), line breaks as spaces.
+fn md_cell(text: &str) -> String {
+    text.replace('|', "\\|").replace('\n', " ")
+}
+
 fn cell(v: Option<f64>, digits: usize) -> String {
     match v {
         Some(v) if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) => format!("{v:.digits$e}"),
@@ -238,7 +244,8 @@ impl Table {
             cells.extend(r.norms.iter().map(|v| cell(*v, 3)));
             cells.push(if r.converged { "yes" } else { "no" }.into());
             cells.push(if r.failed { "FAILED" } else { "no" }.into());
-            s.push_str(&format!("| {} |\n", cells.join(" | ").replace('\n', " ")));
+            let cells: Vec<String> = cells.iter().map(|c| md_cell(c)).collect();
+            s.push_str(&format!("| {} |\n", cells.join(" | ")));
         }
         let refused: Vec<&Row> = self.rows.iter().filter(|r| !r.certified).collect();
         if !refused.is_empty() {
@@ -341,6 +348,10 @@ mod tests {
         let md = t.markdown();
         assert!(md.contains("| c | periodic every = 2 | periodic every 2 s | yes | given gains | 6 | 2.0000 | 2.0000 | 1.5000e-7 | 0.250 | yes | no |"), "{md}");
         assert!(md.contains("NOT CERTIFIED"));
+        assert_eq!(
+            md_cell("mixed ||e|| >= 0.5 ||s||\nx"),
+            "mixed \\|\\|e\\|\\| >= 0.5 \\|\\|s\\|\\| x"
+        );
         assert!(md.contains("## Not certified\n\n- `c` periodic every = 2: not certified (\"x\")"));
         assert!(md.contains("## Failed runs\n\n- `c` periodic every = 2: diverged"));
         assert!(t.any_failed());
