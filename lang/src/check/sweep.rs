@@ -32,6 +32,11 @@ impl Planned<'_> {
 }
 
 impl Checker<'_> {
+    /// Errors reported so far (warnings not counted).
+    fn error_count(&self) -> usize {
+        self.diags.iter().filter(|d| d.is_error()).count()
+    }
+
     /// The block; `n` controller states, the scenario's `dynamics` and
     /// `time` span are known.
     pub(super) fn sweep(
@@ -219,9 +224,10 @@ impl Checker<'_> {
                 span: p.span,
             };
             let mut draft = Draft::default();
-            let errors = self.diags.len();
+            let errors = self.error_count();
             self.trigger_item(&item, p.kind, &settings, n, &mut draft);
-            let Some(t) = draft.trigger.filter(|_| self.diags.len() == errors) else {
+            // Warnings (beta >= 1, rho = 0) keep the scenario; errors drop it.
+            let Some(t) = draft.trigger.filter(|_| self.error_count() == errors) else {
                 return false;
             };
             self.sweep_on.push(draft.trigger_on.take());
@@ -332,7 +338,7 @@ fn disambiguate(scenarios: &mut [SweepScenario]) {
 #[cfg(test)]
 mod tests {
     use crate::check::testing::*;
-    use crate::spec::Trigger;
+    use crate::spec::{Monitor, Trigger};
 
     const SIM: &str = "simulate { x0 = 0.5; time = 0 .. 10 step 0.01;\n";
 
@@ -353,12 +359,34 @@ mod tests {
         assert_eq!(
             sw.scenarios[7].trigger,
             Trigger::Mixed {
-                sampling: (0.01, 0.1),
+                monitor: Monitor::Sampling(0.01, 0.1),
                 beta: 1.0,
-                rho: 1e-4
+                rho: 1e-4,
+                on: None,
             }
         );
         assert_eq!(sw.scenarios[7].source.1.len(), 2);
+    }
+
+    #[test]
+    fn a_mixed_law_monitors_the_named_signal_wherever_it_is_declared() {
+        // The signal is declared after the simulate block: resolved once all are checked.
+        let spec = spec_with(&format!(
+            "{SIM} sweep {{ trigger mixed {{ on = s; beta = 0.5; rho = [1e-6, 1e-5]; monitor = step; }} }} }}\nsignal s = [2 * x1];"
+        ));
+        let sw = spec.simulate.and_then(|s| s.sweep).expect("a sweep");
+        assert_eq!(sw.scenarios.len(), 2);
+        for sc in &sw.scenarios {
+            let Trigger::Mixed { on, monitor, .. } = &sc.trigger else {
+                panic!("{:?}", sc.trigger);
+            };
+            assert_eq!(*monitor, Monitor::Step);
+            assert_eq!(on.as_ref().map(|s| s.name.as_str()), Some("s"));
+        }
+        let (m, at) = only_error(&format!(
+            "{SIM} sweep {{ trigger mixed {{ on = q; beta = 0.5; rho = [1e-6]; monitor = step; }} }} }}\nsignal s = [2 * x1];"
+        ));
+        assert_eq!((m.as_str(), at.as_str()), ("unknown signal `q`", "q"));
     }
 
     #[test]
