@@ -4,7 +4,7 @@
 //! One module per item kind: [`decls`] (version, controller, functions,
 //! constants, signals), [`model`] (outputs and the matrices A, B, D),
 //! [`premises`], [`rules`] (and their given [`gains`]), [`objectives`], [`relaxation`], [`trigger`],
-//! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`]; premises
+//! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`], [`modes`]; premises
 //! must be [`generatable`], and [`combinations`] rejects valid items the
 //! compiler cannot do together.
 //! Environments and constant evaluation are shared by all of them
@@ -17,6 +17,7 @@ mod env;
 mod gains;
 mod generatable;
 mod model;
+mod modes;
 mod monte_carlo;
 mod objective_parts;
 mod objectives;
@@ -213,6 +214,17 @@ impl<'a> Checker<'a> {
             saturation.as_deref(),
             disturbance_bound,
         );
+        let modes = self.modes_block(
+            items,
+            &draft,
+            dims,
+            modes::Around {
+                objectives: &objectives,
+                relaxation: &relaxation,
+                rules: &rules,
+                saturated: saturation.is_some(),
+            },
+        );
         let controller = controller?;
         Some(Spec {
             controller,
@@ -237,6 +249,7 @@ impl<'a> Checker<'a> {
             emit: draft.emit,
             precision: draft.precision.unwrap_or(Precision::F64),
             simulate: draft.simulate,
+            modes,
         })
     }
 
