@@ -93,6 +93,7 @@ impl Runner<'_> {
             trigger: None,
             sampled: None,
             verdicts: Vec::new(),
+            modes: None,
         })))
     }
 

@@ -47,7 +47,8 @@ impl<'a> Checker<'a> {
         }
         let (span, stmts) = block?;
         let modes = self.modes(span, stmts, dims)?;
-        self.modes_supported(&modes, draft, &around).then_some(modes)
+        self.modes_supported(&modes, draft, &around)
+            .then_some(modes)
     }
 
     fn modes(&mut self, span: Span, stmts: &[ModesStmt], dims: Dims) -> Option<Modes> {
@@ -197,7 +198,11 @@ impl<'a> Checker<'a> {
                             e.span,
                             format!("a mode's `B` must be {}x{}", dims.n, dims.m),
                         )
-                        .with_label(format!("this is {}x{}", v.nrows(), v.ncols())),
+                        .with_label(format!(
+                            "this is {}x{}",
+                            v.nrows(),
+                            v.ncols()
+                        )),
                     );
                     return None;
                 }
@@ -316,7 +321,10 @@ impl<'a> Checker<'a> {
                 self.err(
                     Diagnostic::error(
                         literal.row(a),
-                        format!("row {} of the transition-rate matrix does not sum to 0", a + 1),
+                        format!(
+                            "row {} of the transition-rate matrix does not sum to 0",
+                            a + 1
+                        ),
                     )
                     .with_label(format!("sums to {}", Num(sum)))
                     .with_help(format!(
@@ -346,7 +354,10 @@ impl<'a> Checker<'a> {
             if !matches!(o.node, Objective::Stability | Objective::DecayRate(_)) {
                 self.err(unsupported(
                     o.span,
-                    format!("objective `{}` is not supported with `modes`", o.node.kind()),
+                    format!(
+                        "objective `{}` is not supported with `modes`",
+                        o.node.kind()
+                    ),
                 ));
             }
         }
@@ -387,7 +398,9 @@ impl<'a> Checker<'a> {
                     span,
                     "code for mode-dependent gains is not generated yet".into(),
                 )
-                .with_help("drop `emit`, or design fault-blind gains: `design = mode_independent;`"),
+                .with_help(
+                    "drop `emit`, or design fault-blind gains: `design = mode_independent;`",
+                ),
             );
         }
         self.diags.len() == before
@@ -461,9 +474,16 @@ mod tests {
     fn rows_must_sum_to_zero_with_the_corrected_diagonal_as_help() {
         let e = errors(&format!("{BASE}{}", TWO.replace("2, -2", "2, -3")));
         assert_eq!(e.len(), 1, "{e:#?}");
-        assert_eq!(e[0].0.message, "row 2 of the transition-rate matrix does not sum to 0");
+        assert_eq!(
+            e[0].0.message,
+            "row 2 of the transition-rate matrix does not sum to 0"
+        );
         assert_eq!(e[0].1, "2, -3");
-        assert!(e[0].0.help.iter().any(|h| h.contains("is -2")), "{:?}", e[0].0.help);
+        assert!(
+            e[0].0.help.iter().any(|h| h.contains("is -2")),
+            "{:?}",
+            e[0].0.help
+        );
         // Within the relative tolerance: accepted.
         spec_with(&TWO.replace("2, -2", "2, -2.0000000000001"));
     }
@@ -471,13 +491,22 @@ mod tests {
     #[test]
     fn negative_rates_wrong_sizes_and_unknown_settings() {
         let (m, at) = only_error(&TWO.replace("-1, 1; 2, -2", "1, -1; 2, -2"));
-        assert_eq!(m, "a transition rate between two modes must not be negative");
+        assert_eq!(
+            m,
+            "a transition rate between two modes must not be negative"
+        );
         assert_eq!(at, "-1");
         let (m, at) = only_error(&TWO.replace("[-1, 1; 2, -2]", "[-1, 1]"));
-        assert_eq!(m, "the transition-rate matrix is not square: it must be 2x2");
+        assert_eq!(
+            m,
+            "the transition-rate matrix is not square: it must be 2x2"
+        );
         assert_eq!(at, "[-1, 1]");
         let (m, _) = only_error(&TWO.replace("[-1, 1; 2, -2]", "[0]"));
-        assert_eq!(m, "the transition-rate matrix is the wrong size: it must be 2x2");
+        assert_eq!(
+            m,
+            "the transition-rate matrix is the wrong size: it must be 2x2"
+        );
         let (m, at) = only_error(&TWO.replace("bias", "bais"));
         assert_eq!(m, "unknown setting of a mode `bais`");
         assert_eq!(at, "bais");
