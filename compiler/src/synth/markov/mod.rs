@@ -35,6 +35,7 @@
 
 pub mod pairs;
 pub mod problem;
+pub mod report;
 
 use super::achieved::{Achieved, Quantity};
 use super::design::{Design, SolverLog, SynthError};
