@@ -140,7 +140,10 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
                     .collect::<Result<_, _>>()?,
             );
             md.slack.push(match v.y {
-                Some(y) => Some(&p * value(y)? * &p),
+                Some(y) => {
+                    let pyp = &p * value(y)? * &p;
+                    Some((&pyp + pyp.transpose()) * 0.5)
+                }
                 None => None,
             });
             md.p.push(p);
