@@ -341,7 +341,7 @@ pub enum ModesStmt {
         span: Span,
     },
     /// `key = value;` (`rates`, `design`).
-    Setting(Setting),
+    Setting(Box<Setting>),
 }
 
 /// A top-level item with its span.

@@ -594,7 +594,7 @@ impl Cx {
     fn modes_stmt(&self, p: Pair<Rule>) -> PResult<ModesStmt> {
         let span = self.span(&p);
         if p.as_rule() == Rule::setting {
-            return Ok(ModesStmt::Setting(self.setting(p)?));
+            return Ok(ModesStmt::Setting(Box::new(self.setting(p)?)));
         }
         let mut it = p.into_inner().filter(|q| q.as_rule() != Rule::kw_mode);
         let name = self.ident(next(&mut it, span)?);

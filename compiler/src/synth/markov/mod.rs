@@ -174,18 +174,14 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             let mut best = attempt(0.0)?
                 .ok_or_else(|| infeasible("(no mean-square stabilizing gains found)".into()))?;
             let (mut lo, mut hi) = (0.0, 0.5);
-            loop {
-                match attempt(hi) {
-                    Ok(Some(s)) => {
-                        best = s;
-                        lo = hi;
-                        hi *= 2.0;
-                        if hi > 1e6 {
-                            hi = f64::INFINITY;
-                            break;
-                        }
-                    }
-                    _ => break,
+            // Grow the bracket until infeasible (or the solver stalls).
+            while let Ok(Some(s)) = attempt(hi) {
+                best = s;
+                lo = hi;
+                hi *= 2.0;
+                if hi > 1e6 {
+                    hi = f64::INFINITY;
+                    break;
                 }
             }
             while hi.is_finite() && hi - lo > settings.bisection_rel_tol * hi.max(1e-9) {
