@@ -256,6 +256,12 @@ pub struct Report {
     /// The certified mixed trigger on a named signal (`trigger mixed { on = ..; }`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub signal_trigger: Option<crate::synth::signal_trigger::SignalTrigger>,
+    /// Markov-switching modes: per mode P, gains and verdict (specs with `modes`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modes: Option<Vec<crate::synth::markov::report::ModeReport>>,
+    /// The transition-rate matrix Pi (specs with `modes`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transition_rates: Option<Vec<Vec<f64>>>,
     /// Solver.
     pub solver: SolverInfo,
     /// Timings.
@@ -392,7 +398,11 @@ pub fn report(
             serde_json::json!(log.memory_estimate),
         );
     }
+    let (modes, transition_rates) =
+        crate::synth::markov::report::sections(model, design, cert.as_ref(), certified);
     Report {
+        modes,
+        transition_rates,
         tsfc_version: env!("CARGO_PKG_VERSION"),
         spec,
         controller: model.spec.controller.node.clone(),

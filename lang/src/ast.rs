@@ -346,6 +346,24 @@ pub enum ItemKind {
     Precision(Ident),
     /// `simulate { ... }`
     Simulate(Vec<SimStmt>),
+    /// `modes { mode name { settings } ... settings }`
+    Modes(Vec<ModesStmt>),
+}
+
+/// A statement inside `modes { ... }`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ModesStmt {
+    /// `mode name { key = value; ... }`
+    Mode {
+        /// The mode's name.
+        name: Ident,
+        /// Its settings.
+        settings: Vec<Setting>,
+        /// The whole definition.
+        span: Span,
+    },
+    /// `key = value;` (`rates`, `design`).
+    Setting(Box<Setting>),
 }
 
 /// A top-level item with its span.

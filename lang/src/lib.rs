@@ -13,6 +13,7 @@ pub mod diag;
 mod display;
 pub mod eval;
 pub mod limits;
+pub mod modes;
 mod num;
 mod parser;
 pub mod span;

@@ -663,6 +663,8 @@ pub struct Spec {
     pub precision: Precision,
     /// Scenario.
     pub simulate: Option<Simulation>,
+    /// Markov-switching modes, if any.
+    pub modes: Option<crate::modes::Modes>,
 }
 
 impl Spec {

@@ -3,6 +3,7 @@
 //! eigenvalue computed with a dense symmetric eigen-solver. Gains are emitted
 //! only if every strict LMI holds beyond its floating-point error bound.
 
+mod markov;
 pub mod stored;
 
 use crate::model::TsModel;
@@ -117,6 +118,9 @@ fn margins_of(
 /// given gains the conditions are rebuilt with the rules' F_j (never a gain
 /// recovered from the solution), and the design must carry exactly those.
 pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthError> {
+    if let (Some(modes), Some(md)) = (&model.spec.modes, &design.modes) {
+        return markov::certify(model, design, modes, md);
+    }
     if let Some(given) = model.spec.given_gains() {
         let same = given.len() == design.gains.len()
             && given.iter().zip(&design.gains).all(|(f, g)| {

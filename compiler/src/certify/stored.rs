@@ -98,7 +98,7 @@ fn closed_loop(name: &str) -> bool {
 }
 
 /// The membership bound for `gains` (stored) with `x` the solved X.
-fn membership_bound(
+pub(super) fn membership_bound(
     model: &TsModel,
     gains: &[DMatrix<f64>],
     x: &DMatrix<f64>,

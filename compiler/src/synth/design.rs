@@ -110,6 +110,9 @@ pub struct Design {
     /// Per-objective verdicts when the rules give their gains (analysis);
     /// empty when the gains were synthesized.
     pub verdicts: Vec<Verdict>,
+    /// The per-mode design of a spec with `modes` (then `gains`, `x`, `p`
+    /// are the first mode's).
+    pub modes: Option<super::markov::ModesDesign>,
 }
 
 /// The certificate of the sampled loop for the gains of a [`Design`]: every

@@ -18,6 +18,7 @@ mod design;
 mod diagnose;
 pub mod experimental;
 pub mod given;
+pub mod markov;
 pub mod objective;
 pub mod objectives;
 pub mod plan;
@@ -76,6 +77,9 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
     let (model, settings) = (runner.model, runner.settings);
     if let Some(why) = given::unsupported(model) {
         return Err(SynthError::Unsupported(why));
+    }
+    if let Some(modes) = &model.spec.modes {
+        return markov::synthesize(runner, modes);
     }
     if let Some(e) = experimental::theorem2::synthesize(model, settings) {
         return Err(e);

@@ -94,6 +94,7 @@ impl Runner<'_> {
             sampled: None,
             signal_trigger: None,
             verdicts: Vec::new(),
+            modes: None,
         })))
     }
 

@@ -5,7 +5,7 @@
 //! constants, signals), [`model`] (outputs and the matrices A, B, D), named [`signals`],
 //! [`premises`], [`rules`] (and their given [`gains`]), [`objectives`], [`relaxation`], [`trigger`],
 //! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`], [`monte_carlo`] and
-//! [`sweep`]; premises
+//! [`sweep`], [`modes`]; premises
 //! must be [`generatable`], and [`combinations`] rejects valid items the
 //! compiler cannot do together.
 //! Environments and constant evaluation are shared by all of them
@@ -18,6 +18,7 @@ mod env;
 mod gains;
 mod generatable;
 mod model;
+mod modes;
 mod monte_carlo;
 mod objective_parts;
 mod objectives;
@@ -228,6 +229,17 @@ impl<'a> Checker<'a> {
             saturation.as_deref(),
             disturbance_bound,
         );
+        let modes = self.modes_block(
+            items,
+            &draft,
+            dims,
+            modes::Around {
+                objectives: &objectives,
+                relaxation: &relaxation,
+                rules: &rules,
+                saturated: saturation.is_some(),
+            },
+        );
         let controller = controller?;
         Some(Spec {
             controller,
@@ -253,6 +265,7 @@ impl<'a> Checker<'a> {
             emit: draft.emit,
             precision: draft.precision.unwrap_or(Precision::F64),
             simulate: draft.simulate,
+            modes,
         })
     }
 

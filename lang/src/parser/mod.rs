@@ -189,6 +189,7 @@ fn rule_name(r: &Rule) -> Option<&'static str> {
         Rule::mc_how | Rule::kw_scale | Rule::kw_offset => "`scale`, `offset` or `in`",
         Rule::kw_by => "`by`",
         Rule::modifier => "a modifier",
+        Rule::mode_def | Rule::kw_mode => "a mode `mode name { ... }`",
         Rule::EOI => "end of item",
         Rule::item => "an item (`const`, `state`, `rule`, ...)",
         _ => return None,
@@ -374,6 +375,9 @@ impl Cx {
             Rule::precision_decl => ItemKind::Precision(self.ident(next(&mut it, span)?)),
             Rule::simulate_decl => {
                 ItemKind::Simulate(it.map(|p| self.sim_stmt(p)).collect::<PResult<_>>()?)
+            }
+            Rule::modes_decl => {
+                ItemKind::Modes(it.map(|p| self.modes_stmt(p)).collect::<PResult<_>>()?)
             }
             _ => return Err(Diagnostic::error(span, "unsupported item")),
         };
@@ -586,6 +590,27 @@ impl Cx {
         } else {
             Ok(Value::Expr(self.expr(v)?))
         }
+    }
+
+    fn modes_stmt(&self, p: Pair<Rule>) -> PResult<ModesStmt> {
+        let span = self.span(&p);
+        if p.as_rule() == Rule::setting {
+            return Ok(ModesStmt::Setting(Box::new(self.setting(p)?)));
+        }
+        let mut it = p.into_inner().filter(|q| q.as_rule() != Rule::kw_mode);
+        let name = self.ident(next(&mut it, span)?);
+        let settings = match it.next() {
+            Some(block) => block
+                .into_inner()
+                .map(|s| self.setting(s))
+                .collect::<PResult<_>>()?,
+            None => Vec::new(),
+        };
+        Ok(ModesStmt::Mode {
+            name,
+            settings,
+            span,
+        })
     }
 
     fn sim_stmt(&self, p: Pair<Rule>) -> PResult<SimStmt> {

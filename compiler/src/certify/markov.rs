@@ -1,0 +1,219 @@
+//! The certificate of a design with Markov-switching modes: every condition
+//! (P) of `synth/markov` rebuilt in P variables, with P_a = X_a^{-1} and the
+//! design's gains F_aj as constants,
+//!
+//! sum_k w_k G_{a i_k j_k} + c P_a Y_a P_a < 0,
+//! G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a,
+//!
+//! for every mode a and every condition of the relaxation (`synth/markov/pairs.rs`),
+//! with P_a > 0 and (tanaka) P_a Y_a P_a >= 0; margins under the rule of every
+//! certificate ([`super::RULE`]). The stored-precision re-check rebuilds the
+//! same conditions with the gains as generated code stores them.
+
+use super::stored::{membership_bound, stored, StoredPrecision};
+use super::{margins_of, summarize, Certificate, LmiMargin};
+use crate::model::TsModel;
+use crate::synth::markov::pairs::{conditions, PairCondition};
+use crate::synth::markov::problem::{condition_name, input_matrices};
+use crate::synth::markov::ModesDesign;
+use crate::synth::{Design, SynthError};
+use nalgebra::DMatrix;
+use tsf_lang::modes::Modes;
+use tsf_lang::spec::Precision;
+use tsf_lmi::{Expr, Problem};
+
+/// The name of P_a in the certified problem.
+fn p_name(mode: &str) -> String {
+    format!("P_{mode}")
+}
+
+/// The conditions (P) for `gains` (per mode, per rule), and the names of the
+/// non-strict ones.
+fn p_problem(
+    model: &TsModel,
+    modes: &Modes,
+    md: &ModesDesign,
+    gains: &[Vec<DMatrix<f64>>],
+    conds: &[PairCondition],
+    eps: f64,
+) -> Result<(Problem, Vec<String>), SynthError> {
+    let n = model.n;
+    let lmi = |e: tsf_lmi::LmiError| SynthError::Internal(format!("internal error: {e}"));
+    let mut problem = Problem::new();
+    let mut nonstrict = Vec::new();
+    let p = modes
+        .modes
+        .iter()
+        .map(|m| problem.symmetric(&p_name(&m.name), n))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(lmi)?;
+    let id = DMatrix::identity(n, n);
+    for (a, mode) in modes.modes.iter().enumerate() {
+        problem
+            .psd(&format!("{} > 0", p_name(&mode.name)), Expr::var(p[a]), eps)
+            .map_err(lmi)?;
+        let y = match &md.slack[a] {
+            Some(_) => {
+                let y = problem
+                    .symmetric(&format!("PYP_{}", mode.name), n)
+                    .map_err(lmi)?;
+                let name = format!("mode {} Y >= 0", mode.name);
+                problem.psd(&name, Expr::var(y), eps).map_err(lmi)?;
+                nonstrict.push(name);
+                Some(y)
+            }
+            None => None,
+        };
+        let b = input_matrices(model, modes, a);
+        let g = |i: usize, j: usize| -> Result<Expr, tsf_lmi::LmiError> {
+            let acl = &model.rules[i].a + &b[i] * &gains[a][j];
+            let mut e = Expr::product(&id, p[a], &acl)?.he()?;
+            e = e.add(Expr::var(p[a]).scale(2.0 * md.alpha)?)?;
+            for (c, pc) in p.iter().enumerate() {
+                let pi = modes.rates[(a, c)];
+                if pi != 0.0 {
+                    e = e.add(Expr::var(*pc).scale(pi)?)?;
+                }
+            }
+            Ok(e)
+        };
+        for c in conds {
+            let mut e = Expr::zeros(n, n);
+            for &(i, j, w) in &c.terms {
+                e = e
+                    .add(g(i, j).map_err(lmi)?.scale(w).map_err(lmi)?)
+                    .map_err(lmi)?;
+            }
+            if let (Some(y), true) = (y, c.slack != 0.0) {
+                e = e
+                    .add(Expr::var(y).scale(c.slack).map_err(lmi)?)
+                    .map_err(lmi)?;
+            }
+            let name = condition_name(&mode.name, c);
+            problem.nsd(&name, e, eps).map_err(lmi)?;
+            if !c.strict {
+                nonstrict.push(name);
+            }
+        }
+    }
+    Ok((problem, nonstrict))
+}
+
+/// Margins of every condition (P) with `gains` (`eps` marks the strict ones;
+/// the certificate does not ask for it).
+fn margins(
+    model: &TsModel,
+    modes: &Modes,
+    md: &ModesDesign,
+    gains: &[Vec<DMatrix<f64>>],
+    eps: f64,
+) -> Result<Vec<LmiMargin>, SynthError> {
+    let Some((conds, _)) = conditions(model, model.spec.relaxation.node) else {
+        return Err(SynthError::Unsupported(
+            "this relaxation is not supported with `modes`".into(),
+        ));
+    };
+    let (problem, nonstrict) = p_problem(model, modes, md, gains, &conds, eps)?;
+    let mut values: Vec<(String, DMatrix<f64>)> = Vec::new();
+    for (a, mode) in modes.modes.iter().enumerate() {
+        values.push((p_name(&mode.name), md.p[a].clone()));
+        if let Some(y) = &md.slack[a] {
+            values.push((format!("PYP_{}", mode.name), y.clone()));
+        }
+    }
+    margins_of(&problem, &nonstrict, &values, &[], &|_| {})
+}
+
+/// The certificate of a mode design, with its stored-precision re-check.
+pub fn certify(
+    model: &TsModel,
+    design: &Design,
+    modes: &Modes,
+    md: &ModesDesign,
+) -> Result<Certificate, SynthError> {
+    let mut cert = summarize(margins(model, modes, md, &md.gains, design.eps)?);
+    if cert.ok {
+        let s = stored_check(model, modes, md, design.eps)?;
+        if !s.certified {
+            cert.ok = false;
+            cert.worst = s.worst_lmi.clone();
+        }
+        cert.stored = Some(s);
+    }
+    Ok(cert)
+}
+
+/// The conditions re-checked with every F_aj as generated code stores it,
+/// and the membership rounding bound of the worst mode (P form: the blended
+/// gain's error enters as He(P_a B_ai dF), so the bound is taken with P_a).
+fn stored_check(
+    model: &TsModel,
+    modes: &Modes,
+    md: &ModesDesign,
+    eps: f64,
+) -> Result<StoredPrecision, SynthError> {
+    let precision = model.spec.precision;
+    let round = |f: &DMatrix<f64>| f.map(|v| stored(v, precision));
+    let gains: Vec<Vec<DMatrix<f64>>> = md
+        .gains
+        .iter()
+        .map(|g| g.iter().map(round).collect())
+        .collect();
+    let max_relative_rounding = md
+        .gains
+        .iter()
+        .flatten()
+        .flat_map(|f| f.iter().copied())
+        .filter(|v| v.is_finite() && *v != 0.0)
+        .map(|v| ((stored(v, precision) - v) / v).abs())
+        .fold(0.0, f64::max);
+    let lmis = margins(model, modes, md, &gains, eps)?;
+    let mut worst_membership = None;
+    for (a, mode) in modes.modes.iter().enumerate() {
+        let prefix = format!("mode {} ", mode.name);
+        let available = lmis
+            .iter()
+            .filter(|l| l.strict && l.name.starts_with(&prefix))
+            .map(|l| l.margin)
+            .fold(f64::INFINITY, f64::min);
+        let mut mode_model = model.clone();
+        for (rule, b) in mode_model
+            .rules
+            .iter_mut()
+            .zip(input_matrices(model, modes, a))
+        {
+            rule.b = b;
+        }
+        let bound = membership_bound(&mode_model, &gains[a], &md.p[a], precision, available);
+        let worse = worst_membership
+            .as_ref()
+            .is_none_or(|w: &super::MembershipBound| {
+                (bound.required_margin - bound.available_margin)
+                    > (w.required_margin - w.available_margin)
+            });
+        if worse {
+            worst_membership = Some(bound);
+        }
+    }
+    let Some(membership) = worst_membership else {
+        return Err(SynthError::Internal("internal error: no mode".into()));
+    };
+    let cert = summarize(lmis);
+    let certified = cert.ok && membership.holds;
+    Ok(StoredPrecision {
+        precision: match precision {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+        },
+        certified,
+        worst_margin: cert.min_margin,
+        worst_lmi: if cert.ok && !membership.holds {
+            "membership rounding".to_string()
+        } else {
+            cert.worst
+        },
+        conditions: cert.lmis.len(),
+        max_relative_rounding,
+        membership_rounding_bound: membership,
+    })
+}

@@ -1,0 +1,83 @@
+//! The report sections of a design with modes: `modes` (per mode P, gains
+//! and the verdict of its conditions) and `transition_rates`.
+
+use crate::certify::Certificate;
+use crate::model::TsModel;
+use crate::report::{rows, Gain};
+use crate::synth::Design;
+use serde::Serialize;
+
+/// One mode in the report.
+#[derive(Debug, Serialize)]
+pub struct ModeReport {
+    /// The mode's name.
+    pub name: String,
+    /// P_a (n x n rows).
+    #[serde(rename = "P")]
+    pub p: Vec<Vec<f64>>,
+    /// F_aj per rule (empty unless certified).
+    pub gains: Vec<Gain>,
+    /// Whether every condition of this mode passes the certificate.
+    pub certified: bool,
+    /// Least margin over this mode's strict conditions.
+    pub min_margin: f64,
+    /// Conditions of this mode in the certificate.
+    pub conditions: usize,
+}
+
+/// The `modes` and `transition_rates` sections (both `None` without modes).
+pub fn sections(
+    model: &TsModel,
+    design: Option<&Design>,
+    cert: Option<&Certificate>,
+    certified: bool,
+) -> (Option<Vec<ModeReport>>, Option<Vec<Vec<f64>>>) {
+    let Some(modes) = &model.spec.modes else {
+        return (None, None);
+    };
+    let rates = Some(rows(&modes.rates));
+    let Some(md) = design.and_then(|d| d.modes.as_ref()) else {
+        return (None, rates);
+    };
+    let reports = modes
+        .modes
+        .iter()
+        .enumerate()
+        .map(|(a, mode)| {
+            let prefix = format!("mode {} ", mode.name);
+            let own = format!("P_{} > 0", mode.name);
+            let lmis: Vec<_> = cert
+                .map(|c| {
+                    c.lmis
+                        .iter()
+                        .filter(|l| l.name.starts_with(&prefix) || l.name == own)
+                        .collect()
+                })
+                .unwrap_or_default();
+            ModeReport {
+                name: mode.name.clone(),
+                p: rows(&md.p[a]),
+                gains: if certified {
+                    md.gains[a]
+                        .iter()
+                        .zip(&model.rules)
+                        .map(|(f, r)| Gain {
+                            rule: r.name.clone(),
+                            f: rows(f),
+                        })
+                        .collect()
+                } else {
+                    Vec::new()
+                },
+                certified: !lmis.is_empty() && lmis.iter().all(|l| l.ok),
+                min_margin: lmis
+                    .iter()
+                    .filter(|l| l.strict)
+                    .map(|l| l.margin)
+                    .fold(f64::INFINITY, f64::min),
+                conditions: lmis.len(),
+            }
+        })
+        .collect();
+    (Some(reports), rates)
+}
