@@ -7,37 +7,7 @@ use tsf_lang::ast::{BinOp, Expr, ExprKind, Vary};
 use tsf_lang::spec::{McTarget, MonteCarlo};
 use tsf_lang::Spec;
 
-/// SplitMix64 (Steele, Lea and Flood, "Fast splittable pseudorandom number
-/// generators", 2014): 64 bits of state, full period, statistically sound for
-/// simulation draws.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A stream started at `state`.
-    pub fn new(state: u64) -> Self {
-        SplitMix64(state)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)` (53 random bits).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform in `[lo, hi]`.
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-}
+pub use crate::sim::trigger::SplitMix64;
 
 /// The seed of run `index` of a campaign seeded with `seed`.
 pub fn run_seed(seed: u64, index: u64) -> u64 {
