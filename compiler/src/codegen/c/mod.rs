@@ -170,6 +170,16 @@ impl<'a> Gen<'a> {
         )
     }
 
+    /// The generator of the sensor module (`<name>_sensor_` symbols).
+    fn sensor(t: &'a Tables) -> Self {
+        let name = super::header::sensor_name(t);
+        Self::with_prefix(
+            t,
+            format!("{name}_"),
+            format!("{}_", name.to_ascii_uppercase()),
+        )
+    }
+
     /// A generator whose symbols start with `p` and macros with `u`.
     fn with_prefix(t: &'a Tables, p: String, u: String) -> Self {
         Gen {

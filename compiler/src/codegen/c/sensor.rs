@@ -28,12 +28,7 @@ pub fn c_sensor_file_names(t: &Tables) -> (String, String) {
 /// has no aperiodic trigger.
 pub fn emit_c_sensor(t: &Tables) -> Result<CFiles, CodegenError> {
     let s = t.trigger.as_ref().ok_or(CodegenError::NoSensor)?;
-    let name = sensor_name(t);
-    let g = Gen::with_prefix(
-        t,
-        format!("{name}_"),
-        format!("{}_", name.to_ascii_uppercase()),
-    );
+    let g = Gen::sensor(t);
     Ok(CFiles {
         header: sensor_header(&g, s),
         source: sensor_source(&g, s),
