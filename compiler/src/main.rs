@@ -52,6 +52,10 @@ enum Command {
         /// Output format of the diagnostics.
         #[arg(long, value_enum, default_value = "human")]
         format: Format,
+        /// Also print the T-S model as built: premises and sets, the sector
+        /// construction, each rule's premise and local model (stdout).
+        #[arg(long)]
+        explain: bool,
     },
     /// Synthesize certified PDC gains and write the report (exit 3 when infeasible or refused).
     Compile {
@@ -134,7 +138,11 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Check { specs, format } => check(&specs, format),
+        Command::Check {
+            specs,
+            format,
+            explain,
+        } => check(&specs, format, explain),
         Command::Compile {
             spec,
             out,
@@ -479,7 +487,7 @@ fn merge_shards(dirs: &[PathBuf], out: &std::path::Path) -> ExitCode {
     run().unwrap_or_else(|e| report_error(&e))
 }
 
-fn check(specs: &[PathBuf], format: Format) -> ExitCode {
+fn check(specs: &[PathBuf], format: Format, explain: bool) -> ExitCode {
     let mut worst = 0u8;
     let mut json_files = Vec::new();
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
@@ -514,6 +522,9 @@ fn check(specs: &[PathBuf], format: Format) -> ExitCode {
                         m.coverage.points,
                         if m.coverage.exhaustive { "" } else { " (sampled)" }
                     );
+                    if explain {
+                        print!("{}", tsfc::model::explain::explain(m));
+                    }
                 }
             }
             Format::Json => {

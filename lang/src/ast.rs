@@ -338,6 +338,8 @@ pub enum ItemKind {
     },
     /// `relaxation name[(args)];`
     Relaxation(Ident, Vec<NamedArg>),
+    /// `rules kind;`: rules the compiler builds (`rules sector;`).
+    Rules(Ident),
     /// `trigger kind { settings }`
     Trigger(Ident, Vec<Setting>),
     /// `emit targets;`

@@ -16,6 +16,7 @@ pub mod limits;
 pub mod modes;
 mod num;
 mod parser;
+pub mod sector;
 pub mod span;
 pub mod spec;
 mod split;

@@ -665,6 +665,8 @@ pub struct Spec {
     pub simulate: Option<Simulation>,
     /// Markov-switching modes, if any.
     pub modes: Option<crate::modes::Modes>,
+    /// The sector construction that built the rules (`rules sector;`), if any.
+    pub sector: Option<crate::sector::SectorModel>,
 }
 
 impl Spec {

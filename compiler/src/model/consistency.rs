@@ -38,9 +38,13 @@ pub struct Consistency {
     pub firing: Vec<(String, f64)>,
 }
 
-/// Grid axes: from the smallest to the largest operating-point coordinate.
-fn axes(rules: &[LocalModel], n: usize) -> Vec<Vec<f64>> {
-    let bounds: Vec<(f64, f64)> = (0..n)
+/// Grid bounds: from the smallest to the largest operating-point coordinate,
+/// or the box a sector model was fitted on (its rules have no operating point).
+fn bounds(spec: &Spec, rules: &[LocalModel], n: usize) -> Vec<(f64, f64)> {
+    if let Some(s) = &spec.sector {
+        return s.sample_box.clone();
+    }
+    (0..n)
         .map(|k| {
             rules
                 .iter()
@@ -49,7 +53,11 @@ fn axes(rules: &[LocalModel], n: usize) -> Vec<Vec<f64>> {
                     (lo.min(v), hi.max(v))
                 })
         })
-        .collect();
+        .collect()
+}
+
+/// Grid axes over `bounds`, at most [`MAX_POINTS`] points in all.
+fn axes(bounds: &[(f64, f64)]) -> Vec<Vec<f64>> {
     let varying = bounds.iter().filter(|(lo, hi)| hi > lo).count().max(1);
     let per_axis =
         ((MAX_POINTS as f64).powf(1.0 / varying as f64).floor() as usize).clamp(2, MAX_PER_AXIS);
@@ -70,7 +78,8 @@ fn axes(rules: &[LocalModel], n: usize) -> Vec<Vec<f64>> {
 }
 
 /// Compares the blended model with A(x), B(x); `None` when neither depends
-/// on the state (nothing to compare with) or no rule has an operating point.
+/// on the state (nothing to compare with) or no rule has an operating point
+/// (and no sector model built them).
 pub(super) fn check(
     spec: &Spec,
     rules: &[LocalModel],
@@ -94,7 +103,7 @@ pub(super) fn check(
     .into_iter()
     .filter_map(|(name, m, locals)| m.map(|m| (name, m, locals)))
     .collect();
-    if targets.is_empty() || rules.iter().all(|r| r.at.is_none()) {
+    if targets.is_empty() || (rules.iter().all(|r| r.at.is_none()) && spec.sector.is_none()) {
         return None;
     }
     let ranges: Vec<(f64, f64)> = layout
@@ -102,7 +111,7 @@ pub(super) fn check(
         .iter()
         .flat_map(|s| std::iter::repeat_n(s.range, s.dim))
         .collect();
-    let grid = axes(rules, spec.n());
+    let grid = axes(&bounds(spec, rules, spec.n()));
     let mut idx = vec![0usize; grid.len()];
     let mut worst = Consistency {
         points: 0,

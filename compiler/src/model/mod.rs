@@ -4,6 +4,7 @@
 
 mod consistency;
 mod coverage;
+pub mod explain;
 mod local;
 mod premise;
 

@@ -25,6 +25,7 @@ mod objectives;
 mod premises;
 mod relaxation;
 mod rules;
+mod sector;
 mod signals;
 mod simulate;
 mod sweep;
@@ -142,6 +143,8 @@ struct Draft<'a> {
     /// Checked after the pass, once every signal and matrix is known.
     premise_items: Vec<&'a Item>,
     rule_items: Vec<&'a Item>,
+    /// `rules sector;` items.
+    rules_items: Vec<&'a Item>,
     objective_items: Vec<&'a Item>,
     relaxation: Option<Spanned<Relaxation>>,
     trigger: Option<Spanned<Trigger>>,
@@ -216,8 +219,23 @@ impl<'a> Checker<'a> {
         self.resolve_trigger_signal(&mut draft);
         self.resolve_sweep_signals(&mut draft);
         self.check_model(&draft, dims);
-        let premises = self.premises(&draft.premise_items, &draft.rule_items);
-        let rules = self.rules(&draft.rule_items, &premises, dims);
+        let mut premises = self.premises(&draft.premise_items, &draft.rule_items);
+        let matrices = [
+            ("A", draft.a.as_ref(), dims.n, dims.n),
+            ("B", draft.b.as_ref(), dims.n, dims.m),
+            ("D", draft.d.as_ref(), dims.n, dims.q),
+        ];
+        let (rules, sector) = match self.sector_rules(
+            &draft.rules_items,
+            &draft.rule_items,
+            &mut premises,
+            matrices,
+            dims,
+        ) {
+            sector::Built::NotAsked => (self.rules(&draft.rule_items, &premises, dims), None),
+            sector::Built::Sector(model, rules) => (rules, Some(*model)),
+            sector::Built::Failed => (Vec::new(), None),
+        };
         self.gains_all_or_none(&draft.rule_items);
         self.gains_with_trigger(&draft.rule_items, &draft);
         let objectives = self.objectives(&draft.objective_items, dims.n, &draft.outputs);
@@ -266,6 +284,7 @@ impl<'a> Checker<'a> {
             precision: draft.precision.unwrap_or(Precision::F64),
             simulate: draft.simulate,
             modes,
+            sector,
         })
     }
 
@@ -279,6 +298,7 @@ impl<'a> Checker<'a> {
             }
             ItemKind::Premise { .. } => draft.premise_items.push(it),
             ItemKind::Rule { .. } => draft.rule_items.push(it),
+            ItemKind::Rules(_) => draft.rules_items.push(it),
             ItemKind::Objective { .. } => draft.objective_items.push(it),
             ItemKind::Relaxation(name, args) => self.relaxation_item(it, name, args, draft),
             ItemKind::Trigger(kind, settings) => {

@@ -356,6 +356,7 @@ impl Cx {
                 }
             }
             Rule::premise_decl => self.premise(it, span)?,
+            Rule::rules_decl => ItemKind::Rules(self.ident(next(&mut it, span)?)),
             Rule::rule_decl => self.rule(it, span)?,
             Rule::objective_decl => self.objective(it, span)?,
             Rule::relaxation_decl => {
