@@ -404,6 +404,17 @@ pub enum Trigger {
     },
 }
 
+/// How the gains of a `trigger periodic` loop are designed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PeriodicDesign {
+    /// `design = emulation` (default): continuous-time design, then the
+    /// sampled-loop certificate for the period.
+    Emulation,
+    /// `design = discrete`: discrete-time PDC design on the exact zero-order-hold
+    /// discretization of each local model, then the same sampled-loop certificate.
+    Discrete,
+}
+
 /// When a `trigger mixed` checks its law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Monitor {
@@ -665,6 +676,9 @@ pub struct Spec {
     pub simulate: Option<Simulation>,
     /// Markov-switching modes, if any.
     pub modes: Option<crate::modes::Modes>,
+    /// How a periodic loop's gains are designed (`trigger periodic { design = ..; }`),
+    /// with the span of the setting; `None` is emulation.
+    pub periodic_design: Option<Spanned<PeriodicDesign>>,
     /// The sector construction that built the rules (`rules sector;`), if any.
     pub sector: Option<crate::sector::SectorModel>,
 }

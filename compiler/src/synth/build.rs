@@ -74,7 +74,10 @@ pub fn build(
             })
             .collect::<Result<Vec<_>, _>>()?,
     };
-    let pair_reduce = reduce && super::blocks::common_b(model);
+    // A discrete-time design's B_di differ between rules even when B is common.
+    let pair_reduce = reduce
+        && super::blocks::common_b(model)
+        && super::objectives::discrete::period(model).is_none();
     let mut lmis = Lmis {
         problem,
         eps,

@@ -18,6 +18,7 @@ mod env;
 mod gains;
 mod generatable;
 mod model;
+mod discrete;
 mod modes;
 mod monte_carlo;
 mod objective_parts;
@@ -153,6 +154,8 @@ struct Draft<'a> {
     /// Named signals (`signal name = expr;`).
     signals: Vec<NamedSignal>,
     trigger_synthesis: Option<TriggerSynthesis>,
+    /// `design = ..` of a periodic trigger.
+    periodic_design: Option<Spanned<crate::spec::PeriodicDesign>>,
     /// Where a synthesized trigger weight is asked for (when its design method checked).
     weight_span: Option<Span>,
     emit: Vec<Emit>,
@@ -258,6 +261,12 @@ impl<'a> Checker<'a> {
                 saturated: saturation.is_some(),
             },
         );
+        self.discrete_design_fits(
+            draft.periodic_design.as_ref(),
+            &objectives,
+            saturation.is_some(),
+            &rules,
+        );
         let controller = controller?;
         Some(Spec {
             controller,
@@ -284,6 +293,7 @@ impl<'a> Checker<'a> {
             precision: draft.precision.unwrap_or(Precision::F64),
             simulate: draft.simulate,
             modes,
+            periodic_design: draft.periodic_design,
             sector,
         })
     }

@@ -6,7 +6,7 @@ use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Expr, ExprKind, Ident, Item, Setting, Value};
 use crate::diag::Diagnostic;
 use crate::span::Spanned;
-use crate::spec::{Monitor, Threshold, Trigger, TriggerSynthesis, Weight};
+use crate::spec::{Monitor, PeriodicDesign, Threshold, Trigger, TriggerSynthesis, Weight};
 use std::collections::HashMap;
 
 impl Checker<'_> {
@@ -52,14 +52,48 @@ impl Checker<'_> {
                 draft.weight_span = Some(weight.map_or(kind.span, |s| s.span));
             }
         }
+        if matches!(t, Trigger::Periodic { .. }) {
+            if let Some(s) = settings.iter().find(|s| s.key.node == "design") {
+                draft.periodic_design = self.periodic_design(s);
+            }
+        }
         draft.trigger = Some(Spanned::new(t, it.span));
+    }
+
+    /// `design = emulation | discrete` of a periodic trigger.
+    fn periodic_design(&mut self, s: &Setting) -> Option<Spanned<PeriodicDesign>> {
+        let word = match &s.value {
+            Value::Expr(Expr {
+                kind: ExprKind::Name(w),
+                ..
+            }) => w.as_str(),
+            _ => "",
+        };
+        match word {
+            "emulation" => Some(Spanned::new(PeriodicDesign::Emulation, s.span)),
+            "discrete" => Some(Spanned::new(PeriodicDesign::Discrete, s.span)),
+            _ => {
+                let span = match &s.value {
+                    Value::Expr(e) => e.span,
+                    Value::Range(..) => s.span,
+                };
+                self.err(unknown_choice(
+                    span,
+                    "design",
+                    "designs",
+                    word,
+                    &["emulation", "discrete"],
+                ));
+                None
+            }
+        }
     }
 
     /// The law of `kind` with its settings, each known and given once.
     fn trigger(&mut self, kind: &Ident, settings: &[Setting], n: usize) -> Option<Trigger> {
         let allowed: &[&str] = match kind.node.as_str() {
             "continuous" => &[],
-            "periodic" => &["every"],
+            "periodic" => &["every", "design"],
             "aperiodic" => &["sampling", "threshold", "weight"],
             "mixed" => &["on", "beta", "rho", "monitor", "sampling"],
             other => {

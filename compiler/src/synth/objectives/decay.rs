@@ -1,5 +1,6 @@
 //! Stability and decay rate: He(A_i X + B_i M_j) + 2 alpha X < 0, so that
-//! V = x' P x decreases at least as e^{-2 alpha t}.
+//! V = x' P x decreases at least as e^{-2 alpha t} (for a periodic loop
+//! designed in discrete time, the conditions of [`super::discrete`]).
 
 use crate::synth::achieved::{Achieved, Quantity};
 use crate::synth::objective::{Bound, BuildError, Ctx, Goal, Lmis, Objective};
@@ -78,14 +79,18 @@ impl Objective for Decay {
     }
 
     fn impose(&self, ctx: &Ctx<'_>, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
+        let name = if self.stability_only {
+            "stability"
+        } else {
+            "decay"
+        };
+        if let Some(h) = super::discrete::period(ctx.model) {
+            lmis.impose(&super::discrete::family(ctx, h, self.alpha, name))?;
+            return Ok(());
+        }
         let shift = 2.0 * self.alpha;
         let fam = Family {
-            name: if self.stability_only {
-                "stability"
-            } else {
-                "decay"
-            }
-            .into(),
+            name: name.into(),
             q: Box::new(|i, j| ctx.with_sector(i, j, ctx.upsilon(i, j, shift)?, None)),
         };
         lmis.impose(&fam)?;

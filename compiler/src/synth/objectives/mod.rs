@@ -7,6 +7,7 @@
 //! [`from_spec`] and its kind in [`DECLARE_ORDER`] / [`IMPOSE_ORDER`].
 
 mod decay;
+pub mod discrete;
 mod hinf;
 mod input_norm;
 mod linf;
