@@ -7,7 +7,7 @@
 //! override: the spec's certificate covers T = 2 s (and every period up to
 //! about 3.44 s), so T = 4 and 4.5 s are what-if runs of the same design.
 
-mod common;
+use crate::common;
 
 use common::{model_of, spec_path};
 use std::sync::OnceLock;

@@ -6,7 +6,7 @@
 //! x(0), and the paper's own Appendix A design is simulated in the same scenario
 //! for comparison.
 
-mod common;
+use crate::common;
 
 use nalgebra::{DMatrix, DVector};
 use std::sync::OnceLock;

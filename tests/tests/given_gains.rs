@@ -6,7 +6,7 @@
 //! of a shipped spec analyzed again, whose gains reach the generated code
 //! bit for bit.
 
-mod common;
+use crate::common;
 
 use common::{model_of, spec_path};
 use nalgebra::{Complex, DMatrix};

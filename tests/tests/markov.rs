@@ -3,7 +3,7 @@
 //! independent re-check, from the report JSON alone, of every coupled
 //! condition He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a < 0.
 
-mod common;
+use crate::common;
 
 use nalgebra::DMatrix;
 use serde_json::Value;

@@ -3,7 +3,7 @@
 //! sensor's decisions in the runtime, the generated Rust and C, and the
 //! simulator's transmission count replayed from its CSV trace.
 
-mod common;
+use crate::common;
 
 use common::model_of;
 use std::cmp::Ordering;

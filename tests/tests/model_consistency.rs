@@ -2,7 +2,7 @@
 //! stands for: an exact sector model gives 0, swapped operating points give a
 //! warning naming the rules, with the mismatch computed in closed form here.
 
-mod common;
+use crate::common;
 
 use nalgebra::DMatrix;
 use tsfc::frontend::{self, Source};

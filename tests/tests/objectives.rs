@@ -2,7 +2,7 @@
 //! depend on the order the spec lists its objectives, and the certificate
 //! checks the unreduced conditions only through the reductions' inversion.
 
-mod common;
+use crate::common;
 use common::shipped;
 use tsf_lang::spec::Spec;
 use tsfc::model::TsModel;

@@ -7,7 +7,7 @@
 //! every relaxation contains the basic one, Polya's grows with its degree and
 //! degree 2 certifies strictly more points than Tuan's.
 
-mod common;
+use crate::common;
 
 use tsfc::compile::{compile, Status};
 use tsfc::report::SpecInfo;

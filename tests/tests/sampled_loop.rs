@@ -5,7 +5,7 @@
 //! wherever the looped-functional certificate holds (the frozen pair is a
 //! special case of the blended, sampled loop in the linear region).
 
-mod common;
+use crate::common;
 
 use nalgebra::DMatrix;
 use tsf_lang::spec::Emit;

@@ -3,7 +3,7 @@
 //! written out here in closed form, the blend with A(x) at states the test
 //! draws itself, and bad specs with the error each must give.
 
-mod common;
+use crate::common;
 
 use nalgebra::DMatrix;
 use tsfc::frontend::{self, Source};

@@ -1,6 +1,6 @@
 //! Every shipped spec checks clean (no errors) and has the documented size.
 
-mod common;
+use crate::common;
 
 fn check(name: &str) -> tsfc::model::TsModel {
     common::shipped(name)

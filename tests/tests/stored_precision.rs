@@ -4,7 +4,7 @@
 //! here by its eigenvalues, without LMIs) is refused in f32 naming the
 //! failing LMI, and certified in f64.
 
-mod common;
+use crate::common;
 
 use common::{model_of, shipped, spec_path};
 use nalgebra::DMatrix;

@@ -4,7 +4,7 @@
 use nalgebra::DMatrix;
 use std::path::Path;
 
-mod common;
+use crate::common;
 use tsfc::compile::{compile, Status};
 use tsfc::model::TsModel;
 use tsfc::report::SpecInfo;

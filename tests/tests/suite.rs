@@ -1,0 +1,27 @@
+//! The end-to-end suite: one test binary (one link, one set of debug-free
+//! artifacts) whose modules are the former per-file test crates.
+
+mod common;
+mod amrr;
+mod c_codegen;
+mod diagnostics;
+mod event_trigger;
+mod fuzz;
+mod fuzz_pipeline;
+mod given_gains;
+mod markov;
+mod mixed_trigger;
+mod model_consistency;
+mod monte_carlo;
+mod objectives;
+mod plots;
+mod relaxation_map;
+mod rust_codegen;
+mod sampled_loop;
+mod sector;
+mod shipped_specs;
+mod sim_evaluators;
+mod simulation;
+mod stored_precision;
+mod sweep;
+mod synthesis;
