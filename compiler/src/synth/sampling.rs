@@ -11,7 +11,7 @@
 //! (bisection, re-solved at the advised value).
 
 use super::advice::round_down;
-use super::design::{Design, SampledDesign, SynthError, TriggerPlan};
+use super::design::{Design, SampledDesign, SolverLog, SynthError, TriggerPlan};
 use super::objectives::Saturation;
 use super::search::Runner;
 use super::trigger::{self, named};
@@ -148,7 +148,7 @@ impl Runner<'_> {
         let (mut lo, mut hi) = (1.0 / 1024.0, 1.0);
         if self.sampled_attempt(&at(lo))?.is_none() {
             return Err(SynthError::Infeasible {
-                message: format!("the gains of the continuous design are not certified for {what}, nor for intervals 1024 times shorter"),
+                message: format!("the gains of the {} design are not certified for {what}, nor for intervals 1024 times shorter", if super::objectives::discrete::period(self.model).is_some() { "discrete-time" } else { "continuous" }),
                 achievable: vec!["weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger".into()],
             });
         }
@@ -159,6 +159,9 @@ impl Runner<'_> {
             } else {
                 hi = mid;
             }
+        }
+        if let Some(h) = super::objectives::discrete::period(self.model) {
+            return Err(self.discrete_refusal(h, h * lo));
         }
         // Advise a short-printed value, re-solved: advice must certify when used.
         let mut advice = round_down(sampling.1 * lo);
@@ -184,5 +187,54 @@ impl Runner<'_> {
                 sampling.1 * lo
             )],
         })
+    }
+
+    /// The refusal of a discrete-time design whose gains (designed for the
+    /// period `h`) are certified for the shipped loop only up to `reach`. Its
+    /// gains depend on the period, so an advised period is designed and
+    /// certified again (discretization, synthesis, sampled loop) before it is
+    /// advised: at most 4 candidates, each 10 % shorter.
+    fn discrete_refusal(&mut self, h: f64, reach: f64) -> SynthError {
+        let mut advice = round_down(reach);
+        let mut found = None;
+        for _ in 0..4 {
+            if self.discrete_certifies(advice) {
+                found = Some(advice);
+                break;
+            }
+            advice = round_down(advice * 0.9);
+        }
+        let message = format!("the sampled loop is not certified: the gains designed in discrete time for h = {h} s are certified for the continuous plant sampled every {reach:.4} s at most (the memberships move between samples)");
+        let achievable = vec![match found {
+            Some(a) => format!("write `trigger periodic {{ every = {a}; design = discrete; }}` (designed and certified at that period), or weaken the objectives that set the gains"),
+            None => "no shorter period tried certifies (4 tried, each 10 % shorter): weaken the objectives that set the gains, or use `design = emulation`".into(),
+        }];
+        SynthError::Infeasible {
+            message,
+            achievable,
+        }
+    }
+
+    /// Whether the discrete-time design for the period `h` exists and its
+    /// gains are certified for the loop sampled every `h`.
+    fn discrete_certifies(&mut self, h: f64) -> bool {
+        let mut model = self.model.clone();
+        if let Some(t) = model.spec.trigger.as_mut() {
+            t.node = Trigger::Periodic { every: h };
+        }
+        let mut runner = Runner {
+            model: &model,
+            settings: self.settings,
+            log: SolverLog::default(),
+            accept_almost: false,
+        };
+        let (plan, goal) = super::plan::initial_plan(&model.spec, self.settings.default_phi);
+        let design = match runner.run(&plan, goal) {
+            Ok(Some(d)) => d,
+            _ => return false,
+        };
+        let sampled = runner.sampled_attempt(&plan_for(&model, &design, (h, h)));
+        self.log.solves += runner.log.solves;
+        matches!(sampled, Ok(Some(_)))
     }
 }
