@@ -92,6 +92,9 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
     match runner.run(&plan, goal) {
         Ok(Some(mut d)) => {
             saturation_covered(model, &mut d)?;
+            if let Some(note) = objectives::hinf::regional_note(&d) {
+                d.notes.push(note);
+            }
             if let Some(w) = gain_warning(model, &d) {
                 d.notes.push(w);
             }

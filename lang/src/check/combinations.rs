@@ -1,6 +1,6 @@
 //! Combinations of valid items the compiler does not support, rejected here
 //! with spans instead of failing after the solver ran: the saturation region
-//! with H-inf, the saturation region with a bounded disturbance and an L-inf
+//! with a bounded disturbance and an L-inf
 //! objective with neither `xi` nor `phi` fixed, and what a synthesized
 //! trigger weight needs (the compiler's `synth/trigger.rs` and
 //! `synth/theorem2.rs` are the other side of these rules).
@@ -12,7 +12,6 @@ use crate::spec::{Objective, SpannedObjective, Trigger, TriggerSynthesis, Weight
 
 /// The objectives the combination rules look at.
 struct Found<'o> {
-    hinf: Option<&'o SpannedObjective>,
     linf: Option<&'o SpannedObjective>,
     saturation: Option<&'o SpannedObjective>,
     /// Whether every objective item checked (else a missing one may only have failed).
@@ -32,24 +31,11 @@ impl Checker<'_> {
     ) {
         let find = |f: fn(&Objective) -> bool| objectives.iter().find(|o| f(&o.node));
         let found = Found {
-            hinf: find(|o| matches!(o, Objective::Hinf { .. })),
             linf: find(|o| matches!(o, Objective::Linf { .. })),
             saturation: find(|o| matches!(o, Objective::SaturationRegion { .. })),
             complete: objectives.len() == draft.objective_items.len(),
         };
         let region = found.saturation.filter(|_| levels.is_some());
-        if let (Some(sat), Some(h)) = (region, found.hinf) {
-            self.err(
-                Diagnostic::error(
-                    sat.span,
-                    "the saturation region cannot be combined with an H-inf objective",
-                )
-                .with_label("not supported together with `objective hinf`")
-                .with_secondary(h.span, "H-inf objective here")
-                .with_note("the saturation region is supported with stability, decay rate and L-inf objectives")
-                .with_help("bound the disturbance's effect with `objective linf(d -> z) ...` instead of `hinf`, or drop `objective saturation region`"),
-            );
-        }
         if let (Some(sat), Some(l), Some(_)) = (region, found.linf, disturbance_bound) {
             if matches!(
                 l.node,
@@ -186,20 +172,11 @@ mod tests {
             "objective hinf(d -> z) minimize;\nobjective decay_rate >= 0.1;",
         ));
         valid(&spec(
-            "trigger aperiodic { sampling = 0.01 .. 0.1; weight = 1; }",
-        ));
-    }
-
-    #[test]
-    fn the_saturation_region_does_not_go_with_hinf() {
-        let (m, at) = only_error_of(&spec(
             "objective hinf(d -> z) minimize;\nobjective saturation region;",
         ));
-        assert_eq!(
-            m,
-            "the saturation region cannot be combined with an H-inf objective"
-        );
-        assert_eq!(at, "objective saturation region;");
+        valid(&spec(
+            "trigger aperiodic { sampling = 0.01 .. 0.1; weight = 1; }",
+        ));
     }
 
     #[test]

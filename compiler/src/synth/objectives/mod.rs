@@ -8,7 +8,7 @@
 
 mod decay;
 pub mod discrete;
-mod hinf;
+pub mod hinf;
 mod input_norm;
 mod linf;
 mod output_norm;

@@ -53,7 +53,7 @@ impl Objective for Saturation {
             } else {
                 "the saturation region"
             };
-            return Err(BuildError::Unsupported(format!("{why} is supported with stability, decay rate and L-inf objectives, not with {kind}: add `objective input_norm(u) <= <level> for x0 = ...` or remove {kind}")));
+            return Err(BuildError::Unsupported(format!("{why} is supported with stability, decay rate, H-inf and L-inf objectives, not with {kind}: add `objective input_norm(u) <= <level> for x0 = ...` or remove {kind}")));
         }
         lmis.strict("S > 0", Expr::var(sector.s))?;
         if let Some(init) = &self.contain {
