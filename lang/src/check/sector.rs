@@ -53,7 +53,7 @@ fn primes(n: usize) -> Vec<u64> {
     let mut out: Vec<u64> = Vec::with_capacity(n);
     let mut c = 2u64;
     while out.len() < n {
-        if out.iter().all(|p| c % p != 0) {
+        if out.iter().all(|p| !c.is_multiple_of(*p)) {
             out.push(c);
         }
         c += 1;
@@ -313,7 +313,7 @@ impl Checker<'_> {
             .singular_values
             .iter()
             .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
-        if !(smin > 1e-9 * smax) {
+        if smin.is_nan() || smax.is_nan() || smin <= 1e-9 * smax {
             let names: Vec<&str> = idx.iter().map(|&k| premises[k].name.as_str()).collect();
             self.err(
                 Diagnostic::error(
@@ -384,7 +384,7 @@ impl Checker<'_> {
                     let (k, err) = (0..ys.len())
                         .map(|k| (k, (fit[k] - y[k]).abs() / scale))
                         .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-                    if !(err <= FIT_TOLERANCE) {
+                    if err.is_nan() || err > FIT_TOLERANCE {
                         let x = xs[k]
                             .iter()
                             .map(|v| format!("{v:.4}"))
