@@ -157,6 +157,8 @@ struct Solved {
     values: Vec<(String, DMatrix<f64>)>,
     /// The minimized quantity (gamma^2 or c2), when there is one.
     objective: Option<f64>,
+    /// Whether the solver reached only reduced accuracy.
+    almost: bool,
 }
 
 /// How the spec's objectives set alpha: fixed, or maximized.
@@ -236,7 +238,9 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         runner.log.build_time += t0.elapsed();
         let sol = runner.solve(&built.problem, "mode gain problem")?;
         match sol.status {
-            SolveStatus::Solved => {}
+            // A reduced-accuracy iterate is kept: the certificate re-checks
+            // every condition and decides.
+            SolveStatus::Solved | SolveStatus::AlmostSolved => {}
             s if s.is_primal_infeasible() => return Ok(None),
             s => {
                 return Err(SynthError::Solver {
@@ -336,6 +340,7 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             modes: md,
             values,
             objective,
+            almost: sol.status == SolveStatus::AlmostSolved,
         }))
     };
     let infeasible = |what: String| SynthError::Infeasible {
@@ -363,6 +368,21 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         (s, None)
     } else {
         match decay_target(&model.spec.objectives) {
+            Target::Fixed(alpha) if matches!(perf, Performance::Hinf { gamma: None, .. }) => {
+                let s = hinf_minimum(&mut attempt, &perf, alpha, settings.bisection_rel_tol)?
+                    .ok_or_else(|| {
+                        infeasible(format!(
+                            "(no gains found{}{})",
+                            if alpha > 0.0 {
+                                format!(" at decay rate {alpha}")
+                            } else {
+                                String::new()
+                            },
+                            perf_note(&perf)
+                        ))
+                    })?;
+                (s, None)
+            }
             Target::Fixed(alpha) => {
                 let s = attempt(alpha, &perf)?.ok_or_else(|| {
                     infeasible(if alpha > 0.0 {
@@ -420,15 +440,23 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         achieved.set(Quantity::FiniteTimeC2, numbers.c2);
     }
     let mut notes = vec![format!(
-        "Markov modes ({}): {} modes, conditions He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a < 0 per mode and rule pair{}",
+        "Markov modes ({}): {} modes, conditions {} < 0 per mode and rule pair{}",
         modes.design.keyword(),
         modes.len(),
+        match solved.modes.performance {
+            Performance::None => "G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a",
+            Performance::Hinf { .. } => "[[G_aij, P_a D_i, (C + E F_aj)'], [*, -gamma^2 I, G'], [*, *, -I]] (G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a)",
+            Performance::FiniteTime(_) => "[[G_aij, P_a D_i], [*, -lambda3 I]] (G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b - alpha P_a)",
+        },
         if modes.design == ModeDesign::Independent {
             "; one P and one gain set for every mode (a common quadratic Lyapunov function: the gains hold under any switching)"
         } else {
             ""
         }
     )];
+    if solved.almost {
+        notes.push("the solver reached only reduced accuracy on the chosen SDP; the certificate re-checks every condition".into());
+    }
     if let Some((f, numbers)) = solved.modes.finite_time() {
         notes.push(format!(
             "finite time: alpha = {:.6} (alpha T = {:.4}{}), lambda1 = {:.6e}, lambda2 = {:.6e}, lambda3 = {:.6e}: E x(t)' R x(t) < c2 = {:.6} on [0, {}]",
@@ -461,6 +489,72 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         verdicts: Vec::new(),
         modes: Some(solved.modes),
     })
+}
+
+/// The least H-inf bound: the SDP that minimizes gamma^2; when the solver
+/// reaches only reduced accuracy or stops there, a bisection on a fixed gamma
+/// with feasibility SDPs (relative tolerance `tol`), which are better posed
+/// when the infimum is approached only by growing gains.
+fn hinf_minimum<F>(
+    attempt: &mut F,
+    perf: &Performance,
+    alpha: f64,
+    tol: f64,
+) -> Result<Option<Solved>, SynthError>
+where
+    F: FnMut(f64, &Performance) -> Result<Option<Solved>, SynthError>,
+{
+    let first = attempt(alpha, perf);
+    let guess = match &first {
+        Ok(Some(s)) if !s.almost => return first,
+        Ok(None) => return Ok(None),
+        Ok(Some(s)) => match s.modes.performance {
+            Performance::Hinf { gamma: Some(g), .. } if g.is_finite() && g > 0.0 => g,
+            _ => 1.0,
+        },
+        Err(_) => 1.0,
+    };
+    let Performance::Hinf { from, to, .. } = *perf else {
+        return first;
+    };
+    let mut at = |g: f64| {
+        attempt(
+            alpha,
+            &Performance::Hinf {
+                from,
+                to,
+                gamma: Some(g),
+            },
+        )
+        .ok()
+        .flatten()
+        .filter(|s| !s.almost)
+    };
+    // Bracket: grow from the guess until a clean solve, then bisect.
+    let (mut lo, mut hi) = (0.0, guess);
+    let mut best = None;
+    for _ in 0..40 {
+        if let Some(s) = at(hi) {
+            best = Some(s);
+            break;
+        }
+        lo = hi;
+        hi *= 2.0;
+    }
+    let Some(mut best) = best else {
+        return first.map(|_| None);
+    };
+    while hi - lo > tol * hi {
+        let mid = 0.5 * (lo + hi);
+        match at(mid) {
+            Some(s) => {
+                best = s;
+                hi = mid;
+            }
+            None => lo = mid,
+        }
+    }
+    Ok(Some(best))
 }
 
 /// " with the hinf bound" etc., for the infeasibility message.
