@@ -199,5 +199,22 @@ mod tests {
         ));
         assert_eq!(m, "`R` must be symmetric positive definite");
         assert_eq!(at, "-1");
+        let (m, at) = only_error(&format!(
+            "{ONE_MODE}objective finite_time minimize with c1 = 1, T = 2;\nobjective decay_rate >= 1;"
+        ));
+        assert_eq!(
+            m,
+            "objective `decay_rate` together with `finite_time` is not supported with `modes`"
+        );
+        assert_eq!(at, "objective decay_rate >= 1;");
+    }
+
+    #[test]
+    fn hinf_is_accepted_with_modes() {
+        let spec = spec_with(&format!(
+            "disturbance d; D = 1; output z = x1;\n{ONE_MODE}objective hinf(d -> z) minimize;\nobjective decay_rate >= 0.1;"
+        ));
+        assert!(spec.modes.is_some());
+        assert_eq!(spec.objectives.len(), 2);
     }
 }
