@@ -462,7 +462,13 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             "finite time: alpha = {:.6} (alpha T = {:.4}{}), lambda1 = {:.6e}, lambda2 = {:.6e}, lambda3 = {:.6e}: E x(t)' R x(t) < c2 = {:.6} on [0, {}]",
             f.alpha,
             f.alpha * f.horizon,
-            if ftb_alpha.is_some() { ", given" } else { ", grid and golden section" },
+            match (ftb_alpha, &perf) {
+                (Some(_), _) => ", given",
+                (None, Performance::FiniteTime(FtbParams { c2: Some(_), .. })) => {
+                    ", the first grid point that meets the bound"
+                }
+                _ => ", grid and golden section",
+            },
             numbers.lambda1,
             numbers.lambda2,
             numbers.lambda3,
