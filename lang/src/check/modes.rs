@@ -339,8 +339,9 @@ impl<'a> Checker<'a> {
     }
 
     /// Reports what the compiler does not do with modes: objectives other
-    /// than stability and decay rate, relaxations other than basic, tanaka
-    /// and membership_mismatch (every pair), given gains, saturation,
+    /// than stability, decay rate, one hinf, or finite_time alone; relaxations
+    /// other than basic, tanaka (not with hinf or finite_time) and
+    /// membership_mismatch (every pair), given gains, saturation,
     /// sampled or event-triggered loops, and code for mode-dependent gains.
     fn modes_supported(&mut self, modes: &Modes, draft: &Draft, around: &Around<'_>) -> bool {
         let before = self.diags.len();
