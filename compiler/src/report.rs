@@ -285,6 +285,13 @@ fn objectives(model: &TsModel, design: &Design) -> BTreeMap<String, serde_json::
     for (q, v) in a.iter() {
         o.insert(q.key().to_string(), serde_json::json!(v));
     }
+    if let Some(ft) = design
+        .modes
+        .as_ref()
+        .and_then(|md| crate::synth::markov::report::finite_time(model, md))
+    {
+        o.insert("finite_time".into(), ft);
+    }
     if let Some((lo, hi)) = a.decay_bracket {
         o.insert(
             "decay_rate_bracket".into(),

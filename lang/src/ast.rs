@@ -284,8 +284,8 @@ pub enum ItemKind {
     State(Vec<VarDecl>),
     /// `input ... [saturate e];`
     Input(Vec<VarDecl>, Option<Expr>),
-    /// `disturbance ... [bound e];`
-    Disturbance(Vec<VarDecl>, Option<Expr>),
+    /// `disturbance ... [bound e | energy e];`
+    Disturbance(Vec<VarDecl>, Option<DisturbanceLimit>),
     /// `output name = expr;`
     Output(Ident, Expr),
     /// `signal name = expr;` (a named vector expression of the state)
@@ -396,4 +396,13 @@ pub struct File {
     pub items: Vec<Item>,
     /// Items with syntax errors (reported separately).
     pub broken: Vec<BrokenItem>,
+}
+
+/// The limit a `disturbance` declaration gives.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DisturbanceLimit {
+    /// `bound e`: ||w(t)|| <= e at every t.
+    Bound(Expr),
+    /// `energy e`: the integral of w(t)'w(t) over the horizon is at most e.
+    Energy(Expr),
 }

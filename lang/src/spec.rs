@@ -224,6 +224,27 @@ pub enum Objective {
         /// Initial states the region must contain (`for x0 = ...` / `in ellipsoid(R)`).
         contain: Option<InitialSet>,
     },
+    /// Finite-time boundedness (Amato et al.): x(0)' R x(0) <= c1 and the
+    /// disturbance energy at most w2 imply x(t)' R x(t) < c2 for t in [0, T]
+    /// (in the mean-square sense under Markov modes).
+    FiniteTime(FiniteTime),
+}
+
+/// The numbers of a finite-time boundedness objective
+/// (`objective finite_time minimize with c1 = .., T = .., alpha = .., R = ..;`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FiniteTime {
+    /// c2: bounded or minimized.
+    pub target: Target,
+    /// c1 > 0: the initial set x(0)' R x(0) <= c1.
+    pub c1: f64,
+    /// The horizon T > 0.
+    pub horizon: f64,
+    /// The growth rate alpha >= 0 of the Lyapunov function, if fixed (else a
+    /// fixed grid, `ALPHA_GRID_STEPS`).
+    pub alpha: Option<f64>,
+    /// The weight R (n x n, symmetric positive definite).
+    pub r: Mat,
 }
 
 /// An objective with its span.
@@ -247,11 +268,13 @@ pub enum ObjectiveKind {
     OutputNorm,
     /// Saturation region (generalized sector condition).
     SaturationRegion,
+    /// Finite-time boundedness.
+    FiniteTime,
 }
 
 impl ObjectiveKind {
     /// Every kind, in the order the language documents them.
-    pub const ALL: [ObjectiveKind; 7] = [
+    pub const ALL: [ObjectiveKind; 8] = [
         ObjectiveKind::Stability,
         ObjectiveKind::DecayRate,
         ObjectiveKind::Hinf,
@@ -259,6 +282,7 @@ impl ObjectiveKind {
         ObjectiveKind::InputNorm,
         ObjectiveKind::OutputNorm,
         ObjectiveKind::SaturationRegion,
+        ObjectiveKind::FiniteTime,
     ];
 
     /// The kind written as `keyword` after `objective`.
@@ -276,6 +300,7 @@ impl ObjectiveKind {
             ObjectiveKind::InputNorm => "input_norm",
             ObjectiveKind::OutputNorm => "output_norm",
             ObjectiveKind::SaturationRegion => "saturation",
+            ObjectiveKind::FiniteTime => "finite_time",
         }
     }
 }
@@ -297,6 +322,7 @@ impl Objective {
             Objective::InputNorm { .. } => ObjectiveKind::InputNorm,
             Objective::OutputNorm { .. } => ObjectiveKind::OutputNorm,
             Objective::SaturationRegion { .. } => ObjectiveKind::SaturationRegion,
+            Objective::FiniteTime(_) => ObjectiveKind::FiniteTime,
         }
     }
 }
@@ -642,6 +668,9 @@ pub struct Spec {
     pub disturbances: Vec<Signal>,
     /// Bound on ||w(t)||, if given.
     pub disturbance_bound: Option<f64>,
+    /// Bound w2 on the energy of w over the horizon (integral of w'w), if given
+    /// (`disturbance d energy w2;`).
+    pub disturbance_energy: Option<f64>,
     /// Performance outputs.
     pub outputs: Vec<Output>,
     /// `A`.

@@ -11,7 +11,7 @@ use tsfc::compile::{compile, Status};
 use tsfc::report::SpecInfo;
 use tsfc::synth::Settings;
 
-fn info() -> SpecInfo {
+pub(crate) fn info() -> SpecInfo {
     SpecInfo {
         path: "markov.tsf".into(),
         sha256: String::new(),
@@ -19,14 +19,14 @@ fn info() -> SpecInfo {
 }
 
 /// The report JSON of a compile, and whether it was certified.
-fn compiled(text: &str) -> (bool, Value) {
+pub(crate) fn compiled(text: &str) -> (bool, Value) {
     let model = common::model_of("markov.tsf", text);
     let c = compile(&model, info(), &Settings::default(), Default::default());
     let json = serde_json::to_value(&c.report).expect("report serializes");
     (c.status == Status::Certified, json)
 }
 
-fn matrix(v: &Value) -> DMatrix<f64> {
+pub(crate) fn matrix(v: &Value) -> DMatrix<f64> {
     let rows: Vec<Vec<f64>> = serde_json::from_value(v.clone()).expect("rows of numbers");
     let (r, c) = (rows.len(), rows.first().map_or(0, Vec::len));
     DMatrix::from_fn(r, c, |i, j| rows[i][j])

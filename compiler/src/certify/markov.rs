@@ -14,7 +14,9 @@ use super::stored::{membership_bound, stored, StoredPrecision};
 use super::{margins_of, summarize, Certificate, LmiMargin};
 use crate::model::TsModel;
 use crate::synth::markov::pairs::{conditions, PairCondition};
-use crate::synth::markov::problem::{condition_name, input_matrices};
+use crate::synth::markov::problem::{
+    condition_name, diagonal_shift, input_matrices, PerfMatrices, Performance,
+};
 use crate::synth::markov::ModesDesign;
 use crate::synth::{Design, SynthError};
 use nalgebra::DMatrix;
@@ -48,10 +50,36 @@ fn p_problem(
         .collect::<Result<Vec<_>, _>>()
         .map_err(lmi)?;
     let id = DMatrix::identity(n, n);
+    let shift = diagonal_shift(md.alpha, &md.performance);
+    let mats = PerfMatrices::of(model, &md.performance);
+    let ftb = md.finite_time();
+    if matches!(md.performance, Performance::FiniteTime(_)) && ftb.is_none() {
+        return Err(SynthError::Internal(
+            "internal error: the finite-time numbers of the design are not defined (P_a or R not positive definite)".into(),
+        ));
+    }
     for (a, mode) in modes.modes.iter().enumerate() {
         problem
             .psd(&format!("{} > 0", p_name(&mode.name)), Expr::var(p[a]), eps)
             .map_err(lmi)?;
+        if let Some((f, numbers)) = &ftb {
+            let (lower, upper) = (
+                format!("mode {} P >= lambda1 R", mode.name),
+                format!("mode {} P <= lambda2 R", mode.name),
+            );
+            let r = |s: f64| Expr::constant(&(&f.r * s));
+            let e = Expr::var(p[a])
+                .sub(r(numbers.lambda1).map_err(lmi)?)
+                .map_err(lmi)?;
+            problem.psd(&lower, e, 0.0).map_err(lmi)?;
+            let e = r(numbers.lambda2)
+                .map_err(lmi)?
+                .sub(Expr::var(p[a]))
+                .map_err(lmi)?;
+            problem.psd(&upper, e, 0.0).map_err(lmi)?;
+            nonstrict.push(lower);
+            nonstrict.push(upper);
+        }
         let y = match &md.slack[a] {
             Some(_) => {
                 let y = problem
@@ -68,7 +96,7 @@ fn p_problem(
         let g = |i: usize, j: usize| -> Result<Expr, tsf_lmi::LmiError> {
             let acl = &model.rules[i].a + &b[i] * &gains[a][j];
             let mut e = Expr::product(&id, p[a], &acl)?.he()?;
-            e = e.add(Expr::var(p[a]).scale(2.0 * md.alpha)?)?;
+            e = e.add(Expr::var(p[a]).scale(shift)?)?;
             for (c, pc) in p.iter().enumerate() {
                 let pi = modes.rates[(a, c)];
                 if pi != 0.0 {
@@ -89,6 +117,9 @@ fn p_problem(
                     .add(Expr::var(y).scale(c.slack).map_err(lmi)?)
                     .map_err(lmi)?;
             }
+            if let Some(mats) = &mats {
+                e = performance_blocks(e, mats, md, p[a], &gains[a], &c.terms, n).map_err(lmi)?;
+            }
             let name = condition_name(&mode.name, c);
             problem.nsd(&name, e, eps).map_err(lmi)?;
             if !c.strict {
@@ -97,6 +128,67 @@ fn p_problem(
         }
     }
     Ok((problem, nonstrict))
+}
+
+/// The condition's top-left block `top` bordered by the performance rows, in
+/// P variables: H-inf [[top, P_a D, (C + E F_aj)'], [*, -gamma^2 I, G'],
+/// [*, *, -I]], finite time [[top, P_a D], [*, -lambda3 I]], summed over the
+/// condition's terms (weights w_k, total k).
+fn performance_blocks(
+    top: Expr,
+    mats: &PerfMatrices,
+    md: &ModesDesign,
+    p: tsf_lmi::Var,
+    gains: &[DMatrix<f64>],
+    terms: &[(usize, usize, f64)],
+    n: usize,
+) -> Result<Expr, tsf_lmi::LmiError> {
+    let q = mats.q();
+    let k: f64 = terms.iter().map(|t| t.2).sum();
+    let pd = Expr::product(&DMatrix::identity(n, n), p, &mats.d_sum(terms))?;
+    let weight = |w: f64| Expr::constant(&(DMatrix::identity(q, q) * (-k * w)));
+    match (&md.performance, &mats.output) {
+        (Performance::Hinf { gamma, .. }, Some((c, e, g))) => {
+            let gamma = gamma.unwrap_or(f64::NAN);
+            let out = terms
+                .iter()
+                .fold(DMatrix::zeros(c.nrows(), n), |acc, &(_, j, w)| {
+                    acc + (c + e * &gains[j]) * w
+                });
+            Expr::sym_blocks(vec![
+                vec![Some(top), Some(pd), Some(Expr::constant(&out.transpose())?)],
+                vec![
+                    None,
+                    Some(weight(gamma * gamma)?),
+                    Some(Expr::constant(&(g.transpose() * k))?),
+                ],
+                vec![None, None, Some(Expr::identity(c.nrows()).scale(-k)?)],
+            ])
+        }
+        (Performance::FiniteTime(_), _) if q > 0 => Expr::sym_blocks(vec![
+            vec![Some(top), Some(pd)],
+            vec![None, Some(weight(md.lambda3)?)],
+        ]),
+        _ => Ok(top),
+    }
+}
+
+/// The last finite-time condition, e^{alpha T} (lambda2 c1 + lambda3 w2) /
+/// lambda1 < c2 for the claimed c2 (the bound, or the SDP's minimum), as a
+/// margin c2 - (that bound).
+fn finite_time_margin(md: &ModesDesign) -> Option<LmiMargin> {
+    let (f, numbers) = md.finite_time()?;
+    let claimed = f.c2.unwrap_or(f64::NAN);
+    let margin = claimed - numbers.c2;
+    let error_bound = 1e-12 * claimed.abs().max(numbers.c2.abs());
+    Some(LmiMargin {
+        name: "finite time: e^(alpha T) (lambda2 c1 + lambda3 w2) / lambda1 < c2".into(),
+        margin,
+        error_bound,
+        strict: true,
+        size: 1,
+        ok: margin > error_bound,
+    })
 }
 
 /// Margins of every condition (P) with `gains` (`eps` marks the strict ones;
@@ -121,7 +213,9 @@ fn margins(
             values.push((format!("PYP_{}", mode.name), y.clone()));
         }
     }
-    margins_of(&problem, &nonstrict, &values, &[], &|_| {})
+    let mut out = margins_of(&problem, &nonstrict, &values, &[], &|_| {})?;
+    out.extend(finite_time_margin(md));
+    Ok(out)
 }
 
 /// The certificate of a mode design, with its stored-precision re-check.

@@ -17,6 +17,8 @@ pub enum Quantity {
     InputNormBound,
     /// Certified bound on ||y(t)||.
     OutputNormBound,
+    /// Certified finite-time bound c2 on x(t)' R x(t) over [0, T].
+    FiniteTimeC2,
     /// phi used by the L-inf objective (a parameter, not a bound).
     LinfPhi,
     /// xi used by the L-inf objective (a parameter, not a bound).
@@ -32,6 +34,7 @@ impl Quantity {
             Quantity::DecayRate => "decay_rate",
             Quantity::InputNormBound => "input_norm_bound",
             Quantity::OutputNormBound => "output_norm_bound",
+            Quantity::FiniteTimeC2 => "finite_time_c2",
             Quantity::LinfPhi => "linf_phi",
             Quantity::LinfXi => "linf_xi",
         }
@@ -51,6 +54,7 @@ impl Quantity {
             Quantity::DecayRate => ObjectiveKind::DecayRate,
             Quantity::InputNormBound => ObjectiveKind::InputNorm,
             Quantity::OutputNormBound => ObjectiveKind::OutputNorm,
+            Quantity::FiniteTimeC2 => ObjectiveKind::FiniteTime,
         }
     }
 }

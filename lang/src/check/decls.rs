@@ -4,7 +4,7 @@
 
 use super::env::walk_names;
 use super::{Checker, Kind};
-use crate::ast::{Expr, Item, ItemKind, VarDecl};
+use crate::ast::{DisturbanceLimit, Expr, Item, ItemKind, VarDecl};
 use crate::diag::Diagnostic;
 use crate::eval::{FnDef, BUILTINS};
 use crate::span::{Span, Spanned};
@@ -20,6 +20,8 @@ pub(super) struct Limits<'a> {
     pub saturate: Option<&'a Expr>,
     /// `disturbance d bound <e>;`
     pub bound: Option<&'a Expr>,
+    /// `disturbance d energy <e>;`
+    pub energy: Option<&'a Expr>,
 }
 
 impl<'a> Checker<'a> {
@@ -99,6 +101,7 @@ impl<'a> Checker<'a> {
         let mut limits = Limits {
             saturate: None,
             bound: None,
+            energy: None,
         };
         for it in items {
             match &it.kind {
@@ -129,11 +132,21 @@ impl<'a> Checker<'a> {
                     }
                     self.inputs.extend(s);
                 }
-                ItemKind::Disturbance(vars, bound) => {
+                ItemKind::Disturbance(vars, limit) => {
                     let off = self.disturbances.iter().map(|s| s.len).sum();
                     let s = self.signals(vars, Kind::Disturbance, off);
-                    if let Some(e) = bound {
-                        limits.bound = Some(e);
+                    match limit {
+                        Some(DisturbanceLimit::Bound(e)) => limits.bound = Some(e),
+                        Some(DisturbanceLimit::Energy(e)) => {
+                            if let Some(first) = limits.energy.replace(e) {
+                                self.err(
+                                    Diagnostic::error(e.span, "the disturbance energy bound is given twice")
+                                        .with_secondary(first.span, "first given here")
+                                        .with_note("`energy w2` bounds the integral of w'w over every disturbance together: give it once"),
+                                );
+                            }
+                        }
+                        None => {}
                     }
                     self.disturbances.extend(s);
                 }

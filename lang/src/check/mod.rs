@@ -16,6 +16,7 @@ mod decls;
 mod discrete;
 mod dynamics;
 mod env;
+mod finite_time;
 mod gains;
 mod generatable;
 mod model;
@@ -215,6 +216,10 @@ impl<'a> Checker<'a> {
         let disturbance_bound = limits
             .bound
             .and_then(|e| self.positive(e, "the disturbance bound"));
+        let energy_given = limits.energy.is_some();
+        let disturbance_energy = limits
+            .energy
+            .and_then(|e| self.positive(e, "the disturbance energy bound"));
         let mut draft = Draft::default();
         for it in items {
             self.item(it, dims, &mut draft);
@@ -261,6 +266,17 @@ impl<'a> Checker<'a> {
                 saturated: saturation.is_some(),
             },
         );
+        let modes_span = items
+            .iter()
+            .find(|it| matches!(it.kind, ItemKind::Modes(_)))
+            .map(|it| it.span);
+        self.finite_time_fits(
+            &objectives,
+            modes_span,
+            dims.q,
+            disturbance_energy,
+            energy_given && disturbance_energy.is_none(),
+        );
         self.discrete_design_fits(
             draft.periodic_design.as_ref(),
             &objectives,
@@ -277,6 +293,7 @@ impl<'a> Checker<'a> {
             saturation,
             disturbances: self.disturbances.clone(),
             disturbance_bound,
+            disturbance_energy,
             outputs: draft.outputs,
             a: draft.a,
             b: draft.b,

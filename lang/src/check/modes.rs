@@ -339,19 +339,26 @@ impl<'a> Checker<'a> {
     }
 
     /// Reports what the compiler does not do with modes: objectives other
-    /// than stability and decay rate, relaxations other than basic, tanaka
-    /// and membership_mismatch (every pair), given gains, saturation,
+    /// than stability, decay rate, one hinf, or finite_time alone; relaxations
+    /// other than basic, tanaka (not with hinf or finite_time) and
+    /// membership_mismatch (every pair), given gains, saturation,
     /// sampled or event-triggered loops, and code for mode-dependent gains.
     fn modes_supported(&mut self, modes: &Modes, draft: &Draft, around: &Around<'_>) -> bool {
         let before = self.diags.len();
-        let note = "with `modes`, tsfc supports stability and decay-rate objectives, relaxations basic, tanaka and membership_mismatch, a continuous loop, and code for mode-independent gains (docs/limits.md)";
+        let note = "with `modes`, tsfc supports stability, decay-rate, hinf and finite_time objectives, relaxations basic, tanaka (stability and decay only) and membership_mismatch, a continuous loop, and code for mode-independent gains (docs/limits.md)";
         let unsupported = |span: Span, what: String| {
             Diagnostic::error(span, what)
                 .with_secondary(modes.span, "modes here")
                 .with_note(note)
         };
         for o in around.objectives {
-            if !matches!(o.node, Objective::Stability | Objective::DecayRate(_)) {
+            if !matches!(
+                o.node,
+                Objective::Stability
+                    | Objective::DecayRate(_)
+                    | Objective::Hinf { .. }
+                    | Objective::FiniteTime(_)
+            ) {
                 self.err(unsupported(
                     o.span,
                     format!(
@@ -360,6 +367,53 @@ impl<'a> Checker<'a> {
                     ),
                 ));
             }
+        }
+        let performance: Vec<&SpannedObjective> = around
+            .objectives
+            .iter()
+            .filter(|o| matches!(o.node, Objective::Hinf { .. } | Objective::FiniteTime(_)))
+            .collect();
+        let finite_time = performance
+            .iter()
+            .find(|o| matches!(o.node, Objective::FiniteTime(_)));
+        if let Some(ft) = finite_time {
+            if let Some(other) = around
+                .objectives
+                .iter()
+                .find(|o| o.span != ft.span && !matches!(o.node, Objective::Stability))
+            {
+                self.err(
+                    unsupported(
+                        other.span,
+                        format!(
+                            "objective `{}` together with `finite_time` is not supported with `modes`",
+                            other.node.kind()
+                        ),
+                    )
+                    .with_secondary(ft.span, "finite_time here"),
+                );
+            }
+        } else if let [first, second, ..] = performance.as_slice() {
+            self.err(
+                unsupported(
+                    second.span,
+                    "more than one `hinf` objective is not supported with `modes`".into(),
+                )
+                .with_secondary(first.span, "first one here"),
+            );
+        }
+        if let (Some(o), Relaxation::Tanaka { .. }) = (performance.first(), around.relaxation.node)
+        {
+            self.err(
+                unsupported(
+                    around.relaxation.span,
+                    format!(
+                        "relaxation `tanaka` with objective `{}` is not supported with `modes`",
+                        o.node.kind()
+                    ),
+                )
+                .with_help("use `relaxation basic;` or `relaxation membership_mismatch;`"),
+            );
         }
         if matches!(
             around.relaxation.node,

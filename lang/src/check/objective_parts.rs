@@ -161,10 +161,12 @@ impl Checker<'_> {
         self.positive(&a.value, key)
     }
 
-    /// Whether every `with` parameter is one the kind takes (only `linf` takes any).
+    /// Whether every `with` parameter is one the kind takes (`linf` and `finite_time`).
     pub(super) fn with_allowed(&mut self, o: &ObjectiveItem) -> bool {
         let allowed_with: &[&str] = if o.name.node == ObjectiveKind::Linf.keyword() {
             &["xi", "phi", "paper"]
+        } else if o.name.node == ObjectiveKind::FiniteTime.keyword() {
+            &super::finite_time::PARAMETERS
         } else {
             &[]
         };

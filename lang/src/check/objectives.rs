@@ -175,6 +175,14 @@ impl Checker<'_> {
                 };
                 Some(Objective::SaturationRegion { contain })
             }
+            ObjectiveKind::FiniteTime => {
+                if !self.expect_signals(&o, 0) {
+                    return None;
+                }
+                let target = self.goal_target(&o, "minimize", "<=");
+                let ft = self.finite_time(&o, n, target?)?;
+                Some(Objective::FiniteTime(ft))
+            }
         }
     }
 }
@@ -200,6 +208,10 @@ fn is_optimized(o: &Objective) -> bool {
                 target: Target::Optimize,
                 ..
             }
+            | Objective::FiniteTime(crate::spec::FiniteTime {
+                target: Target::Optimize,
+                ..
+            })
     )
 }
 

@@ -320,13 +320,25 @@ impl Cx {
             Rule::input_decl | Rule::disturbance_decl => {
                 let vars = self.var_list(next(&mut it, span)?)?;
                 let extra = match it.next() {
-                    Some(p) => Some(self.expr(first(p, span)?)?),
+                    Some(p) => {
+                        let energy = p.as_rule() == Rule::energy;
+                        Some((energy, self.expr(first(p, span)?)?))
+                    }
                     None => None,
                 };
                 if rule == Rule::input_decl {
-                    ItemKind::Input(vars, extra)
+                    ItemKind::Input(vars, extra.map(|(_, e)| e))
                 } else {
-                    ItemKind::Disturbance(vars, extra)
+                    ItemKind::Disturbance(
+                        vars,
+                        extra.map(|(energy, e)| {
+                            if energy {
+                                crate::ast::DisturbanceLimit::Energy(e)
+                            } else {
+                                crate::ast::DisturbanceLimit::Bound(e)
+                            }
+                        }),
+                    )
                 }
             }
             Rule::output_decl => {

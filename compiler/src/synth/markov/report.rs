@@ -4,8 +4,11 @@
 use crate::certify::Certificate;
 use crate::model::TsModel;
 use crate::report::{rows, Gain};
+use crate::synth::markov::ModesDesign;
 use crate::synth::Design;
 use serde::Serialize;
+use tsf_lang::modes::ModeDesign;
+use tsf_lang::spec::{Objective, Target};
 
 /// One mode in the report.
 #[derive(Debug, Serialize)]
@@ -80,4 +83,37 @@ pub fn sections(
         })
         .collect();
     (Some(reports), rates)
+}
+
+/// The `objectives.finite_time` section: c1, c2 (the bound the design's P_a
+/// prove), T, alpha, w2, lambda1..3, the weight R, and the bound asked for
+/// (`c2_bound`) when c2 was bounded rather than minimized.
+pub fn finite_time(model: &TsModel, md: &ModesDesign) -> Option<serde_json::Value> {
+    let (f, numbers) = md.finite_time()?;
+    let mut v = serde_json::json!({
+        "c1": f.c1,
+        "c2": numbers.c2,
+        "T": f.horizon,
+        "alpha": f.alpha,
+        "w2": f.w2,
+        "lambda1": numbers.lambda1,
+        "lambda2": numbers.lambda2,
+        "lambda3": numbers.lambda3,
+        "R": rows(&f.r),
+        "sense": match md.design {
+            ModeDesign::Dependent => "mean square (E x' R x), under the Markov chain",
+            ModeDesign::Independent => "along every switching path (a mode-independent V)",
+        },
+    });
+    let bound = model.spec.objectives.iter().find_map(|o| match &o.node {
+        Objective::FiniteTime(ft) => match ft.target {
+            Target::Fixed(c2) => Some(c2),
+            Target::Optimize => None,
+        },
+        _ => None,
+    });
+    if let Some(bound) = bound {
+        v["c2_bound"] = serde_json::json!(bound);
+    }
+    Some(v)
 }

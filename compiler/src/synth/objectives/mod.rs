@@ -49,7 +49,9 @@ pub const IMPOSE_ORDER: &[ObjectiveKind] = &[
 /// stability, which the builder imposes when nothing else implies it).
 pub fn from_spec(o: &spec::Objective, spec: &Spec, default_phi: f64) -> Option<Box<dyn Objective>> {
     Some(match o {
-        spec::Objective::Stability => return None,
+        // Stability is imposed by the builder; finite-time boundedness only
+        // exists with `modes` (synth/markov), which does not use plans.
+        spec::Objective::Stability | spec::Objective::FiniteTime(_) => return None,
         spec::Objective::DecayRate(t) => Box::new(Decay::new(*t)),
         spec::Objective::Hinf { from, to, target } => Box::new(Hinf {
             from: *from,
