@@ -1,15 +1,16 @@
 //! The end-to-end suite: one test binary (one link, one set of debug-free
 //! artifacts) whose modules are the former per-file test crates.
 
-mod common;
 mod amrr;
 mod c_codegen;
+mod common;
 mod diagnostics;
 mod event_trigger;
 mod fuzz;
 mod fuzz_pipeline;
 mod given_gains;
 mod markov;
+mod mismatch_kappa;
 mod mixed_trigger;
 mod model_consistency;
 mod monte_carlo;
