@@ -110,10 +110,12 @@ fn kappa_zero_is_basic_and_kappa_one_is_every_pair_on_the_kim_lee_map() {
 /// the input in opposite directions; rule 2 is stable with a weak input.
 /// Every pair is infeasible: Q_13 and Q_31 need f3 < -1 and f1 > 1 in the
 /// x1 direction, Q_11 needs f1 < -1. With controller memberships within 0.1
-/// of the plant's, F1 = [-3, 0], F3 = [3, 0] stabilize the loop.
+/// of the plant's, F1 = [-3, 0], F3 = [3, 0] stabilize the loop. A(x), B(x)
+/// are the exact blend on the premise range (the simulator's plant).
 fn opposite(relaxation: &str) -> String {
     format!(
         "tsf 1;\ncontroller opposite;\nstate x1, x2;\ninput u;\n\
+         A(x) = [3 * abs(x1) - 2, 0; 0, -1];\nB(x) = [0.1 * (1 - abs(x1)) - x1; 0];\n\
          premise z = x1 range -1 .. 1 {{ neg = tri(-1, -1, 0); zero = tri(-1, 0, 1); pos = tri(0, 1, 1); }}\n\
          rule R1: z is neg => A = [1, 0; 0, -1], B = [1; 0];\n\
          rule R2: z is zero => A = [-2, 0; 0, -1], B = [0.1; 0];\n\
@@ -257,6 +259,14 @@ fn the_simulation_measures_the_mismatch_and_counts_samples_above_kappa() {
         )
         .expect("write spec");
         let prepared = tsfc::sim::prepare(&path).expect("certified");
+        // The generated headers state the bound the certificate relies on.
+        assert!(
+            prepared.tables.header.relaxation.ends_with(&format!(
+                "valid while the controller's memberships are within {kappa} of the plant's"
+            )),
+            "{}",
+            prepared.tables.header.relaxation
+        );
         let o = tsfc::sim::simulate(&prepared, &Default::default()).expect("simulate");
         let m = &o.metrics;
         assert!(!m.failed, "{:?}", m.failures());
