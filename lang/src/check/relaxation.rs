@@ -163,6 +163,36 @@ mod tests {
     use crate::check::testing::*;
     use crate::spec::Relaxation;
 
+    /// A spec with `r` rules (one triangle each on x1) and `relaxation`.
+    fn rules_spec(r: usize, relaxation: &str) -> String {
+        let sets: Vec<String> = (0..r)
+            .map(|k| format!("s{k} = tri({}, {k}, {});", k as f64 - 1.0, k + 1))
+            .collect();
+        let rules: Vec<String> = (0..r)
+            .map(|k| format!("rule R{k}: x1 is s{k} => A = -2;"))
+            .collect();
+        format!(
+            "tsf 1; controller c; state x1; input u; A = -1; B = 1;\n\
+             premise x1 range 0 .. {} {{ {} }}\n{}\nrelaxation {relaxation};\n",
+            r - 1,
+            sets.join(" "),
+            rules.join("\n")
+        )
+    }
+
+    #[test]
+    fn membership_mismatch_is_bounded_in_rules() {
+        let kappa = "membership_mismatch(kappa = 0.1)";
+        assert_eq!(valid(&rules_spec(16, kappa)).rules.len(), 16);
+        let (m, at) = only_error_of(&rules_spec(17, kappa));
+        assert_eq!(
+            m,
+            "membership_mismatch with 17 rules: at most 16 rules (2 r^2 slack matrices per objective)"
+        );
+        assert_eq!(at, format!("relaxation {kappa};"));
+        assert_eq!(valid(&rules_spec(17, "basic")).rules.len(), 17);
+    }
+
     #[test]
     fn each_relaxation_with_its_parameters() {
         assert_eq!(spec_with("").relaxation.node, Relaxation::Basic);
