@@ -320,6 +320,9 @@ fn simulate(
             for f in files {
                 eprintln!("  wrote                {}", f.display());
             }
+            for w in m.warnings() {
+                eprintln!("warning: {w}");
+            }
             let failures = m.failures();
             for f in &failures {
                 eprintln!("error: {f}");

@@ -221,6 +221,10 @@ pub struct Report {
     pub verdicts: Vec<VerdictReport>,
     /// Relaxation used.
     pub relaxation: String,
+    /// What a `membership_mismatch(kappa = ..)` relaxation relies on (absent
+    /// under every other relaxation).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub membership_mismatch: Option<MismatchReport>,
     /// Margin eps of strict LMIs.
     pub lmi_margin_eps: Option<f64>,
     /// Achieved objective values.
@@ -266,6 +270,45 @@ pub struct Report {
     pub solver: SolverInfo,
     /// Timings.
     pub timings_s: Timings,
+}
+
+/// The mismatch bound of `membership_mismatch(kappa = ..)` and whether the
+/// certificate relies on it.
+#[derive(Debug, Clone, Serialize)]
+pub struct MismatchReport {
+    /// The spec's kappa.
+    pub kappa: f64,
+    /// The certificate assumes |k_j - h_j| <= kappa for every rule j at every
+    /// instant (a continuously updated controller); false when every
+    /// plant/controller pair is imposed instead (sampled or event-triggered loops).
+    pub relied_on: bool,
+    /// The assumption, or why kappa is not used, in words.
+    pub statement: String,
+}
+
+impl MismatchReport {
+    /// The report of `model`'s relaxation (None unless `membership_mismatch`).
+    pub fn of(model: &TsModel) -> Option<MismatchReport> {
+        let tsf_lang::spec::Relaxation::MembershipMismatch { kappa } = model.spec.relaxation.node
+        else {
+            return None;
+        };
+        let relied_on = crate::synth::relaxations::kappa_relied_on(model).is_some();
+        let statement = if relied_on {
+            format!(
+                "the certificate holds for controller memberships k within kappa = {kappa} of the plant's h: |k_j - h_j| <= {kappa} for every rule j at every instant (bounded-mismatch LMIs with slacks Pk, Gk, after Arino & Sala 2008)"
+            )
+        } else {
+            format!(
+                "kappa = {kappa} is not used: the controller holds its memberships from the last transmitted sample, so no kappa bounds the mismatch; every plant/controller rule pair Q_ij < 0 is imposed (sufficient for any mismatch)"
+            )
+        };
+        Some(MismatchReport {
+            kappa,
+            relied_on,
+            statement,
+        })
+    }
 }
 
 fn objectives(model: &TsModel, design: &Design) -> BTreeMap<String, serde_json::Value> {
@@ -425,6 +468,7 @@ pub fn report(
         },
         verdicts,
         relaxation: model.spec.relaxation.node.to_string(),
+        membership_mismatch: MismatchReport::of(model),
         lmi_margin_eps: design.map(|d| d.eps),
         objectives: design.map(|d| objectives(model, d)).unwrap_or_default(),
         gains: if certified {

@@ -55,6 +55,10 @@ pub const MAX_POLYA_DEGREE: usize = 4;
 /// (r + d + 1 choose d + 2) for r rules.
 pub const MAX_POLYA_LMIS: usize = 5_000;
 
+/// Most rules under `membership_mismatch(kappa = ..)`: its bounded-mismatch
+/// LMIs declare 2 r^2 slack matrices per objective family (512 at r = 16).
+pub const MAX_MISMATCH_RULES: usize = 16;
+
 /// (r + d + 1 choose d + 2): the coefficients of Polya's relaxation of degree
 /// d for r rules (saturating; `None` past `usize`).
 pub fn polya_lmis(r: usize, d: usize) -> Option<usize> {

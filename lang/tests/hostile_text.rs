@@ -98,7 +98,7 @@ fn tiny_and_huge_numbers_are_printed_short() {
         ),
         (
             "relaxation membership_mismatch(kappa = -1e-300);",
-            "`kappa` must be in [0, 1), found -1e-300",
+            "`kappa` must be in [0, 1], found -1e-300",
         ),
         (
             "trigger aperiodic { sampling = 1e-300 .. 1e-301; }",

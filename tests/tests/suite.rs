@@ -11,6 +11,7 @@ mod fuzz_pipeline;
 mod given_gains;
 mod markov;
 mod markov_performance;
+mod mismatch_kappa;
 mod mixed_trigger;
 mod model_consistency;
 mod monte_carlo;

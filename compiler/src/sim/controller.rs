@@ -38,6 +38,11 @@ pub trait Law {
     /// [`Law::command`] with the premise vector `z(x)` already computed
     /// (length p; see [`super::premise::Premises`]).
     fn command_with(&self, x: &[f64], z: &[f64], u: &mut [f64]) -> Flags;
+
+    /// Writes the normalized firing strengths `h_j(z)` the controller blends
+    /// with at state `x` into `h` (length r), with the premise vector `z` if
+    /// the caller computed it (else from `x`, as [`Law::command`] does).
+    fn strengths(&self, x: &[f64], z: Option<&[f64]>, h: &mut [f64]);
 }
 
 struct Padded<'a, const N: usize, const M: usize, const P: usize, const R: usize> {
@@ -87,11 +92,7 @@ impl<const N: usize, const M: usize, const P: usize, const R: usize> Law
     for Padded<'_, N, M, P, R>
 {
     fn command(&self, x: &[f64], u: &mut [f64]) -> Flags {
-        let xs: [f64; N] = pad(&x[..self.n.min(x.len())], 0.0);
-        let z: [f64; P] = match self.premise {
-            PremiseCode::Linear(_) => premises_linear(&self.ctrl.premise_map, &xs),
-            PremiseCode::Exprs(e) => std::array::from_fn(|p| e.get(p).map_or(0.0, |s| s.eval(x))),
-        };
+        let (xs, z) = self.premises(x);
         self.apply(&xs, &z, u)
     }
 
@@ -99,9 +100,30 @@ impl<const N: usize, const M: usize, const P: usize, const R: usize> Law
         let xs: [f64; N] = pad(&x[..self.n.min(x.len())], 0.0);
         self.apply(&xs, &pad(z, 0.0), u)
     }
+
+    fn strengths(&self, x: &[f64], z: Option<&[f64]>, h: &mut [f64]) {
+        let z: [f64; P] = match z {
+            Some(z) => pad(z, 0.0),
+            None => self.premises(x).1,
+        };
+        let (w, _) = self.ctrl.strengths(&z);
+        for (o, v) in h.iter_mut().zip(&w) {
+            *o = *v;
+        }
+    }
 }
 
 impl<const N: usize, const M: usize, const P: usize, const R: usize> Padded<'_, N, M, P, R> {
+    /// The padded state and the premise vector computed from it.
+    fn premises(&self, x: &[f64]) -> ([f64; N], [f64; P]) {
+        let xs: [f64; N] = pad(&x[..self.n.min(x.len())], 0.0);
+        let z: [f64; P] = match self.premise {
+            PremiseCode::Linear(_) => premises_linear(&self.ctrl.premise_map, &xs),
+            PremiseCode::Exprs(e) => std::array::from_fn(|p| e.get(p).map_or(0.0, |s| s.eval(x))),
+        };
+        (xs, z)
+    }
+
     fn apply(&self, xs: &[f64; N], z: &[f64; P], u: &mut [f64]) -> Flags {
         let step = self.ctrl.step_with_premises(xs, z);
         for (o, v) in u.iter_mut().zip(&step.u[..self.m]) {

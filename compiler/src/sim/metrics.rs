@@ -74,6 +74,19 @@ pub struct Metrics {
     pub out_of_region_samples: u64,
     /// The first sampling instant outside the premise region (null if none).
     pub left_region_at_s: Option<f64>,
+    /// Largest membership mismatch over the run: at each sampling instant,
+    /// max_j |h_j(x(t_k)) - k_j| with h the plant's memberships there and k
+    /// those the controller held since its last update (0 with fewer than two
+    /// updates' worth of samples).
+    pub max_membership_mismatch: f64,
+    /// The mismatch bound the certificate relies on
+    /// (`membership_mismatch(kappa = ..)` in a continuous loop).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub certified_kappa: Option<f64>,
+    /// Sampling instants whose mismatch exceeds `certified_kappa` (the run
+    /// left the certificate's assumption there).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples_above_kappa: Option<u64>,
     /// `V(x(t_end)) / V(x0)` for the certificate's Lyapunov function
     /// `V(x) = x' P x` over the controller's states (null when `x0 = 0` or
     /// the state is not finite).
@@ -130,6 +143,72 @@ impl Metrics {
             ));
         }
         out
+    }
+}
+
+impl Metrics {
+    /// Warnings about the run that do not fail it: samples whose membership
+    /// mismatch exceeds the kappa the certificate relies on.
+    pub fn warnings(&self) -> Vec<String> {
+        match (self.certified_kappa, self.samples_above_kappa) {
+            (Some(kappa), Some(above)) if above > 0 => vec![format!(
+                "the membership mismatch exceeded the certified kappa = {kappa} at {above} of {} samples (max {:.3e}): the certificate assumes |k_j - h_j| <= kappa at every instant",
+                self.samples, self.max_membership_mismatch
+            )],
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// The membership mismatch of a run: the plant's memberships at each
+/// sampling instant against those the controller holds since its last update.
+pub struct MismatchTally {
+    held: Option<Vec<f64>>,
+    max: f64,
+    above: u64,
+    kappa: Option<f64>,
+}
+
+impl MismatchTally {
+    /// A tally checking against `kappa` (the certified bound, if any).
+    pub fn new(kappa: Option<f64>) -> Self {
+        MismatchTally {
+            held: None,
+            max: 0.0,
+            above: 0,
+            kappa,
+        }
+    }
+
+    /// Records the plant's memberships `h` at a sampling instant, before the
+    /// controller's update; `sent`: the controller takes `h` from now on.
+    pub fn sample(&mut self, h: &[f64], sent: bool) {
+        if let Some(k) = &self.held {
+            let d = h
+                .iter()
+                .zip(k)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if d.is_finite() {
+                self.max = self.max.max(d);
+                if self.kappa.is_some_and(|kappa| d > kappa) {
+                    self.above += 1;
+                }
+            }
+        }
+        if sent {
+            match &mut self.held {
+                Some(k) => k.copy_from_slice(h),
+                None => self.held = Some(h.to_vec()),
+            }
+        }
+    }
+
+    /// Writes the mismatch figures into `metrics`.
+    pub fn finish(&self, metrics: &mut Metrics) {
+        metrics.max_membership_mismatch = self.max;
+        metrics.certified_kappa = self.kappa;
+        metrics.samples_above_kappa = self.kappa.map(|_| self.above);
     }
 }
 
@@ -410,6 +489,9 @@ impl Tally {
             no_rule_samples: self.no_rule,
             out_of_region_samples: self.out_of_region,
             left_region_at_s: self.left_region_at,
+            max_membership_mismatch: 0.0,
+            certified_kappa: None,
+            samples_above_kappa: None,
             lyapunov_ratio,
             diverged,
             failed: !finished || diverged || self.out_of_region > 0,

@@ -4,7 +4,7 @@
 use super::controller::{law, runtime_terms};
 use super::integrator::{Dopri5, Rk4, Stepper};
 use super::limits::step_count;
-use super::metrics::{Metrics, RunFacts, Sample, Tally, Trace};
+use super::metrics::{Metrics, MismatchTally, RunFacts, Sample, Tally, Trace};
 use super::plant::Plant;
 use super::premise::Premises;
 use super::region::Region;
@@ -318,6 +318,8 @@ pub fn run_truth(
         super::csv::header(*out, &trace.state_names, &trace.input_names).map_err(write_err)?;
     }
     let mut tally = Tally::new(n, m, &x, opts.convergence_rel_tol);
+    let mut mismatch = MismatchTally::new(crate::synth::relaxations::kappa_relied_on(model));
+    let mut h_now = vec![0.0; tables.r];
     let mut saturated = 0u64;
     let mut nonfinite_at = None;
     let mut progress = Progress::new(opts.progress, t0, t1);
@@ -331,6 +333,8 @@ pub fn run_truth(
         if let Some(p) = premises.as_mut() {
             p.eval(&x[..n], &mut z);
         }
+        controller.strengths(&x[..n], premises.as_ref().map(|_| &z[..]), &mut h_now);
+        mismatch.sample(&h_now, sent);
         if sent {
             let flags = match &premises {
                 Some(_) => controller.command_with(&x[..n], &z, &mut u),
@@ -423,6 +427,7 @@ pub fn run_truth(
         p: &prepared.p,
     };
     let (mut metrics, trace) = tally.finish(&facts, &last, trace);
+    mismatch.finish(&mut metrics);
     metrics.integrator = match &stepper {
         Stepper::Rk4(s) => format!("rk4, fixed step <= {} s", s.h),
         Stepper::Dopri5(s) => format!(

@@ -550,7 +550,7 @@ pub const INTERPRETATIONS: [&str; 5] = [
     "two-step route instead of Theorem 2 (37)-(41): gains F_j and sector gains G_j from the continuous design, then Upsilon, P, Y, L1, L2, T, xi for every sampling interval in [h_min, h_max] with the looped functional (21)",
     "sector condition evaluated at x(t_k) (the paper's N x(t_k^l) does not match u = F x(t_k))",
     "the event condition is used with the certified ceiling nu_c of the adaptive law (the proof's (25) needs nu(t_k) <= nu_c; the printed law is unbounded above), so generated code clamps nu(t_k) to [nu, nu_c]",
-    "membership mismatch: every plant/controller rule pair (i, j) is imposed (sufficient for any mismatch; kappa is not used)",
+    "membership mismatch: every plant/controller rule pair (i, j) is imposed (sufficient for any mismatch): the controller's memberships are held from the last transmitted sample, so no kappa bounds the mismatch and kappa is not used",
     "(41)'s (gamma - rho) I read as (gamma - xi) I, from (20) and (35)",
 ];
 

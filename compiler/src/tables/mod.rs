@@ -48,7 +48,8 @@ pub struct Header {
     /// Worst margin of the certificate re-checked with the tables as stored
     /// (`None` if the certificate carries no stored-precision check).
     pub stored_margin: Option<f64>,
-    /// Relaxation used.
+    /// Relaxation used (with the membership-mismatch bound the certificate
+    /// relies on, if any).
     pub relaxation: String,
     /// Certified sampling intervals [h_min, h_max] in s (equal: a period) of a
     /// loop that transmits every sample; `None` for a continuous loop or an
@@ -169,7 +170,13 @@ pub fn tables(
             min_margin: cert.min_margin,
             precision: spec.precision,
             stored_margin: cert.stored.as_ref().map(|s| s.worst_margin),
-            relaxation: spec.relaxation.node.to_string(),
+            relaxation: match crate::synth::relaxations::kappa_relied_on(model) {
+                Some(kappa) => format!(
+                    "{}; valid while the controller's memberships are within {kappa} of the plant's",
+                    spec.relaxation.node
+                ),
+                None => spec.relaxation.node.to_string(),
+            },
             sampling: design.sampled.as_ref().map(|s| s.plan.sampling),
         },
         n: model.n,

@@ -4,7 +4,7 @@
 use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Ident, Item, NamedArg};
 use crate::diag::Diagnostic;
-use crate::limits::{polya_lmis, MAX_POLYA_DEGREE, MAX_POLYA_LMIS};
+use crate::limits::{polya_lmis, MAX_MISMATCH_RULES, MAX_POLYA_DEGREE, MAX_POLYA_LMIS};
 use crate::num::Num;
 use crate::span::{Span, Spanned};
 use crate::spec::{Relaxation, RuleSpec};
@@ -45,6 +45,20 @@ impl Checker<'_> {
                     .with_label("s is the most rules that fire at once"),
                 );
             }
+        }
+        if matches!(relaxation.node, Relaxation::MembershipMismatch { .. })
+            && rules.len() > MAX_MISMATCH_RULES
+        {
+            self.err(
+                Diagnostic::error(
+                    relaxation.span,
+                    format!(
+                        "membership_mismatch with {} rules: at most {MAX_MISMATCH_RULES} rules (2 r^2 slack matrices per objective)",
+                        rules.len()
+                    ),
+                )
+                .with_help("use `tuan` or `tanaka(s = ..)` for many rules"),
+            );
         }
         if let Relaxation::Polya { d } = relaxation.node {
             let count = polya_lmis(rules.len(), d);
@@ -118,11 +132,14 @@ impl Checker<'_> {
             "membership_mismatch" => {
                 let p = self.named(args, &["kappa"], "relaxation `membership_mismatch`")?;
                 let kappa = p.get("kappa").copied().unwrap_or(0.0);
-                if !(0.0..1.0).contains(&kappa) {
-                    self.err(Diagnostic::error(
-                        span,
-                        format!("`kappa` must be in [0, 1), found {}", Num(kappa)),
-                    ));
+                if !(0.0..=1.0).contains(&kappa) {
+                    self.err(
+                        Diagnostic::error(
+                            span,
+                            format!("`kappa` must be in [0, 1], found {}", Num(kappa)),
+                        )
+                        .with_help("kappa bounds |k_j - h_j|, the difference of the controller's and the plant's membership of each rule: 0 = the same memberships, 1 = any"),
+                    );
                     return None;
                 }
                 Some(Relaxation::MembershipMismatch { kappa })
@@ -145,6 +162,36 @@ impl Checker<'_> {
 mod tests {
     use crate::check::testing::*;
     use crate::spec::Relaxation;
+
+    /// A spec with `r` rules (one triangle each on x1) and `relaxation`.
+    fn rules_spec(r: usize, relaxation: &str) -> String {
+        let sets: Vec<String> = (0..r)
+            .map(|k| format!("s{k} = tri({}, {k}, {});", k as f64 - 1.0, k + 1))
+            .collect();
+        let rules: Vec<String> = (0..r)
+            .map(|k| format!("rule R{k}: x1 is s{k} => A = -2;"))
+            .collect();
+        format!(
+            "tsf 1; controller c; state x1; input u; A = -1; B = 1;\n\
+             premise x1 range 0 .. {} {{ {} }}\n{}\nrelaxation {relaxation};\n",
+            r - 1,
+            sets.join(" "),
+            rules.join("\n")
+        )
+    }
+
+    #[test]
+    fn membership_mismatch_is_bounded_in_rules() {
+        let kappa = "membership_mismatch(kappa = 0.1)";
+        assert_eq!(valid(&rules_spec(16, kappa)).rules.len(), 16);
+        let (m, at) = only_error_of(&rules_spec(17, kappa));
+        assert_eq!(
+            m,
+            "membership_mismatch with 17 rules: at most 16 rules (2 r^2 slack matrices per objective)"
+        );
+        assert_eq!(at, format!("relaxation {kappa};"));
+        assert_eq!(valid(&rules_spec(17, "basic")).rules.len(), 17);
+    }
 
     #[test]
     fn each_relaxation_with_its_parameters() {
@@ -177,8 +224,8 @@ mod tests {
             m.starts_with("`d` must be a whole number in 0 ..= 4"),
             "{m}"
         );
-        let (m, _) = only_error("relaxation membership_mismatch(kappa = 1);");
-        assert_eq!(m, "`kappa` must be in [0, 1), found 1");
+        let (m, _) = only_error("relaxation membership_mismatch(kappa = 1.5);");
+        assert_eq!(m, "`kappa` must be in [0, 1], found 1.5");
         let (m, at) = only_error("relaxation basic(s = 1);");
         assert_eq!(m, "relaxation `basic` has no parameter `s`");
         assert_eq!(at, "s");

@@ -6,6 +6,7 @@
 
 mod basic;
 mod mismatch;
+mod mismatch_bounded;
 mod polya;
 mod tanaka;
 mod tuan;
@@ -13,19 +14,44 @@ mod tuan;
 use super::reduction::Reduction;
 use super::relaxation::{DoubleSum, Family, Sink};
 use crate::model::TsModel;
-use tsf_lang::spec::Relaxation;
+use tsf_lang::spec::{Relaxation, Trigger};
 use tsf_lmi::{LmiError, Problem};
 
-/// The implementation of a spec's relaxation.
-fn double_sum(r: Relaxation) -> Box<dyn DoubleSum> {
+/// The implementation of a spec's relaxation for `model`.
+fn double_sum(model: &TsModel, r: Relaxation) -> Box<dyn DoubleSum> {
     match r {
         Relaxation::Basic => Box::new(basic::Basic),
         Relaxation::Tanaka { s } => Box::new(tanaka::Tanaka { s }),
         Relaxation::Tuan => Box::new(tuan::Tuan),
         Relaxation::Polya { d } => Box::new(polya::Polya { d }),
-        // kappa does not relax these conditions (see mismatch.rs).
+        Relaxation::MembershipMismatch { kappa } if continuous(model) => {
+            Box::new(mismatch_bounded::MismatchBounded { kappa })
+        }
         Relaxation::MembershipMismatch { .. } => Box::new(mismatch::Mismatch),
     }
+}
+
+/// The mismatch bound kappa the certificate relies on: the spec's
+/// `membership_mismatch(kappa = ..)` in a continuous loop without modes. A sampled or
+/// event-triggered loop holds the controller's memberships from the last
+/// transmitted sample, so no kappa bounds its mismatch: every plant/controller
+/// pair is imposed there (`None`), and kappa is not used.
+pub fn kappa_relied_on(model: &TsModel) -> Option<f64> {
+    match model.spec.relaxation.node {
+        Relaxation::MembershipMismatch { kappa } if continuous(model) => Some(kappa),
+        _ => None,
+    }
+}
+
+/// Whether the bounded-mismatch LMIs apply: the controller is updated
+/// continuously (no trigger, or `trigger continuous`) and there are no Markov
+/// modes (whose conditions, `synth/markov/pairs.rs`, impose every pair).
+fn continuous(model: &TsModel) -> bool {
+    model.spec.modes.is_none()
+        && matches!(
+            model.spec.trigger.as_ref().map(|t| &t.node),
+            None | Some(Trigger::Continuous)
+        )
 }
 
 /// Imposes objective families under one relaxation and collects what the
@@ -47,9 +73,18 @@ impl<'m> Relaxer<'m> {
     /// the pair conditions are left out: they equal sums of vertex conditions
     /// (Q_ij + Q_ji = Q_ii + Q_jj) and so are implied.
     pub fn new(model: &'m TsModel, relaxation: Relaxation, eps: f64, pair_reduce: bool) -> Self {
+        Relaxer::with(model, double_sum(model, relaxation), eps, pair_reduce)
+    }
+
+    fn with(
+        model: &'m TsModel,
+        relaxation: Box<dyn DoubleSum>,
+        eps: f64,
+        pair_reduce: bool,
+    ) -> Self {
         Relaxer {
             model,
-            relaxation: double_sum(relaxation),
+            relaxation,
             eps,
             pair_reduce,
             reductions: Vec::new(),
@@ -61,12 +96,7 @@ impl<'m> Relaxer<'m> {
     /// event-triggered families, whose controller memberships are evaluated
     /// at x(t_k).
     pub fn every_pair(model: &'m TsModel, eps: f64) -> Self {
-        Relaxer::new(
-            model,
-            Relaxation::MembershipMismatch { kappa: 0.0 },
-            eps,
-            false,
-        )
+        Relaxer::with(model, Box::new(mismatch::Mismatch), eps, false)
     }
 
     /// Adds the relaxed conditions of `fam` to `problem`.
