@@ -10,6 +10,7 @@ mod fuzz;
 mod fuzz_pipeline;
 mod given_gains;
 mod markov;
+mod markov_runtime;
 mod mixed_trigger;
 mod model_consistency;
 mod monte_carlo;

@@ -261,6 +261,7 @@ impl<'a> Checker<'a> {
                 saturated: saturation.is_some(),
             },
         );
+        self.simulate_modes(modes.as_ref(), draft.simulate.as_ref());
         self.discrete_design_fits(
             draft.periodic_design.as_ref(),
             &objectives,

@@ -341,10 +341,10 @@ impl<'a> Checker<'a> {
     /// Reports what the compiler does not do with modes: objectives other
     /// than stability and decay rate, relaxations other than basic, tanaka
     /// and membership_mismatch (every pair), given gains, saturation,
-    /// sampled or event-triggered loops, and code for mode-dependent gains.
+    /// sampled or event-triggered loops.
     fn modes_supported(&mut self, modes: &Modes, draft: &Draft, around: &Around<'_>) -> bool {
         let before = self.diags.len();
-        let note = "with `modes`, tsfc supports stability and decay-rate objectives, relaxations basic, tanaka and membership_mismatch, a continuous loop, and code for mode-independent gains (docs/limits.md)";
+        let note = "with `modes`, tsfc supports stability and decay-rate objectives, relaxations basic, tanaka and membership_mismatch, and a continuous loop (docs/limits.md)";
         let unsupported = |span: Span, what: String| {
             Diagnostic::error(span, what)
                 .with_secondary(modes.span, "modes here")
@@ -391,17 +391,6 @@ impl<'a> Checker<'a> {
                 t.span,
                 "a sampled or event-triggered loop is not supported with `modes`".into(),
             ));
-        }
-        if let (Some(span), ModeDesign::Dependent) = (draft.emit_seen, modes.design) {
-            self.err(
-                unsupported(
-                    span,
-                    "code for mode-dependent gains is not generated yet".into(),
-                )
-                .with_help(
-                    "drop `emit`, or design fault-blind gains: `design = mode_independent;`",
-                ),
-            );
         }
         self.diags.len() == before
     }
@@ -521,9 +510,8 @@ mod tests {
         let (m, at) = only_error(&format!("{TWO}\nobjective input_norm(u) <= 1 for x0 = 1;"));
         assert_eq!(m, "objective `input_norm` is not supported with `modes`");
         assert!(at.starts_with("objective input_norm"));
-        let (m, at) = only_error(&format!("{TWO}\nemit rust;"));
-        assert_eq!(m, "code for mode-dependent gains is not generated yet");
-        assert_eq!(at, "emit rust;");
+        // Code is generated for both designs.
+        spec_with(&format!("{TWO}\nemit rust, c;"));
         let ok = TWO.replace("rates", "design = mode_independent; rates");
         spec_with(&format!("{ok}\nemit rust;"));
     }
