@@ -91,7 +91,11 @@ fn rust_gain_literals(text: &str) -> Vec<f64> {
             token.push(ch);
         } else {
             if !token.is_empty() && token != "-" {
-                out.push(token.parse().unwrap_or_else(|_| panic!("literal `{token}`")));
+                out.push(
+                    token
+                        .parse()
+                        .unwrap_or_else(|_| panic!("literal `{token}`")),
+                );
             }
             token.clear();
         }
@@ -210,7 +214,10 @@ fn generated_modal_c_matches_the_runtime_bit_for_bit() {
     for k in 0..3000 {
         let scale = [0.1, 1.0, 3.0, 1e6][k % 4];
         let mode = [0u8, 1, 0, 1, 2, 7, 255][k % 7];
-        cases.push((mode, [rng.uniform(-scale, scale), rng.uniform(-scale, scale)]));
+        cases.push((
+            mode,
+            [rng.uniform(-scale, scale), rng.uniform(-scale, scale)],
+        ));
     }
     for e in [f64::NAN, f64::INFINITY, -0.0, 1e308, 5e-324] {
         for mode in [0u8, 1, 2] {
@@ -253,12 +260,7 @@ fn generated_modal_c_matches_the_runtime_bit_for_bit() {
     );
     let mut input = String::new();
     for (mode, x) in &cases {
-        let _ = writeln!(
-            input,
-            "{mode} {:x} {:x}",
-            x[0].to_bits(),
-            x[1].to_bits()
-        );
+        let _ = writeln!(input, "{mode} {:x} {:x}", x[0].to_bits(), x[1].to_bits());
     }
     let input_path = dir.join("cases.txt");
     std::fs::write(&input_path, input).expect("write cases");
@@ -321,7 +323,7 @@ fn the_mode_process_occupies_modes_as_the_stationary_distribution() {
     let want = stationary(&pi);
     let text = format!(
         "{}modes {{ mode a {{ }} mode b {{ }} mode c {{ }} rates = [-1.7, 0.9, 0.8; 1, -5, 4; 1.6, 1.1, -2.7]; }}\n",
-        "tsf 1; controller c; state x; input u; A = -1; B = 1;\npremise x range -1 .. 1 { all = trap(-2, -1, 1, 2); }\nrule R: x is all => A = -1;\n"
+        "tsf 1; controller c; state x1; input u; A = -1; B = 1;\npremise x1 range -1 .. 1 { all = trap(-2, -1, 1, 2); }\nrule R: x1 is all => A = -1;\n"
     );
     let model = common::model_of("chain.tsf", &text);
     let modes = model.spec.modes.as_ref().expect("modes");
@@ -420,7 +422,11 @@ fn the_mode_plot_is_written() {
     let files = tsfc::sim::plot::plots(&o).expect("plots");
     let names: Vec<&str> = files.iter().map(|f| f.0.as_str()).collect();
     assert!(names.contains(&"twomode.modes.svg") && names.contains(&"twomode.modes.png"));
-    let svg = &files.iter().find(|f| f.0 == "twomode.modes.svg").expect("svg").1;
+    let svg = &files
+        .iter()
+        .find(|f| f.0 == "twomode.modes.svg")
+        .expect("svg")
+        .1;
     let svg = String::from_utf8_lossy(svg);
     assert!(svg.contains("0 = ok, 1 = weak"), "legend names the modes");
 }

@@ -2,11 +2,10 @@
 //! next sampling instant.
 
 use super::controller::{law, runtime_terms};
-use super::modes::{Actuation, ModeProcess, ModeTally};
-use crate::tables::Tables;
 use super::integrator::{Dopri5, Rk4, Stepper};
 use super::limits::step_count;
 use super::metrics::{Metrics, RunFacts, Sample, Tally, Trace};
+use super::modes::{Actuation, ModeProcess, ModeTally};
 use super::plant::Plant;
 use super::premise::Premises;
 use super::region::Region;
@@ -14,6 +13,7 @@ use super::signal::Signals;
 use super::source::{head, SpecSource};
 use super::trigger::sampler;
 use super::{Options, Prepared, Progress, SimError};
+use crate::tables::Tables;
 use std::io::Write;
 use std::time::Instant;
 use tsf_lang::spec::{Integrator, Monitor, Trigger};
@@ -333,9 +333,10 @@ pub fn run_truth(
                     "a spec with `modes` is simulated in a continuous loop only (no trigger override)",
                 ));
             }
-            let sim = spec.simulate.as_ref().ok_or_else(|| {
-                SimError::spec("the spec has no `simulate { ... }` block")
-            })?;
+            let sim = spec
+                .simulate
+                .as_ref()
+                .ok_or_else(|| SimError::spec("the spec has no `simulate { ... }` block"))?;
             let (mode0, seed) = super::modes::setup(modes, sim, t1 - t0)?;
             let actuation = Actuation::new(truth.modes.as_ref().unwrap_or(modes), m);
             Some(Chain {
@@ -365,8 +366,13 @@ pub fn run_truth(
     };
     let write_err = |e: std::io::Error| SimError::usage(format!("cannot write the CSV trace: {e}"));
     if let Some(out) = csv.as_mut() {
-        super::csv::header(*out, &trace.state_names, &trace.input_names, chain.is_some())
-            .map_err(write_err)?;
+        super::csv::header(
+            *out,
+            &trace.state_names,
+            &trace.input_names,
+            chain.is_some(),
+        )
+        .map_err(write_err)?;
     }
     let mut tally = Tally::new(n, m, &x, opts.convergence_rel_tol);
     let mut saturated = 0u64;
@@ -454,7 +460,7 @@ pub fn run_truth(
             if let Some((act, a)) = given {
                 act.add_given(a, &u, &mut dy[..n]);
             }
-            Ok(())
+            Ok::<(), SimError>(())
         };
         let start = sampler.continuous.then(|| x.clone());
         stepper.advance(&mut rhs, t, t_next, &mut x)?;

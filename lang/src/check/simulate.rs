@@ -336,7 +336,8 @@ mod tests {
 
     #[test]
     fn mode_settings_name_a_mode_of_the_block() {
-        let modes = "modes { mode ok { } mode weak { effectiveness = 0.5; } rates = [-1, 1; 2, -2]; }\n";
+        let modes =
+            "modes { mode ok { } mode weak { effectiveness = 0.5; } rates = [-1, 1; 2, -2]; }\n";
         let spec = spec_with(&format!(
             "{modes}simulate {{ x0 = 0; time = 0 .. 1; mode0 = weak; mode_seed = 7; }}"
         ));

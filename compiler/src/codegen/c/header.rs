@@ -114,7 +114,11 @@ extern "C" {{
                 mt.names.len()
             );
             for (a, name) in mt.names.iter().enumerate() {
-                let _ = writeln!(s, "#define {u}MODE_{} {a} /* mode `{name}` */", name.to_ascii_uppercase());
+                let _ = writeln!(
+                    s,
+                    "#define {u}MODE_{} {a} /* mode `{name}` */",
+                    name.to_ascii_uppercase()
+                );
             }
         }
         let (mode_param, mode_doc) = match t.modes {

@@ -160,7 +160,12 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         .terms
         .iter()
         .any(|x| matches!(x, TermSpec::Is { .. }));
-    let mut imports = vec![modal.as_ref().map_or(quote!(FactoredController), |_| quote!(ModalController)), quote!(Flags)];
+    let mut imports = vec![
+        modal
+            .as_ref()
+            .map_or(quote!(FactoredController), |_| quote!(ModalController)),
+        quote!(Flags),
+    ];
     if uses_membership {
         imports.push(quote!(Membership));
     }

@@ -269,7 +269,11 @@ fn modes(o: &Outcome) -> Option<Figure> {
     let panel = panel(
         o,
         "mode",
-        vec![Mark::labelled(legend.join(", "), colour(0), Shape::Line(stairs))],
+        vec![Mark::labelled(
+            legend.join(", "),
+            colour(0),
+            Shape::Line(stairs),
+        )],
     );
     Some(Figure {
         title: title(o, "Markov mode r(t)"),
