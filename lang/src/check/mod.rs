@@ -13,12 +13,12 @@
 
 mod combinations;
 mod decls;
-mod discrete;
 mod dynamics;
 mod env;
 mod gains;
 mod generatable;
 mod model;
+mod discrete;
 mod modes;
 mod monte_carlo;
 mod objective_parts;
