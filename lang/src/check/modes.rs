@@ -19,6 +19,9 @@ use std::collections::HashMap;
 /// the magnitudes of the row's entries.
 pub const ROW_SUM_TOLERANCE: f64 = 1e-9;
 
+/// Most modes a `modes` block may declare (docs/limits.md).
+pub const MAX_MODES: usize = 32;
+
 /// The checked items the modes block must be consistent with.
 pub(super) struct Around<'s> {
     pub objectives: &'s [SpannedObjective],
@@ -107,6 +110,13 @@ impl<'a> Checker<'a> {
             .iter()
             .filter(|s| matches!(s, ModesStmt::Mode { .. }))
             .count();
+        if count > MAX_MODES {
+            self.err(
+                Diagnostic::error(span, format!("{count} modes: at most {MAX_MODES}"))
+                    .with_note("generated code takes the mode as an 8-bit index, and every mode adds an n x n Lyapunov matrix and coupling blocks to the SDP"),
+            );
+            return None;
+        }
         let rates = self.rates(rates, count)?;
         ok.then_some(Modes {
             modes,
@@ -447,6 +457,18 @@ mod tests {
         assert_eq!(m.modes[1].actuator, Actuator::Effectiveness(vec![0.5]));
         assert_eq!(m.modes[1].bias, Some(vec![0.1]));
         assert_eq!(m.rates[(1, 0)], 2.0);
+    }
+
+    #[test]
+    fn at_most_max_modes() {
+        let k = super::MAX_MODES + 1;
+        let modes: String = (0..k).map(|a| format!("mode m{a} {{ }} ")).collect();
+        let rows = vec![vec!["0"; k].join(", "); k];
+        let (m, _) = only_error(&format!(
+            "modes {{ {modes} rates = [{}]; }}",
+            rows.join("; ")
+        ));
+        assert_eq!(m, format!("{k} modes: at most {}", super::MAX_MODES));
     }
 
     #[test]
