@@ -317,6 +317,19 @@ fn simulate(
                     .join(", "),
                 m.wall_time_s
             );
+            if let Some(mm) = &m.modes {
+                eprintln!(
+                    "  modes ({}, seed {}): {} jumps; {}",
+                    mm.design,
+                    mm.seed,
+                    mm.transitions,
+                    mm.modes
+                        .iter()
+                        .map(|s| format!("{} {:.1}% of the time", s.name, 100.0 * s.fraction))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
             for f in files {
                 eprintln!("  wrote                {}", f.display());
             }

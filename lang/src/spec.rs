@@ -534,6 +534,11 @@ pub struct Simulation {
     pub signals: Vec<(usize, Expr)>,
     /// Seed for random sampling patterns.
     pub seed: u64,
+    /// Initial Markov mode (`mode0 = name;`, a mode of the `modes` block;
+    /// the first mode when not given).
+    pub mode0: Option<crate::span::Spanned<String>>,
+    /// Seed of the Markov mode process (`mode_seed = k;`; `seed` when not given).
+    pub mode_seed: Option<u64>,
     /// Integrator.
     pub integrator: Integrator,
     /// Truth dynamics, if given.

@@ -155,6 +155,16 @@ static double tsf_atan_f64(double x) {
     return signbit(x) ? -r : r;
 }
 
+/* ---------------------------------------------------------------- modes */
+
+int tsf_select_mode(uint8_t mode, int k, uint8_t *flags) {
+    if ((int)mode < k) {
+        return (int)mode;
+    }
+    *flags = (uint8_t)(*flags | TSF_FLAG_MODE_OUT_OF_RANGE);
+    return 0;
+}
+
 /* ------------------------------------------------------------- triggers */
 
 int tsf_periodic_decide(uint32_t *count, uint32_t every) {

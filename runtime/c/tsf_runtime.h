@@ -41,6 +41,7 @@ extern "C" {
 #define TSF_FLAG_PREMISE_NONFINITE 4u
 #define TSF_FLAG_COMMAND_NONFINITE 8u
 #define TSF_FLAG_SATURATED 16u
+#define TSF_FLAG_MODE_OUT_OF_RANGE 32u
 
 /* TSF_REAL_FN(double, tsf_dot) is tsf_dot, TSF_REAL_FN(float, tsf_dot) is
    tsf_dotf; the type may be a macro expanding to double or float. */
@@ -167,6 +168,11 @@ uint8_t tsf_step_with_premises(const tsf_controller *c, const double *x, const d
                                double *deg, double *h, double *u);
 uint8_t tsf_step_with_premisesf(const tsf_controllerf *c, const float *x, const float *z,
                                 float *deg, float *h, float *u);
+
+/* The gain set of `mode` among k Markov-switching modes
+   (tsf_runtime::select_mode): mode itself when mode < k, else 0 with
+   TSF_FLAG_MODE_OUT_OF_RANGE or-ed into *flags. */
+int tsf_select_mode(uint8_t mode, int k, uint8_t *flags);
 
 /* Periodic trigger: transmit on the first tick and then every `every` ticks
    (0 acts as 1); *count starts at 0. */

@@ -106,6 +106,9 @@ impl Flags {
     pub const COMMAND_NONFINITE: Flags = Flags(8);
     /// At least one channel was clipped to its saturation level.
     pub const SATURATED: Flags = Flags(16);
+    /// The mode index given to a [`ModalController`](crate::ModalController)
+    /// was not one of its modes: mode 0's gains were used.
+    pub const MODE_OUT_OF_RANGE: Flags = Flags(32);
 
     /// `true` if every bit of `other` is set in `self`.
     pub const fn contains(self, other: Flags) -> bool {

@@ -11,6 +11,8 @@
 //!   with defined behaviour for non-firing premises and non-finite inputs;
 //! - [`FactoredController`]: the same step with each distinct premise term
 //!   evaluated once (what generated code runs);
+//! - [`ModalController`]: one gain set per Markov-switching mode, the active
+//!   mode an input of every step (out of range: mode 0 and a flag);
 //! - [`trigger`]: periodic, static relative, adaptive (Xu & Huang 2020) and
 //!   mixed (Amrr et al. 2019) transmission triggers.
 
@@ -35,6 +37,7 @@ pub mod controller;
 pub mod factored;
 pub mod math;
 pub mod membership;
+pub mod modal;
 mod real;
 pub mod trigger;
 
@@ -44,5 +47,6 @@ pub use controller::{
 };
 pub use factored::{factored_weights, term_degrees, FactoredController};
 pub use membership::{about_degree, Membership};
+pub use modal::{select_mode, ModalController};
 pub use real::Real;
 pub use trigger::{AdaptiveTrigger, MixedTrigger, PeriodicTrigger, RelativeTrigger, SignalTrigger};

@@ -5,6 +5,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .spec("../../specs/zhang2013_multiobjective.tsf")
         .spec("../../specs/xu2020_event_triggered.tsf")
         .spec("../../specs/inverted_pendulum.tsf")
+        .spec("../../specs/xue2024_markov_fault_tolerant.tsf")
         .emit_rust(true)
         .compile()?;
     Ok(())

@@ -51,3 +51,16 @@ fn amrr2019_specs_check_clean() {
         }
     }
 }
+
+#[test]
+fn xue2024_checks_clean() {
+    let m = check("xue2024_markov_fault_tolerant.tsf");
+    assert_eq!((m.n, m.m, m.r()), (6, 3, 3));
+    assert!(m.coverage.covered);
+    let modes = m.spec.modes.as_ref().expect("modes");
+    assert_eq!(modes.len(), 3);
+    // Rows of the restored rate matrix sum to 0.
+    for a in 0..3 {
+        assert!(modes.rates.row(a).sum().abs() < 1e-12);
+    }
+}

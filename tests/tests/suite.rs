@@ -12,6 +12,7 @@ mod given_gains;
 mod markov;
 mod markov_performance;
 mod mismatch_kappa;
+mod markov_runtime;
 mod mixed_trigger;
 mod model_consistency;
 mod monte_carlo;

@@ -1,5 +1,6 @@
 //! The CSV trace, streamed to disk while the loop runs: `t, <states>,
-//! <inputs>, transmitted`, one row per sampling instant, numbers in Rust's
+//! <inputs>, transmitted` (and `mode`, the index of the Markov mode, for a
+//! spec with `modes`), one row per sampling instant, numbers in Rust's
 //! shortest round-trip format (deterministic text). The file is written
 //! atomically: rows go to a temporary file in the target folder, renamed over
 //! the target only when the run has finished; on failure the temporary file
@@ -14,12 +15,17 @@ pub fn header(
     out: &mut dyn Write,
     state_names: &[String],
     input_names: &[String],
+    mode: bool,
 ) -> io::Result<()> {
     out.write_all(b"t")?;
     for name in state_names.iter().chain(input_names) {
         write!(out, ",{name}")?;
     }
-    out.write_all(b",transmitted\n")
+    out.write_all(if mode {
+        b",transmitted,mode\n".as_slice()
+    } else {
+        b",transmitted\n".as_slice()
+    })
 }
 
 /// Writes one number (shortest round-trip digits; see the module notes).
@@ -31,14 +37,25 @@ pub fn number(out: &mut dyn Write, v: f64) -> io::Result<()> {
     }
 }
 
-/// Writes one row.
-pub fn row(out: &mut dyn Write, t: f64, x: &[f64], u: &[f64], sent: bool) -> io::Result<()> {
+/// Writes one row (`mode`: the Markov mode index, for a spec with modes).
+pub fn row(
+    out: &mut dyn Write,
+    t: f64,
+    x: &[f64],
+    u: &[f64],
+    sent: bool,
+    mode: Option<usize>,
+) -> io::Result<()> {
     number(out, t)?;
     for &v in x.iter().chain(u) {
         out.write_all(b",")?;
         number(out, v)?;
     }
-    out.write_all(if sent { b",1\n" } else { b",0\n" })
+    out.write_all(if sent { b",1" } else { b",0" })?;
+    if let Some(a) = mode {
+        write!(out, ",{a}")?;
+    }
+    out.write_all(b"\n")
 }
 
 /// A file written through a temporary sibling and renamed into place by

@@ -27,6 +27,11 @@ pub struct Trace {
     /// `(instant, time since the previous transmission)` at each transmission
     /// after the first (thinned).
     pub gaps: Vec<(f64, f64)>,
+    /// Markov mode from each instant on: the initial mode, then each jump
+    /// (thinned; empty without modes).
+    pub modes: Vec<(f64, usize)>,
+    /// Mode names (indices of `modes`).
+    pub mode_names: Vec<String>,
 }
 
 /// Figures of merit of one run (written as `<controller>.metrics.json`).
@@ -117,6 +122,9 @@ pub struct Metrics {
     pub seed: u64,
     /// Truth plant used.
     pub plant: String,
+    /// The Markov mode process and per-mode figures (specs with `modes`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modes: Option<super::modes::ModeMetrics>,
     /// Wall-clock time of the run (not part of any deterministic output).
     #[serde(skip)]
     pub wall_time_s: f64,
@@ -504,6 +512,7 @@ impl Tally {
             monitor_step: None,
             seed: 0,
             plant: String::new(),
+            modes: None,
             wall_time_s: 0.0,
         };
         (metrics, trace)

@@ -17,7 +17,8 @@
 //! the spec ([`source`]). A certified report of the same spec gives the
 //! design without solving again ([`reuse`]). Monte Carlo campaigns
 //! ([`campaign`]) and sweeps of triggering laws with a comparison table
-//! ([`sweep`]) run many scenarios on a worker pool.
+//! ([`sweep`]) run many scenarios on a worker pool. A spec with `modes`
+//! runs under a seeded Markov mode process ([`modes`]).
 
 pub mod campaign;
 pub mod controller;
@@ -25,6 +26,7 @@ pub mod csv;
 pub mod integrator;
 pub mod limits;
 pub mod metrics;
+pub mod modes;
 pub mod plant;
 pub mod plot;
 pub mod premise;

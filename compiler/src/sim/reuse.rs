@@ -1,6 +1,6 @@
 //! Simulating a certified design without solving again: the JSON report of
 //! `tsfc compile` holds what the simulator takes from the design (the gains
-//! F_j per rule, the Lyapunov matrix P, the synthesized trigger weight
+//! F_j per rule (per mode with `modes`), the Lyapunov matrix P, the synthesized trigger weight
 //! Upsilon); everything else (premises, sets, rule centres, saturation,
 //! trigger law, scenario) comes from the spec, checked again. A report is
 //! used only when it is certified (status and certificate), was written by
@@ -13,7 +13,7 @@ use super::{source, Prepared, SimError};
 use crate::model::TsModel;
 use crate::pipeline::{self, Front};
 use crate::report::sha256_hex;
-use crate::tables::{Header, Tables};
+use crate::tables::{Header, ModeTables, Tables};
 use nalgebra::DMatrix;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -46,6 +46,13 @@ struct ReportView {
     trigger: Option<TriggerView>,
     sampled_loop: Option<SampledView>,
     stored_precision: Option<StoredView>,
+    modes: Option<Vec<ModeView>>,
+}
+
+#[derive(Debug, Deserialize)]
+struct ModeView {
+    name: String,
+    gains: Vec<GainView>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -126,11 +133,36 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
     if r.controller != spec.controller.node || (r.n, r.m) != (n, m) || named != rules {
         return Err("its controller, sizes or rules differ from the spec's".into());
     }
-    let gains = r
-        .gains
-        .iter()
-        .map(|g| matrix(&g.f, m, n, &format!("gain of {}", g.rule)).map(|_| g.f.clone()))
-        .collect::<Result<Vec<_>, _>>()?;
+    let gain_set = |gains: &[GainView]| -> Result<Vec<Vec<Vec<f64>>>, String> {
+        let named: Vec<&str> = gains.iter().map(|g| g.rule.as_str()).collect();
+        if named != rules {
+            return Err("its rules differ from the spec's".into());
+        }
+        gains
+            .iter()
+            .map(|g| matrix(&g.f, m, n, &format!("gain of {}", g.rule)).map(|_| g.f.clone()))
+            .collect()
+    };
+    let gains = gain_set(&r.gains)?;
+    let modes = match &spec.modes {
+        None => None,
+        Some(sm) => {
+            let rm = r.modes.as_ref().ok_or("it has no `modes` section")?;
+            let names: Vec<&str> = sm.modes.iter().map(|md| md.name.as_str()).collect();
+            let named: Vec<&str> = rm.iter().map(|md| md.name.as_str()).collect();
+            if names != named {
+                return Err("its modes differ from the spec's".into());
+            }
+            let sets = rm
+                .iter()
+                .map(|md| gain_set(&md.gains))
+                .collect::<Result<Vec<_>, _>>()?;
+            (sm.design == tsf_lang::modes::ModeDesign::Dependent).then(|| ModeTables {
+                names: names.iter().map(|s| s.to_string()).collect(),
+                gains: sets,
+            })
+        }
+    };
     let p = matrix(&r.p, n, n, "P")?;
     let trigger_weight = match &r.trigger {
         Some(t) => Some(matrix(&t.weight, n, n, "trigger weight")?),
@@ -172,6 +204,7 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
         precision: spec.precision,
         trigger: None,
         signal_trigger: None,
+        modes,
     };
     Ok(Prepared {
         model: model.clone(),

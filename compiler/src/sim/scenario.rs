@@ -5,6 +5,7 @@ use super::controller::{law, runtime_terms};
 use super::integrator::{Dopri5, Rk4, Stepper};
 use super::limits::step_count;
 use super::metrics::{Metrics, MismatchTally, RunFacts, Sample, Tally, Trace};
+use super::modes::{Actuation, ModeProcess, ModeTally};
 use super::plant::Plant;
 use super::premise::Premises;
 use super::region::Region;
@@ -12,11 +13,22 @@ use super::signal::Signals;
 use super::source::{head, SpecSource};
 use super::trigger::sampler;
 use super::{Options, Prepared, Progress, SimError};
+use crate::tables::Tables;
 use std::io::Write;
 use std::time::Instant;
 use tsf_lang::spec::{Integrator, Monitor, Trigger};
 use tsf_lang::Span;
 use tsf_runtime::Flags;
+
+/// The Markov mode process of a run and its bookkeeping.
+struct Chain {
+    process: ModeProcess,
+    tally: ModeTally,
+    actuation: Actuation,
+    seed: u64,
+    /// The input the plant's input term sees in the current mode.
+    u_plant: Vec<f64>,
+}
 
 /// A finished run.
 #[derive(Debug, Clone)]
@@ -298,6 +310,45 @@ pub fn run_truth(
     };
     let terms = runtime_terms(tables);
     let controller = law(tables, &terms)?;
+    // Markov modes: the chain, what each mode does to the input, and the
+    // controller of each mode (mode-dependent gains) or one for all (fault-blind).
+    let mode_tables: Vec<Tables> = tables.modes.as_ref().map_or(Vec::new(), |mt| {
+        mt.gains
+            .iter()
+            .map(|g| Tables {
+                gains: g.clone(),
+                modes: None,
+                ..tables.clone()
+            })
+            .collect()
+    });
+    let mode_laws = mode_tables
+        .iter()
+        .map(|t| law(t, &terms))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut chain = match &spec.modes {
+        Some(modes) => {
+            if plan.trigger.is_some_and(|t| *t != Trigger::Continuous) {
+                return Err(SimError::unsupported(
+                    "a spec with `modes` is simulated in a continuous loop only (no trigger override)",
+                ));
+            }
+            let sim = spec
+                .simulate
+                .as_ref()
+                .ok_or_else(|| SimError::spec("the spec has no `simulate { ... }` block"))?;
+            let (mode0, seed) = super::modes::setup(modes, sim, t1 - t0)?;
+            let actuation = Actuation::new(truth.modes.as_ref().unwrap_or(modes), m);
+            Some(Chain {
+                process: ModeProcess::new(modes, mode0, seed, t0),
+                tally: ModeTally::new(modes, mode0, t0, m),
+                actuation,
+                seed,
+                u_plant: vec![0.0; m],
+            })
+        }
+        None => None,
+    };
     let region = Region::new(model, tables);
     let mut premises = Premises::new(tables, opts.evaluator);
     let mut z = vec![0.0; tables.p];
@@ -315,7 +366,13 @@ pub fn run_truth(
     };
     let write_err = |e: std::io::Error| SimError::usage(format!("cannot write the CSV trace: {e}"));
     if let Some(out) = csv.as_mut() {
-        super::csv::header(*out, &trace.state_names, &trace.input_names).map_err(write_err)?;
+        super::csv::header(
+            *out,
+            &trace.state_names,
+            &trace.input_names,
+            chain.is_some(),
+        )
+        .map_err(write_err)?;
     }
     let mut tally = Tally::new(n, m, &x, opts.convergence_rel_tol);
     let mut mismatch = MismatchTally::new(crate::synth::relaxations::kappa_relied_on(model));
@@ -328,6 +385,15 @@ pub fn run_truth(
     // Continuous monitoring: each crossing is located to this time tolerance.
     let monitor_tol = (h * 1e-6).max(1e-12);
     let last_sent = loop {
+        // Jumps of the mode process due by now.
+        let mode = chain.as_mut().map(|c| {
+            while c.process.next_jump() <= t {
+                let at = c.process.next_jump();
+                c.process.jump();
+                c.tally.jump(at, c.process.mode());
+            }
+            c.process.mode()
+        });
         let sent = sampler.gate.decide(&x[..n]);
         let mut no_rule = false;
         if let Some(p) = premises.as_mut() {
@@ -336,9 +402,14 @@ pub fn run_truth(
         controller.strengths(&x[..n], premises.as_ref().map(|_| &z[..]), &mut h_now);
         mismatch.sample(&h_now, sent);
         if sent {
+            // The mode's controller (mode-dependent gains), else the one law.
+            let ctl = match mode {
+                Some(a) if !mode_laws.is_empty() => &mode_laws[a.min(mode_laws.len() - 1)],
+                _ => &controller,
+            };
             let flags = match &premises {
-                Some(_) => controller.command_with(&x[..n], &z, &mut u),
-                None => controller.command(&x[..n], &mut u),
+                Some(_) => ctl.command_with(&x[..n], &z, &mut u),
+                None => ctl.command(&x[..n], &mut u),
             };
             saturated += u64::from(flags.contains(Flags::SATURATED));
             no_rule = flags.contains(Flags::NO_RULE_FIRED);
@@ -358,8 +429,11 @@ pub fn run_truth(
         if let Some(obs) = observer.as_mut() {
             obs(t, &x, &u);
         }
+        if let (Some(c), Some(a)) = (chain.as_mut(), mode) {
+            c.tally.sample(a, &u);
+        }
         if let Some(out) = csv.as_mut() {
-            super::csv::row(*out, t, &x, &u, sent).map_err(write_err)?;
+            super::csv::row(*out, t, &x, &u, sent, mode).map_err(write_err)?;
         }
         if t >= t1 || nonfinite_at.is_some() {
             break sent;
@@ -369,9 +443,28 @@ pub fn run_truth(
         if t1 - t_next < 1e-9 * h {
             t_next = t1;
         }
+        // A mode jump ends the step early: the plant switches at the jump.
+        let mut jumps = false;
+        if let Some(c) = chain.as_mut() {
+            if c.process.next_jump() < t_next {
+                t_next = c.process.next_jump();
+                jumps = true;
+            }
+            if let Some(a) = mode {
+                c.actuation.plant_input(a, &u, &mut c.u_plant);
+            }
+        }
+        let (u_plant, given) = match (&chain, mode) {
+            (Some(c), Some(a)) => (&c.u_plant, Some((&c.actuation, a))),
+            _ => (&u, None),
+        };
         let mut rhs = |tt: f64, y: &[f64], dy: &mut [f64]| {
             let w = signals.at(tt)?;
-            plant.rhs(tt, y, &u, w, dy)
+            plant.rhs(tt, y, u_plant, w, dy)?;
+            if let Some((act, a)) = given {
+                act.add_given(a, &u, &mut dy[..n]);
+            }
+            Ok::<(), SimError>(())
         };
         let start = sampler.continuous.then(|| x.clone());
         stepper.advance(&mut rhs, t, t_next, &mut x)?;
@@ -398,8 +491,9 @@ pub fn run_truth(
             }
         }
         t = t_next;
-        // A located crossing ends the step early: the grid point is still ahead.
-        if !located {
+        // A located crossing or a mode jump ends the step early: the grid
+        // point is still ahead.
+        if !located && !jumps {
             k += 1;
         }
         if !x.iter().all(|v| v.is_finite()) {
@@ -450,6 +544,13 @@ pub fn run_truth(
         };
     }
     metrics.seed = plan.seed;
+    let mut trace = trace;
+    if let (Some(c), Some(modes)) = (chain, &spec.modes) {
+        let (mm, switches) = c.tally.finish(t1, modes.design.keyword(), c.seed);
+        metrics.modes = Some(mm);
+        trace.modes = switches;
+        trace.mode_names = modes.modes.iter().map(|m| m.name.clone()).collect();
+    }
     let sim_dynamics = spec.simulate.as_ref().is_some_and(|s| s.dynamics.is_some());
     metrics.plant = if dim > n || sim_dynamics {
         format!(

@@ -99,6 +99,41 @@ pub struct Tables {
     pub trigger: Option<SensorTables>,
     /// The sensor-side mixed trigger on a named signal (`trigger mixed { on = ..; }`).
     pub signal_trigger: Option<SignalSensorTables>,
+    /// Per-mode gains of a mode-dependent design (`modes { design =
+    /// mode_dependent; }`): generated code takes the active mode each step.
+    /// `None` without modes and for fault-blind (mode-independent) gains,
+    /// which are `gains` in every mode.
+    pub modes: Option<ModeTables>,
+}
+
+/// The gain sets of a mode-dependent design.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeTables {
+    /// Mode names, in the spec's order (mode index = position).
+    pub names: Vec<String>,
+    /// Gains F_aj as rows (K x R x M x N); mode 0's are [`Tables::gains`].
+    pub gains: Vec<Vec<Vec<Vec<f64>>>>,
+}
+
+/// The rows of a matrix.
+fn matrix_rows(f: &nalgebra::DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..f.nrows())
+        .map(|i| f.row(i).iter().copied().collect())
+        .collect()
+}
+
+/// The per-mode gains of a mode-dependent design, `None` otherwise.
+fn mode_tables(model: &TsModel, design: &Design) -> Option<ModeTables> {
+    let modes = model.spec.modes.as_ref()?;
+    let md = design.modes.as_ref()?;
+    (modes.design == tsf_lang::modes::ModeDesign::Dependent).then(|| ModeTables {
+        names: modes.modes.iter().map(|m| m.name.clone()).collect(),
+        gains: md
+            .gains
+            .iter()
+            .map(|set| set.iter().map(matrix_rows).collect())
+            .collect(),
+    })
 }
 
 fn component_names(signals: &[tsf_lang::spec::Signal]) -> Vec<String> {
@@ -190,15 +225,7 @@ pub fn tables(
         terms: model.terms.clone(),
         factored: FactoredTerms::new(&model.terms),
         centres: model.centers.clone(),
-        gains: design
-            .gains
-            .iter()
-            .map(|f| {
-                (0..f.nrows())
-                    .map(|i| f.row(i).iter().copied().collect())
-                    .collect()
-            })
-            .collect(),
+        gains: design.gains.iter().map(matrix_rows).collect(),
         u_max: spec
             .saturation
             .clone()
@@ -206,6 +233,7 @@ pub fn tables(
         precision: spec.precision,
         trigger: sensor::sensor_tables(model, design)?,
         signal_trigger: signal::signal_sensor_tables(model, design)?,
+        modes: mode_tables(model, design),
     })
 }
 

@@ -277,6 +277,7 @@ impl<'a> Checker<'a> {
             disturbance_energy,
             energy_given && disturbance_energy.is_none(),
         );
+        self.simulate_modes(modes.as_ref(), draft.simulate.as_ref());
         self.discrete_design_fits(
             draft.periodic_design.as_ref(),
             &objectives,

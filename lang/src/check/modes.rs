@@ -19,6 +19,9 @@ use std::collections::HashMap;
 /// the magnitudes of the row's entries.
 pub const ROW_SUM_TOLERANCE: f64 = 1e-9;
 
+/// Most modes a `modes` block may declare (docs/limits.md).
+pub const MAX_MODES: usize = 32;
+
 /// The checked items the modes block must be consistent with.
 pub(super) struct Around<'s> {
     pub objectives: &'s [SpannedObjective],
@@ -107,6 +110,13 @@ impl<'a> Checker<'a> {
             .iter()
             .filter(|s| matches!(s, ModesStmt::Mode { .. }))
             .count();
+        if count > MAX_MODES {
+            self.err(
+                Diagnostic::error(span, format!("{count} modes: at most {MAX_MODES}"))
+                    .with_note("generated code takes the mode as an 8-bit index, and every mode adds an n x n Lyapunov matrix and coupling blocks to the SDP"),
+            );
+            return None;
+        }
         let rates = self.rates(rates, count)?;
         ok.then_some(Modes {
             modes,
@@ -342,10 +352,10 @@ impl<'a> Checker<'a> {
     /// than stability, decay rate, one hinf, or finite_time alone; relaxations
     /// other than basic, tanaka (not with hinf or finite_time) and
     /// membership_mismatch (every pair), given gains, saturation,
-    /// sampled or event-triggered loops, and code for mode-dependent gains.
+    /// sampled or event-triggered loops.
     fn modes_supported(&mut self, modes: &Modes, draft: &Draft, around: &Around<'_>) -> bool {
         let before = self.diags.len();
-        let note = "with `modes`, tsfc supports stability, decay-rate, hinf and finite_time objectives, relaxations basic, tanaka (stability and decay only) and membership_mismatch, a continuous loop, and code for mode-independent gains (docs/limits.md)";
+        let note = "with `modes`, tsfc supports stability, decay-rate, hinf and finite_time objectives, relaxations basic, tanaka (stability and decay only) and membership_mismatch, and a continuous loop (docs/limits.md)";
         let unsupported = |span: Span, what: String| {
             Diagnostic::error(span, what)
                 .with_secondary(modes.span, "modes here")
@@ -446,17 +456,6 @@ impl<'a> Checker<'a> {
                 "a sampled or event-triggered loop is not supported with `modes`".into(),
             ));
         }
-        if let (Some(span), ModeDesign::Dependent) = (draft.emit_seen, modes.design) {
-            self.err(
-                unsupported(
-                    span,
-                    "code for mode-dependent gains is not generated yet".into(),
-                )
-                .with_help(
-                    "drop `emit`, or design fault-blind gains: `design = mode_independent;`",
-                ),
-            );
-        }
         self.diags.len() == before
     }
 }
@@ -512,6 +511,18 @@ mod tests {
         assert_eq!(m.modes[1].actuator, Actuator::Effectiveness(vec![0.5]));
         assert_eq!(m.modes[1].bias, Some(vec![0.1]));
         assert_eq!(m.rates[(1, 0)], 2.0);
+    }
+
+    #[test]
+    fn at_most_max_modes() {
+        let k = super::MAX_MODES + 1;
+        let modes: String = (0..k).map(|a| format!("mode m{a} {{ }} ")).collect();
+        let rows = vec![vec!["0"; k].join(", "); k];
+        let (m, _) = only_error(&format!(
+            "modes {{ {modes} rates = [{}]; }}",
+            rows.join("; ")
+        ));
+        assert_eq!(m, format!("{k} modes: at most {}", super::MAX_MODES));
     }
 
     #[test]
@@ -575,9 +586,8 @@ mod tests {
         let (m, at) = only_error(&format!("{TWO}\nobjective input_norm(u) <= 1 for x0 = 1;"));
         assert_eq!(m, "objective `input_norm` is not supported with `modes`");
         assert!(at.starts_with("objective input_norm"));
-        let (m, at) = only_error(&format!("{TWO}\nemit rust;"));
-        assert_eq!(m, "code for mode-dependent gains is not generated yet");
-        assert_eq!(at, "emit rust;");
+        // Code is generated for both designs.
+        spec_with(&format!("{TWO}\nemit rust, c;"));
         let ok = TWO.replace("rates", "design = mode_independent; rates");
         spec_with(&format!("{ok}\nemit rust;"));
     }

@@ -6,8 +6,12 @@ use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Expr, ExprKind, Ident, Item, McStmt, Setting, SimStmt, SweepStmt, Value};
 use crate::diag::Diagnostic;
 use crate::eval::Mat;
-use crate::span::Span;
+use crate::modes::Modes;
+use crate::span::{Span, Spanned};
 use crate::spec::{Dynamics, Integrator, Simulation};
+
+/// Settings of `simulate`.
+const SIM_KEYS: [&str; 6] = ["x0", "time", "seed", "integrator", "mode0", "mode_seed"];
 
 /// What the statements of a `simulate` block set so far.
 struct Scenario<'a> {
@@ -15,6 +19,8 @@ struct Scenario<'a> {
     time: Option<(f64, f64, f64)>,
     signals: Vec<(usize, Expr)>,
     seed: u64,
+    mode0: Option<Spanned<String>>,
+    mode_seed: Option<u64>,
     integrator: Integrator,
     dynamics: Option<Dynamics>,
     /// The `monte_carlo` block (checked once the rest of the scenario is known).
@@ -48,6 +54,8 @@ impl Checker<'_> {
             time: None,
             signals: Vec::new(),
             seed: 0,
+            mode0: None,
+            mode_seed: None,
             integrator: Integrator::Rk4,
             dynamics: None,
             monte_carlo: None,
@@ -128,6 +136,8 @@ impl Checker<'_> {
             time,
             signals: sc.signals,
             seed: sc.seed,
+            mode0: sc.mode0,
+            mode_seed: sc.mode_seed,
             integrator: sc.integrator,
             dynamics: sc.dynamics,
             span,
@@ -168,13 +178,39 @@ impl Checker<'_> {
                     sc.ok = false;
                 }
             }
-            "seed" => match self.setting_scalar(s) {
-                Some(v) if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 => sc.seed = v as u64,
+            "seed" | "mode_seed" => match self.setting_scalar(s) {
+                Some(v) if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 => {
+                    if s.key.node == "seed" {
+                        sc.seed = v as u64;
+                    } else {
+                        sc.mode_seed = Some(v as u64);
+                    }
+                }
                 Some(_) => self.err(Diagnostic::error(
                     s.span,
-                    "the seed is a non-negative whole number",
+                    format!("`{}` is a non-negative whole number", s.key.node),
                 )),
                 None => sc.ok = false,
+            },
+            "mode0" => match &s.value {
+                Value::Expr(
+                    e @ Expr {
+                        kind: ExprKind::Name(w),
+                        ..
+                    },
+                ) => {
+                    sc.mode0 = Some(Spanned {
+                        node: w.clone(),
+                        span: e.span,
+                    })
+                }
+                _ => {
+                    self.err(
+                        Diagnostic::error(s.span, "`mode0` names a mode")
+                            .with_help("e.g. `mode0 = normal;` with `mode normal { }` in `modes`"),
+                    );
+                    sc.ok = false;
+                }
             },
             "integrator" => match &s.value {
                 Value::Expr(Expr {
@@ -191,15 +227,38 @@ impl Checker<'_> {
                 ),
             },
             other => {
-                let keys = ["x0", "time", "seed", "integrator"];
                 self.err(unknown_choice(
                     s.key.span,
                     "simulate setting",
                     "settings",
                     other,
-                    &keys,
+                    &SIM_KEYS,
                 ));
                 sc.ok = false;
+            }
+        }
+    }
+
+    /// The mode settings of `simulate` against the `modes` block: `mode0`
+    /// names one of its modes, and neither setting is given without modes.
+    pub(super) fn simulate_modes(&mut self, modes: Option<&Modes>, sim: Option<&Simulation>) {
+        let Some(sim) = sim else { return };
+        match modes {
+            None => {
+                if let Some(m0) = &sim.mode0 {
+                    self.err(
+                        Diagnostic::error(m0.span, "`mode0` needs a `modes` block")
+                            .with_help("declare the modes: `modes { mode normal { } ... }`"),
+                    );
+                }
+            }
+            Some(modes) => {
+                if let Some(m0) = &sim.mode0 {
+                    let names: Vec<&str> = modes.modes.iter().map(|m| m.name.as_str()).collect();
+                    if !names.contains(&m0.node.as_str()) {
+                        self.err(unknown_choice(m0.span, "mode", "modes", &m0.node, &names));
+                    }
+                }
             }
         }
     }
@@ -273,6 +332,30 @@ mod tests {
         assert_eq!(at, "steps");
         let (m, _) = only_error("simulate { x0 = 0; x0 = 1; time = 0 .. 1; }");
         assert_eq!(m, "`x0` is given twice");
+    }
+
+    #[test]
+    fn mode_settings_name_a_mode_of_the_block() {
+        let modes =
+            "modes { mode ok { } mode weak { effectiveness = 0.5; } rates = [-1, 1; 2, -2]; }\n";
+        let spec = spec_with(&format!(
+            "{modes}simulate {{ x0 = 0; time = 0 .. 1; mode0 = weak; mode_seed = 7; }}"
+        ));
+        let s = spec.simulate.expect("a scenario");
+        assert_eq!(s.mode0.map(|m| m.node), Some("weak".to_string()));
+        assert_eq!(s.mode_seed, Some(7));
+        let (m, at) = only_error(&format!(
+            "{modes}simulate {{ x0 = 0; time = 0 .. 1; mode0 = wek; }}"
+        ));
+        assert_eq!(m, "unknown mode `wek`");
+        assert_eq!(at, "wek");
+        let (m, at) = only_error("simulate { x0 = 0; time = 0 .. 1; mode0 = ok; }");
+        assert_eq!(m, "`mode0` needs a `modes` block");
+        assert_eq!(at, "ok");
+        let (m, _) = only_error(&format!(
+            "{modes}simulate {{ x0 = 0; time = 0 .. 1; mode_seed = -1; }}"
+        ));
+        assert_eq!(m, "`mode_seed` is a non-negative whole number");
     }
 
     #[test]

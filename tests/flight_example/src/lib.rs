@@ -24,3 +24,9 @@ pub mod event_triggered {
 pub mod pendulum {
     include!(concat!(env!("OUT_DIR"), "/inverted_pendulum.rs"));
 }
+
+/// Xue et al. (2024) flexible spacecraft with Markov-switching actuator faults:
+/// mode-dependent gains, the step takes the active mode (3 rules, 3 modes).
+pub mod markov {
+    include!(concat!(env!("OUT_DIR"), "/xue_markov.rs"));
+}

@@ -103,6 +103,31 @@ extern "C" {{
         for (name, bit, doc) in FLAGS {
             let _ = writeln!(s, "#define {u}FLAG_{name} {bit}u /* {doc} */");
         }
+        if let Some(mt) = &t.modes {
+            let _ = writeln!(
+                s,
+                "#define {u}FLAG_MODE_OUT_OF_RANGE 32u /* the mode given to step was >= {u}K: mode 0's gains were used */"
+            );
+            let _ = writeln!(
+                s,
+                "\n#define {u}K {} /* Markov-switching modes (gain sets) */",
+                mt.names.len()
+            );
+            for (a, name) in mt.names.iter().enumerate() {
+                let _ = writeln!(
+                    s,
+                    "#define {u}MODE_{} {a} /* mode `{name}` */",
+                    name.to_ascii_uppercase()
+                );
+            }
+        }
+        let (mode_param, mode_doc) = match t.modes {
+            Some(_) => (
+                "uint8_t mode, ",
+                format!(" in mode `mode` (0 .. {u}K - 1, from fault detection; a mode >= {u}K uses mode 0's gains and sets {u}FLAG_MODE_OUT_OF_RANGE)"),
+            ),
+            None => ("", String::new()),
+        };
         let _ = write!(
             s,
             r#"
@@ -116,10 +141,10 @@ typedef struct {p}t {{
 void {p}init({p}t *s);
 /* Premise vector z of state x ({u}P components). */
 void {p}premises(const {real} x[{u}N], {real} z[]);
-/* One control step: z from x, then {p}step_with_premises. */
-void {p}step({p}t *s, const {real} x[{u}N], {real} u[{u}M]);
+/* One control step{mode_doc}: z from x, then {p}step_with_premises. */
+void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]);
 /* One control step with premises z computed by the caller. */
-void {p}step_with_premises({p}t *s, const {real} x[{u}N], const {real} z[], {real} u[{u}M]);
+void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]);
 /* Flags of the last step. */
 uint8_t {p}flags(const {p}t *s);
 /* Nonzero if the last command was forced to zero by a non-finite input. */

@@ -64,14 +64,30 @@ impl Gen<'_> {
             flat_rows(&padded(&t.centres, pd))
         );
         let mut gains = Vec::new();
-        for (f, name) in t.gains.iter().zip(&t.rule_names) {
-            gains.push(format!("    /* {name} */\n{}", flat_rows(f)));
+        match &t.modes {
+            Some(mt) => {
+                for (set, mode) in mt.gains.iter().zip(&mt.names) {
+                    for (f, name) in set.iter().zip(&t.rule_names) {
+                        gains.push(format!("    /* mode {mode}, {name} */\n{}", flat_rows(f)));
+                    }
+                }
+                let _ = writeln!(
+                    s,
+                    "/* PDC gains F_aj ({u}M x {u}N, row-major): per mode, one block per rule. */\nstatic const {real} {p}gains[{u}K * {u}R * {u}M * {u}N] = {{\n{}\n}};\n",
+                    gains.join(",\n")
+                );
+            }
+            None => {
+                for (f, name) in t.gains.iter().zip(&t.rule_names) {
+                    gains.push(format!("    /* {name} */\n{}", flat_rows(f)));
+                }
+                let _ = writeln!(
+                    s,
+                    "/* PDC gains F_j ({u}M x {u}N, row-major), one block per rule. */\nstatic const {real} {p}gains[{u}R * {u}M * {u}N] = {{\n{}\n}};\n",
+                    gains.join(",\n")
+                );
+            }
         }
-        let _ = writeln!(
-            s,
-            "/* PDC gains F_j ({u}M x {u}N, row-major), one block per rule. */\nstatic const {real} {p}gains[{u}R * {u}M * {u}N] = {{\n{}\n}};\n",
-            gains.join(",\n")
-        );
         let _ = writeln!(
             s,
             "/* Saturation levels (INFINITY = unlimited). */\nstatic const {real} {p}u_max[{u}M] = {};\n",
@@ -118,14 +134,9 @@ static const int {p}rule_factors[{u}R + 1] = {{{firsts}}};
 /* Operating points of `about` terms. */
 static const {real} {p}about_points[{np}] = {pts};
 
-/* Everything the runtime's step reads. */
-static const {u}RT(tsf_controller) {p}tables = {{
-    {u}N, {u}M, {u}P, {u}R, {d},
-    {p}terms, {p}factors, {p}rule_factors, {p}about_points,
-    {p}centres, {p}gains, {p}u_max
-}};
-
+{descriptor}
 "#,
+            descriptor = self.descriptor(f.terms.len()),
             nt = terms.len(),
             terms = terms.join(",\n"),
             nf = factors.len(),
@@ -133,9 +144,34 @@ static const {u}RT(tsf_controller) {p}tables = {{
             firsts = firsts.join(", "),
             np = points.len(),
             pts = list(&points),
-            d = f.terms.len(),
         );
         s
+    }
+
+    /// The descriptor(s) the runtime's step reads: `<name>_tables`, or one
+    /// per mode `<name>_tables[K]` (each pointing at its mode's gains).
+    fn descriptor(&self, d: usize) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let entry = |gains: String| {
+            format!(
+                "{{\n    {u}N, {u}M, {u}P, {u}R, {d},\n    {p}terms, {p}factors, {p}rule_factors, {p}about_points,\n    {p}centres, {gains}, {p}u_max\n}}"
+            )
+        };
+        match &self.t.modes {
+            Some(mt) => {
+                let entries: Vec<String> = (0..mt.names.len())
+                    .map(|a| entry(format!("&{p}gains[{a} * {u}R * {u}M * {u}N]")))
+                    .collect();
+                format!(
+                    "/* Everything the runtime's step reads, per mode (its gains). */\nstatic const {u}RT(tsf_controller) {p}tables[{u}K] = {{\n{}\n}};\n",
+                    entries.join(",\n")
+                )
+            }
+            None => format!(
+                "/* Everything the runtime's step reads. */\nstatic const {u}RT(tsf_controller) {p}tables = {};\n",
+                entry(format!("{p}gains"))
+            ),
+        }
     }
 
     /// `name_premises`: `z = L x` or straight-line premise expressions.

@@ -11,6 +11,18 @@ impl Gen<'_> {
         let real = format!("{u}REAL");
         let pd = self.pd;
         let dd = self.t.factored.terms.len().max(1);
+        let (mode_param, mode_arg, call) = match self.t.modes {
+            Some(_) => (
+                "uint8_t mode, ",
+                "mode, ",
+                format!("uint8_t flags = 0u;\n    const int a = tsf_select_mode(mode, {u}K, &flags);\n    s->flags = (uint8_t)({u}RT(tsf_step_with_premises)(&{p}tables[a], x, z, deg, s->h, u) | flags);"),
+            ),
+            None => (
+                "",
+                "",
+                format!("s->flags = {u}RT(tsf_step_with_premises)(&{p}tables, x, z, deg, s->h, u);"),
+            ),
+        };
         format!(
             r#"void {p}init({p}t *s) {{
     int i;
@@ -20,15 +32,15 @@ impl Gen<'_> {
     s->flags = 0;
 }}
 
-void {p}step_with_premises({p}t *s, const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
+void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
     {real} deg[{dd}]; /* degrees of the distinct premise terms */
-    s->flags = {u}RT(tsf_step_with_premises)(&{p}tables, x, z, deg, s->h, u);
+    {call}
 }}
 
-void {p}step({p}t *s, const {real} x[{u}N], {real} u[{u}M]) {{
+void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
     {real} z[{pd}];
     {p}premises(x, z);
-    {p}step_with_premises(s, x, z, u);
+    {p}step_with_premises(s, {mode_arg}x, z, u);
 }}
 
 uint8_t {p}flags(const {p}t *s) {{

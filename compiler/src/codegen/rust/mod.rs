@@ -119,14 +119,16 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         rule_refs.push(quote!(&#ident));
     }
     let d = Literal::usize_unsuffixed(t.factored.terms.len());
+    let modal = Modal::of(t);
+    let mode_arg = modal.as_ref().map(|_| quote!(mode,));
     let (premise_map, step_body, premise_fn) = match &t.premise {
-        PremiseCode::Linear(l) => (matrix(l, prec), quote!(TABLE.step(x)), quote!()),
+        PremiseCode::Linear(l) => (matrix(l, prec), quote!(TABLE.step(#mode_arg x)), quote!()),
         PremiseCode::Exprs(exprs) => {
             let zero_rows: Vec<Vec<f64>> = (0..t.p).map(|_| vec![0.0; t.n]).collect();
             let items = exprs.iter().map(|e| sym(e, prec));
             (
                 matrix(&zero_rows, prec),
-                quote!(TABLE.step_with_premises(x, &premises(x))),
+                quote!(TABLE.step_with_premises(#mode_arg x, &premises(x))),
                 quote! {
                     /// The premise variables z as functions of the state (from the spec).
                     #[allow(clippy::approx_constant, clippy::excessive_precision)]
@@ -138,9 +140,16 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         }
     };
     let centres = matrix(&t.centres, prec);
-    let gains = {
-        let items = t.gains.iter().map(|g| matrix(g, prec));
+    let gain_set = |set: &[Vec<Vec<f64>>]| {
+        let items = set.iter().map(|g| matrix(g, prec));
         quote!([#(#items),*])
+    };
+    let gains = match &t.modes {
+        Some(mt) => {
+            let sets = mt.gains.iter().map(|set| gain_set(set));
+            quote!([#(#sets),*])
+        }
+        None => gain_set(&t.gains),
     };
     let u_max = array(&t.u_max, prec);
     let state_doc = format!("State order: {}.", t.state_names.join(", "));
@@ -151,7 +160,12 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         .terms
         .iter()
         .any(|x| matches!(x, TermSpec::Is { .. }));
-    let mut imports = vec![quote!(FactoredController), quote!(Flags)];
+    let mut imports = vec![
+        modal
+            .as_ref()
+            .map_or(quote!(FactoredController), |_| quote!(ModalController)),
+        quote!(Flags),
+    ];
     if uses_membership {
         imports.push(quote!(Membership));
     }
@@ -162,6 +176,38 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         imports.push(quote!(Term));
     }
     let sampling = sampling_consts(t.header.sampling);
+    let (table_ty, table_ctor, mode_consts, step_sig, step_doc, mode_accessor) = match &modal {
+        Some(md) => (
+            quote!(ModalController<'static, #ty, N, M, P, R, D, K>),
+            quote!(ModalController),
+            md.consts.clone(),
+            quote!(pub fn step(&mut self, mode: u8, x: &[#ty; N]) -> [#ty; M]),
+            quote! {
+                /// One control update in mode `mode` (an index of `MODE_NAMES`, from
+                /// fault detection): the saturated command for state `x` with that
+                /// mode's gains. Never panics; NaN or infinite states give a zero
+                /// command and a fault flag; a mode `>= K` uses mode 0's gains and
+                /// raises `Flags::MODE_OUT_OF_RANGE`.
+            },
+            quote! {
+                /// Whether the last step was given a mode `>= K` (mode 0's gains used).
+                pub fn mode_out_of_range(&self) -> bool {
+                    self.flags.contains(Flags::MODE_OUT_OF_RANGE)
+                }
+            },
+        ),
+        None => (
+            quote!(FactoredController<'static, #ty, N, M, P, R, D>),
+            quote!(FactoredController),
+            quote!(),
+            quote!(pub fn step(&mut self, x: &[#ty; N]) -> [#ty; M]),
+            quote! {
+                /// One control update: the saturated command for state `x`.
+                /// Never panics; NaN or infinite states give a zero command and a fault flag.
+            },
+            quote!(),
+        ),
+    };
     let tokens = quote! {
         use tsf_runtime::{#(#imports),*};
 
@@ -175,13 +221,14 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         pub const R: usize = #r;
         /// Number of distinct premise terms (each evaluated once per step).
         pub const D: usize = #d;
+        #mode_consts
         #sampling
 
         #(#statics)*
 
         /// The controller's tables, certified by tsfc.
         #[allow(clippy::approx_constant, clippy::excessive_precision, clippy::unreadable_literal)]
-        pub static TABLE: FactoredController<'static, #ty, N, M, P, R, D> = FactoredController {
+        pub static TABLE: #table_ty = #table_ctor {
             premise_map: #premise_map,
             terms: [#(#term_items),*],
             rules: [#(#rule_refs),*],
@@ -214,9 +261,8 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
                 Controller { flags: Flags::NONE, strengths: [0.0; R] }
             }
 
-            /// One control update: the saturated command for state `x`.
-            /// Never panics; NaN or infinite states give a zero command and a fault flag.
-            pub fn step(&mut self, x: &[#ty; N]) -> [#ty; M] {
+            #step_doc
+            #step_sig {
                 let s = #step_body;
                 self.flags = s.flags;
                 self.strengths = s.h;
@@ -247,6 +293,8 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
             pub fn strengths(&self) -> &[#ty; R] {
                 &self.strengths
             }
+
+            #mode_accessor
         }
 
         impl Default for Controller {
@@ -259,6 +307,28 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     Ok(format!("{}{body}", header(t)))
 }
 
+/// The mode constants of a mode-dependent design (`K`, `MODE_NAMES`).
+struct Modal {
+    consts: TokenStream,
+}
+
+impl Modal {
+    /// `Some` when the tables carry per-mode gains.
+    fn of(t: &Tables) -> Option<Self> {
+        let mt = t.modes.as_ref()?;
+        let k = Literal::usize_unsuffixed(mt.names.len());
+        let names = mt.names.iter().map(|n| Literal::string(n));
+        Some(Modal {
+            consts: quote! {
+                /// Number of Markov-switching modes (gain sets).
+                pub const K: usize = #k;
+                /// Mode names: `step`'s `mode` argument indexes this list.
+                pub const MODE_NAMES: [&str; K] = [#(#names),*];
+            },
+        })
+    }
+}
+
 /// The header comment (no timestamps, no absolute paths).
 fn header(t: &Tables) -> String {
     let h = &t.header;
@@ -267,6 +337,13 @@ fn header(t: &Tables) -> String {
         "// Controller `{}`: {} states, {} inputs, {} rules, {} premise variables; relaxation {}.\n",
         t.name, t.n, t.m, t.r, t.p, h.relaxation
     ));
+    if let Some(mt) = &t.modes {
+        s.push_str(&format!(
+            "// Mode-dependent gains: {} modes ({}); `step` takes the active mode (from fault detection).\n",
+            mt.names.len(),
+            mt.names.join(", ")
+        ));
+    }
     if t.trigger.is_some() {
         s.push_str(&format!(
             "// Controller-side role of the event-triggered loop: `step` is fed the received x(t_k),\n// the last state transmitted by the sensor module `{}`; memberships\n// and feedback are evaluated at x(t_k), and the command is held between transmissions.\n",

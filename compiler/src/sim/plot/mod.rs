@@ -12,7 +12,9 @@
 //!   `+u_bar`/`-u_bar` in red when the channel is limited;
 //! - `events`: top, a raster with one tick per transmission; bottom, the
 //!   inter-event time (time since the previous transmission) at each
-//!   transmission; the trigger law in the caption.
+//!   transmission; the trigger law in the caption;
+//! - `modes` (specs with `modes`): the Markov mode r(t) as a staircase, the
+//!   time share of each mode in the caption.
 //!
 //! A run that diverges or goes non-finite still gives readable figures: the
 //! y-range comes from the finite values and is clipped when they run away
@@ -229,14 +231,70 @@ fn events(o: &Outcome) -> Figure {
     }
 }
 
+/// The Markov mode r(t) as a staircase (mode index on the y axis, the
+/// names in the legend), for a spec with `modes`.
+fn modes(o: &Outcome) -> Option<Figure> {
+    let tr = &o.trace;
+    let mm = o.metrics.modes.as_ref()?;
+    let (_, t1) = span(o);
+    let mut stairs = Vec::with_capacity(2 * tr.modes.len() + 1);
+    for (k, &(t, a)) in tr.modes.iter().enumerate() {
+        let y = a as f64;
+        if let Some(&(_, prev)) = k.checked_sub(1).and_then(|j| tr.modes.get(j)) {
+            stairs.push((t, prev as f64));
+        }
+        stairs.push((t, y));
+    }
+    if let Some(&(_, a)) = tr.modes.last() {
+        stairs.push((t1, a as f64));
+    }
+    let legend: Vec<String> = tr
+        .mode_names
+        .iter()
+        .enumerate()
+        .map(|(a, name)| format!("{a} = {name}"))
+        .collect();
+    let mut caption = caption(o);
+    caption.push(format!(
+        "{} gains; mode process seed {}, {} jumps; time share {}",
+        mm.design,
+        mm.seed,
+        mm.transitions,
+        mm.modes
+            .iter()
+            .map(|m| format!("{} {:.1}%", m.name, 100.0 * m.fraction))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    let panel = panel(
+        o,
+        "mode",
+        vec![Mark::labelled(
+            legend.join(", "),
+            colour(0),
+            Shape::Line(stairs),
+        )],
+    );
+    Some(Figure {
+        title: title(o, "Markov mode r(t)"),
+        caption,
+        x_label: "time [s]".into(),
+        panels: vec![panel],
+    })
+}
+
 /// The plot files of a run: `(file name, bytes)`.
 pub fn plots(o: &Outcome) -> Result<Vec<(String, Vec<u8>)>, SimError> {
     let mut files = Vec::new();
-    for (fig, tag) in [
+    let mut figures = vec![
         (states(o), "states"),
         (inputs(o), "inputs"),
         (events(o), "events"),
-    ] {
+    ];
+    if let Some(f) = modes(o) {
+        figures.push((f, "modes"));
+    }
+    for (fig, tag) in figures {
         let (svg, png) = chart::render(&fig)?;
         files.push((format!("{}.{tag}.svg", o.name), svg));
         files.push((format!("{}.{tag}.png", o.name), png));
