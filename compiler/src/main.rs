@@ -218,6 +218,9 @@ fn compile(
     if front.checked.model.is_none() {
         return ExitCode::from(exit::SPEC);
     }
+    if let Some(code) = tsfc::adaptive::cli::compile(&front, out) {
+        return ExitCode::from(code);
+    }
     let run = match front.compile(&tsfc::synth::Settings::default()) {
         Ok(r) => r,
         Err(e) => return fail(e),
@@ -289,6 +292,17 @@ fn simulate(
 ) -> ExitCode {
     /// The run went non-finite, diverged or left the premise region.
     const RUN_FAILED: u8 = 4;
+    if let Ok(front) = pipeline::read(path) {
+        if front.checked.model.is_some() {
+            let opts = tsfc::adaptive::sim::Options {
+                horizon,
+                x0: x0.clone(),
+            };
+            if let Some(code) = tsfc::adaptive::cli::simulate(&front, out, &opts) {
+                return ExitCode::from(code);
+            }
+        }
+    }
     let run = || -> Result<(tsfc::sim::Outcome, Vec<PathBuf>), tsfc::sim::SimError> {
         let prepared = prepare(path, report, out)?;
         let opts = tsfc::sim::Options {

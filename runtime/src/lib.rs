@@ -12,7 +12,9 @@
 //! - [`FactoredController`]: the same step with each distinct premise term
 //!   evaluated once (what generated code runs);
 //! - [`trigger`]: periodic, static relative, adaptive (Xu & Huang 2020) and
-//!   mixed (Amrr et al. 2019) transmission triggers.
+//!   mixed (Amrr et al. 2019) transmission triggers;
+//! - [`adaptive`]: the model-reference adaptive law (Wang et al. 2013) with
+//!   projection and a boundary-layer robust term, state caller-owned.
 
 #![cfg_attr(
     not(test),
@@ -31,6 +33,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod adaptive;
 pub mod controller;
 pub mod factored;
 pub mod math;
@@ -38,6 +41,7 @@ pub mod membership;
 mod real;
 pub mod trigger;
 
+pub use adaptive::{Adaptation, AdaptiveError, AdaptiveLaw, AdaptiveState};
 pub use controller::{
     blend, nearest_rule, normalize, premises_linear, rule_weights, saturate, Controller, Flags,
     Rule, Step, Term,

@@ -1,9 +1,10 @@
 //! The end-to-end suite: one test binary (one link, one set of debug-free
 //! artifacts) whose modules are the former per-file test crates.
 
-mod common;
+mod adaptive;
 mod amrr;
 mod c_codegen;
+mod common;
 mod diagnostics;
 mod event_trigger;
 mod fuzz;

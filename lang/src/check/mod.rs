@@ -11,14 +11,15 @@
 //! Environments and constant evaluation are shared by all of them
 //! ([`env`], [`values`]).
 
+mod adaptive;
 mod combinations;
 mod decls;
+mod discrete;
 mod dynamics;
 mod env;
 mod gains;
 mod generatable;
 mod model;
-mod discrete;
 mod modes;
 mod monte_carlo;
 mod objective_parts;
@@ -267,6 +268,7 @@ impl<'a> Checker<'a> {
             saturation.is_some(),
             &rules,
         );
+        let adaptive = self.adaptive_block(items, &draft, dims, &objectives, &rules);
         let controller = controller?;
         Some(Spec {
             controller,
@@ -295,6 +297,7 @@ impl<'a> Checker<'a> {
             modes,
             periodic_design: draft.periodic_design,
             sector,
+            adaptive,
         })
     }
 
