@@ -292,7 +292,9 @@ fn simulate(
 ) -> ExitCode {
     /// The run went non-finite, diverged or left the premise region.
     const RUN_FAILED: u8 = 4;
-    if let Ok(front) = pipeline::read(path) {
+    // An adaptive spec has its own simulator (docs/adaptive.md); other specs are read once.
+    let adaptive = std::fs::read_to_string(path).is_ok_and(|t| t.contains("adaptive"));
+    if let Some(front) = adaptive.then(|| pipeline::read(path).ok()).flatten() {
         if front.checked.model.is_some() {
             let opts = tsfc::adaptive::sim::Options {
                 horizon,

@@ -392,8 +392,9 @@ pub fn csv(run: &Run, design: &Design) -> String {
     out
 }
 
-/// The plot of the estimates (SVG, PNG): per input, the blended-rule input
-/// gains b_ik and the norms ||a_ik||; and d with its bound.
+/// The plot of the estimates (SVG, PNG): per input, the input gains b_ik of
+/// every rule relative to their initial values and the distance
+/// ||a_ik - a_ik(0)||; then d with its projection bounds.
 pub fn plot(run: &Run, design: &Design) -> Result<(Vec<u8>, Vec<u8>), SimError> {
     let span = (
         run.trace.first().map_or(0.0, |s| s.t),
@@ -406,53 +407,41 @@ pub fn plot(run: &Run, design: &Design) -> Result<(Vec<u8>, Vec<u8>), SimError> 
         marks,
         notes: Vec::new(),
     };
-    let bound = |label: &str, v: f64| {
-        Mark::labelled(
-            label.to_string(),
-            chart::RED,
-            Shape::Line(vec![(span.0, v), (span.1, v)]),
-        )
-        .beneath()
-    };
-    let bound_plain =
-        |v: f64| Mark::plain(chart::RED, Shape::Line(vec![(span.0, v), (span.1, v)])).beneath();
+    let limit = |v: f64| Shape::Line(vec![(span.0, v), (span.1, v)]);
     let series = |get: &dyn Fn(&Sample) -> f64| -> Vec<(f64, f64)> {
         run.trace.iter().map(|s| (s.t, get(s))).collect()
     };
-    let mut panels = Vec::new();
+    let per_rule = |get: &dyn Fn(&Sample, usize) -> f64| -> Vec<Mark> {
+        (0..design.rules)
+            .map(|i| {
+                Mark::labelled(
+                    format!("R{}", i + 1),
+                    colour(i),
+                    Shape::Line(series(&|s| get(s, i))),
+                )
+            })
+            .collect()
+    };
     let (n, m) = (design.n, design.m);
+    let mut panels = Vec::new();
     for k in 0..m {
-        let mut marks: Vec<Mark> = (0..design.rules)
-            .map(|i| {
-                Mark::labelled(
-                    format!("R{}", i + 1),
-                    colour(i),
-                    Shape::Line(series(&|s| s.b_hat[i * m + k])),
-                )
-            })
-            .collect();
-        if design.b.rate > 0.0 {
-            marks.push(bound("bounds", design.b.lo));
-            marks.push(bound_plain(design.b.hi));
-        }
-        panels.push(panel(format!("b_hat[.][{k}]"), marks));
-        let marks = (0..design.rules)
-            .map(|i| {
+        panels.push(panel(
+            format!("b_hat[.][{k}] / b_hat(0) - 1"),
+            per_rule(&|s, i| s.b_hat[i * m + k] / design.b0[i * m + k] - 1.0),
+        ));
+        panels.push(panel(
+            format!("||a_hat[.][{k}] - a_hat(0)||"),
+            per_rule(&|s, i| {
                 let at = (i * m + k) * n;
-                Mark::labelled(
-                    format!("R{}", i + 1),
-                    colour(i),
-                    Shape::Line(series(&|s| {
-                        s.a_hat[at..at + n]
-                            .iter()
-                            .map(|v| v * v)
-                            .sum::<f64>()
-                            .sqrt()
-                    })),
-                )
-            })
-            .collect();
-        panels.push(panel(format!("||a_hat[.][{k}]||"), marks));
+                let d0 = &design.a0[at..at + n];
+                s.a_hat[at..at + n]
+                    .iter()
+                    .zip(d0)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt()
+            }),
+        ));
     }
     let mut marks = vec![Mark::labelled(
         "d_hat",
@@ -460,17 +449,32 @@ pub fn plot(run: &Run, design: &Design) -> Result<(Vec<u8>, Vec<u8>), SimError> 
         Shape::Line(series(&|s| s.d_hat)),
     )];
     if design.d.rate > 0.0 {
-        marks.push(bound("bounds", design.d.lo));
-        marks.push(bound_plain(design.d.hi));
+        marks.push(Mark::labelled("bounds", chart::RED, limit(design.d.lo)).beneath());
+        marks.push(Mark::plain(chart::RED, limit(design.d.hi)).beneath());
     }
     panels.push(panel("d_hat".into(), marks));
-    let m_ = &run.metrics;
+    let mt = &run.metrics;
+    let range = |r: (f64, f64)| format!("[{:.4e}, {:.4e}]", r.0, r.1);
     let fig = Figure {
         title: format!("{}: adaptive estimates", run.name),
-        caption: vec![format!(
-            "projection bounds in red; estimates within bounds: {}; final ||x|| = {:.3e}",
-            m_.estimates_within_bounds, m_.final_state_norm
-        )],
+        caption: vec![
+            format!(
+                "estimates within their projection bounds: {}; final ||x|| = {:.3e}",
+                mt.estimates_within_bounds, mt.final_state_norm
+            ),
+            format!(
+                "ranges over the run: a {} in [{}, {}], b {} in [{}, {}], d {} in [{}, {}]",
+                range(mt.a_range),
+                design.a.lo,
+                design.a.hi,
+                range(mt.b_range),
+                design.b.lo,
+                design.b.hi,
+                range(mt.d_range),
+                design.d.lo,
+                design.d.hi
+            ),
+        ],
         x_label: "time [s]".into(),
         panels,
     };
