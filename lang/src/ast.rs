@@ -356,6 +356,7 @@ pub enum ItemKind {
 
 /// A statement inside `adaptive { ... }`.
 #[derive(Debug, Clone, PartialEq)]
+#[allow(clippy::large_enum_variant)] // a handful per spec, parsed once
 pub enum AdaptiveStmt {
     /// `key = value;` (`error`, `reference`, `Q`).
     Setting(Box<Setting>),

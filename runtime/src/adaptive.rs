@@ -37,6 +37,7 @@ pub struct Adaptation {
 
 impl Adaptation {
     /// `v + dv` projected onto `[lo, hi]`; `v` when the step is not finite.
+    #[allow(clippy::manual_clamp)] // `f64::clamp` panics on bounds lo > hi; this never does
     fn update(&self, v: f64, dv: f64) -> f64 {
         let next = v + self.rate * dv;
         // Not `f64::clamp`: it panics on bad bounds; this never does.
@@ -101,13 +102,8 @@ pub enum AdaptiveError {
 
 /// `sat(v) = max(-1, min(1, v))`.
 fn sat(v: f64) -> f64 {
-    if v > 1.0 {
-        1.0
-    } else if v < -1.0 {
-        -1.0
-    } else {
-        v
-    }
+    // Constant, ordered bounds: `clamp` cannot panic here.
+    v.clamp(-1.0, 1.0)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

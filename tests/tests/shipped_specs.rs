@@ -51,3 +51,10 @@ fn amrr2019_specs_check_clean() {
         }
     }
 }
+
+#[test]
+fn wang2013_adaptive_checks_clean() {
+    let m = check("wang2013_adaptive_mrac.tsf");
+    assert_eq!((m.n, m.m, m.r()), (6, 3, 9));
+    assert!(m.spec.adaptive.is_some() && m.spec.objectives.is_empty());
+}

@@ -49,11 +49,12 @@ pub fn solve(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<Lyapunov, Refusal> {
     let m = a.nrows();
     let a_eig_re = sorted(a.complex_eigenvalues().iter().map(|z| z.re).collect());
     let worst = a_eig_re.last().copied().unwrap_or(f64::NAN);
-    if !(worst < 0.0) {
+    // NaN (an empty or non-finite A_m) is refused too.
+    if worst.is_nan() || worst >= 0.0 {
         return Err(Refusal::NotHurwitz(worst));
     }
     let q_min = q.clone().symmetric_eigen().eigenvalues.min();
-    if !(q_min > 0.0) {
+    if q_min.is_nan() || q_min <= 0.0 {
         return Err(Refusal::QNotDefinite(q_min));
     }
     let eye = DMatrix::<f64>::identity(m, m);
@@ -76,7 +77,7 @@ pub fn solve(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<Lyapunov, Refusal> {
             .collect(),
     );
     let p_min = p_eig.first().copied().unwrap_or(f64::NAN);
-    if !(p_min > 0.0) || !(residual < 1e-8) {
+    if p_min.is_nan() || p_min <= 0.0 || residual.is_nan() || residual >= 1e-8 {
         return Err(Refusal::NoPositiveP(format!(
             "smallest eigenvalue {p_min:.6e}, relative residual {residual:.3e}"
         )));

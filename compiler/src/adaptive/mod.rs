@@ -211,13 +211,13 @@ pub fn design(model: &TsModel) -> Outcome {
             ));
         }
     }
-    let in_box = |e: &tsf_lang::adaptive::Estimate, v: f64| (e.lo..=e.hi).contains(&v);
     let mut nominal_inside = true;
     let (a0, a) = estimates(
+        "a",
         ad.a.as_ref(),
         ca.iter().flat_map(row_major).collect(),
         &mut nominal_inside,
-        in_box,
+        &mut refusals,
     );
     let b_nominal: Vec<f64> = input_gains.iter().flatten().copied().collect();
     if let Some(e) = &ad.b {
@@ -228,14 +228,13 @@ pub fn design(model: &TsModel) -> Outcome {
             ));
         }
     }
-    let (b0, b) = estimates(ad.b.as_ref(), b_nominal, &mut nominal_inside, in_box);
-    if ad.a.as_ref().is_some_and(|e| e.init.is_none())
-        || ad.b.as_ref().is_some_and(|e| e.init.is_none())
-    {
-        if !nominal_inside {
-            refusals.push("an estimate starts at the design model's value (no `init`), but that value lies outside its projection bounds".into());
-        }
-    }
+    let (b0, b) = estimates(
+        "b",
+        ad.b.as_ref(),
+        b_nominal,
+        &mut nominal_inside,
+        &mut refusals,
+    );
     let (d0, d, layer) = match &ad.robust {
         Some(r) => (
             r.estimate.init.unwrap_or(r.estimate.lo),
@@ -308,32 +307,40 @@ fn fixed() -> Adaptation {
     }
 }
 
-/// Initial values and adaptation of one estimated quantity whose design-model
-/// values are `nominal`.
+/// Initial values and adaptation of the estimated quantity `name` whose
+/// design-model values are `nominal`. `inside` is cleared when a design-model
+/// value lies outside the box; without `init` that is a refusal (the estimate
+/// would start outside its bounds).
 fn estimates(
+    name: &str,
     e: Option<&tsf_lang::adaptive::Estimate>,
     nominal: Vec<f64>,
     inside: &mut bool,
-    in_box: impl Fn(&tsf_lang::adaptive::Estimate, f64) -> bool,
+    refusals: &mut Vec<String>,
 ) -> (Vec<f64>, Adaptation) {
-    match e {
-        None => (nominal, fixed()),
-        Some(e) => {
-            *inside &= nominal.iter().all(|v| in_box(e, *v));
-            let init = match e.init {
-                Some(v) => vec![v; nominal.len()],
-                None => nominal,
-            };
-            (
-                init,
-                Adaptation {
-                    rate: e.rate,
-                    lo: e.lo,
-                    hi: e.hi,
-                },
-            )
+    let Some(e) = e else {
+        return (nominal, fixed());
+    };
+    let outside = nominal.iter().find(|v| !(e.lo..=e.hi).contains(*v));
+    if let Some(v) = outside {
+        *inside = false;
+        if e.init.is_none() {
+            refusals.push(format!(
+                "`{name}` starts at the design model's values (no `init`), but {v} lies outside its bounds {} .. {}",
+                e.lo, e.hi
+            ));
         }
     }
+    let init = match e.init {
+        Some(v) => vec![v; nominal.len()],
+        None => nominal,
+    };
+    let adaptation = Adaptation {
+        rate: e.rate,
+        lo: e.lo,
+        hi: e.hi,
+    };
+    (init, adaptation)
 }
 
 /// What the Lyapunov argument of docs/adaptive.md gives for this block.

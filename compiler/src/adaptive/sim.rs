@@ -171,7 +171,7 @@ pub fn run(
         t1 = t0 + hz;
     }
     let steps = ((t1 - t0) / h).round();
-    if !(steps >= 1.0 && steps <= MAX_STEPS as f64) {
+    if !(1.0..=MAX_STEPS as f64).contains(&steps) {
         return Err(SimError::spec(format!(
             "the run has {steps} steps; at most {MAX_STEPS} (docs/limits.md)"
         )));
@@ -232,6 +232,9 @@ pub fn run(
             let v = env.eval(e).map_err(|d| source.eval_error("r", t, d))?;
             r.iter_mut().zip(v.iter()).for_each(|(a, b)| *a = *b);
         }
+        // A recorded sample holds the estimates the command at t was computed with.
+        let record = k % stride == 0 || k == steps;
+        let used = record.then(|| (st_a.clone(), st_b.clone(), st_d));
         let mut st = AdaptiveState {
             a_hat: &mut st_a,
             b_hat: &mut st_b,
@@ -259,7 +262,7 @@ pub fn run(
             }
         }
         k_done = k;
-        if k % stride == 0 || k == steps {
+        if let Some((a_hat, b_hat, d_hat)) = used {
             let s: Vec<f64> = design
                 .c
                 .chunks_exact(n)
@@ -270,9 +273,9 @@ pub fn run(
                 x: x.clone(),
                 u: u.clone(),
                 s,
-                a_hat: st_a.clone(),
-                b_hat: st_b.clone(),
-                d_hat: st_d,
+                a_hat,
+                b_hat,
+                d_hat,
             });
         }
         if k == steps {
@@ -300,7 +303,7 @@ pub fn run(
             x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         }
         let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if !(norm < DIVERGED_NORM) {
+        if norm.is_nan() || norm >= DIVERGED_NORM {
             failure = Some(format!(
                 "the state diverged at t = {} (||x|| = {norm:.3e})",
                 t + h
