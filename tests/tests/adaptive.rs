@@ -93,6 +93,31 @@ fn projection_keeps_the_estimate_at_its_bound() {
     assert!(last.x[0].abs() < 1e-3, "x(6) = {}", last.x[0]);
 }
 
+/// Tracking: with the true a (a_hat(0) = 1), x(0) = s_m(0) = 0 and r = 1,
+/// eps stays 0 and x follows the reference model s_m' = -2 (s_m - r):
+/// x(t) = 1 - exp(-2 t), a_hat unchanged.
+#[test]
+fn a_matched_loop_tracks_the_reference_model() {
+    let text = SCALAR
+        .replace("HI init 0", "10 init 1")
+        .replace("x0 = 1;", "x0 = 0;")
+        .replace("Q = 2;", "Q = 2;\n    r(t) = 1;");
+    let (_, run) = run(&common::model_of("track.tsf", &text));
+    let mut worst: f64 = 0.0;
+    for s in &run.trace {
+        worst = worst.max((s.x[0] - (1.0 - (-2.0 * s.t).exp())).abs());
+        // Only the O(h) gap between the Euler reference model and the RK4
+        // plant moves it.
+        assert!(
+            (s.a_hat[0] - 1.0).abs() < 1e-3,
+            "a_hat moved: {}",
+            s.a_hat[0]
+        );
+    }
+    eprintln!("tracking: max |x - (1 - exp(-2t))| = {worst:.3e}");
+    assert!(worst < 2e-3, "tracking error {worst:.3e}");
+}
+
 /// An unstable reference model is refused with exit 3 (after the checker
 /// accepted it: eigenvalues are the compiler's).
 #[test]
