@@ -23,13 +23,10 @@ impl Checker<'_> {
         for o in objectives {
             if !matches!(o.node, Objective::Stability | Objective::DecayRate(_)) {
                 self.err(
-                    Diagnostic::error(
-                        o.span,
-                        "this objective is not supported with `design = discrete`",
-                    )
-                    .with_secondary(d.span, "discrete-time design asked here")
-                    .with_note(note)
-                    .with_help("use `design = emulation` (the default) for this objective"),
+                    Diagnostic::error(o.span, "this objective is not supported with `design = discrete`")
+                        .with_secondary(d.span, "discrete-time design asked here")
+                        .with_note(note)
+                        .with_help("use `design = emulation` (the default) for this objective"),
                 );
             }
         }

@@ -33,10 +33,7 @@ use tsf_lmi::Expr;
 /// The period when the spec asks for the discrete-time design route.
 pub fn period(model: &TsModel) -> Option<f64> {
     let spec = &model.spec;
-    match (
-        spec.periodic_design.as_ref().map(|d| d.node),
-        spec.trigger.as_ref().map(|t| &t.node),
-    ) {
+    match (spec.periodic_design.as_ref().map(|d| d.node), spec.trigger.as_ref().map(|t| &t.node)) {
         (Some(PeriodicDesign::Discrete), Some(Trigger::Periodic { every })) => Some(*every),
         _ => None,
     }
@@ -49,10 +46,7 @@ pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64) -> (DMatrix<f64>, DMatrix
     big.view_mut((0, 0), (n, n)).copy_from(&(a * h));
     big.view_mut((0, n), (n, m)).copy_from(&(b * h));
     let e = big.exp();
-    (
-        e.view((0, 0), (n, n)).into_owned(),
-        e.view((0, n), (n, m)).into_owned(),
-    )
+    (e.view((0, 0), (n, n)).into_owned(), e.view((0, n), (n, m)).into_owned())
 }
 
 /// The family Q_ij = -[[rho^2 X, (A_di X + B_di M_j)'], [*, X]] (< 0) with
@@ -85,11 +79,7 @@ mod tests {
     #[test]
     fn zoh_matches_closed_forms() {
         let (h, a, b) = (0.3, -2.0, 1.5);
-        let (ad, bd) = zoh(
-            &DMatrix::from_element(1, 1, a),
-            &DMatrix::from_element(1, 1, b),
-            h,
-        );
+        let (ad, bd) = zoh(&DMatrix::from_element(1, 1, a), &DMatrix::from_element(1, 1, b), h);
         assert!((ad[(0, 0)] - (a * h).exp()).abs() < 1e-14);
         assert!((bd[(0, 0)] - b * ((a * h).exp() - 1.0) / a).abs() < 1e-14);
         let a2 = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]);
