@@ -15,6 +15,7 @@
 
 #![allow(clippy::result_large_err)] // diagnostics travel on the cold error path
 
+pub mod adaptive;
 pub mod builder;
 pub mod codegen;
 pub mod error;

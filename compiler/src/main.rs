@@ -218,6 +218,9 @@ fn compile(
     if front.checked.model.is_none() {
         return ExitCode::from(exit::SPEC);
     }
+    if let Some(code) = tsfc::adaptive::cli::compile(&front, out) {
+        return ExitCode::from(code);
+    }
     let run = match front.compile(&tsfc::synth::Settings::default()) {
         Ok(r) => r,
         Err(e) => return fail(e),
@@ -289,6 +292,19 @@ fn simulate(
 ) -> ExitCode {
     /// The run went non-finite, diverged or left the premise region.
     const RUN_FAILED: u8 = 4;
+    // An adaptive spec has its own simulator (docs/adaptive.md); other specs are read once.
+    let adaptive = std::fs::read_to_string(path).is_ok_and(|t| t.contains("adaptive"));
+    if let Some(front) = adaptive.then(|| pipeline::read(path).ok()).flatten() {
+        if front.checked.model.is_some() {
+            let opts = tsfc::adaptive::sim::Options {
+                horizon,
+                x0: x0.clone(),
+            };
+            if let Some(code) = tsfc::adaptive::cli::simulate(&front, out, &opts) {
+                return ExitCode::from(code);
+            }
+        }
+    }
     let run = || -> Result<(tsfc::sim::Outcome, Vec<PathBuf>), tsfc::sim::SimError> {
         let prepared = prepare(path, report, out)?;
         let opts = tsfc::sim::Options {

@@ -75,6 +75,11 @@ impl Front {
         let Some(model) = checked.model else {
             return Err(Error::spec(rendered));
         };
+        if model.spec.adaptive.is_some() {
+            return Err(Error::spec(format!(
+                "{name}: an adaptive controller has no LMI design (`tsfc compile` reports its adaptive design; docs/adaptive.md)"
+            )));
+        }
         let sha256 = sha256_hex(&source.bytes);
         let info = SpecInfo {
             path: name.clone(),

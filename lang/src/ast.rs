@@ -350,6 +350,58 @@ pub enum ItemKind {
     Simulate(Vec<SimStmt>),
     /// `modes { mode name { settings } ... settings }`
     Modes(Vec<ModesStmt>),
+    /// `adaptive { ... }`
+    Adaptive(Vec<AdaptiveStmt>),
+}
+
+/// A statement inside `adaptive { ... }`.
+#[derive(Debug, Clone, PartialEq)]
+#[allow(clippy::large_enum_variant)] // a handful per spec, parsed once
+pub enum AdaptiveStmt {
+    /// `key = value;` (`error`, `reference`, `Q`).
+    Setting(Box<Setting>),
+    /// `estimate name rate g bounds lo .. hi [init v];` or
+    /// `robust name rate g bounds lo .. hi [init v] layer phi;`
+    Estimate {
+        /// `true` for `robust`.
+        robust: bool,
+        /// The estimated quantity (`a`, `b`, `d`).
+        name: Ident,
+        /// Adaptation rate.
+        rate: Expr,
+        /// Projection bounds.
+        lo: Expr,
+        /// Projection bounds.
+        hi: Expr,
+        /// Initial value (default: the design model's value, or `lo` for `d`).
+        init: Option<Expr>,
+        /// Boundary-layer width.
+        layer: Option<Expr>,
+        /// The whole statement.
+        span: Span,
+    },
+    /// `r(t) = expr;`
+    Signal {
+        /// The signal name.
+        name: Ident,
+        /// The time parameter.
+        param: Ident,
+        /// The expression.
+        value: Expr,
+        /// The whole statement.
+        span: Span,
+    },
+    /// `converged |signal| <= tol by t;`
+    Converged {
+        /// `x` or a state name.
+        signal: Ident,
+        /// The norm bound.
+        tol: Expr,
+        /// The time by which the bound holds for good.
+        by: Expr,
+        /// The whole statement.
+        span: Span,
+    },
 }
 
 /// A statement inside `modes { ... }`.

@@ -7,6 +7,7 @@
 
 #![allow(clippy::result_large_err)] // diagnostics travel on the cold error path; boxing them buys nothing
 
+pub mod adaptive;
 pub mod ast;
 mod check;
 pub mod diag;

@@ -715,6 +715,8 @@ pub struct Spec {
     pub periodic_design: Option<Spanned<PeriodicDesign>>,
     /// The sector construction that built the rules (`rules sector;`), if any.
     pub sector: Option<crate::sector::SectorModel>,
+    /// The adaptive controller (`adaptive { ... }`), if the spec is one.
+    pub adaptive: Option<crate::adaptive::Adaptive>,
 }
 
 impl Spec {

@@ -14,7 +14,9 @@
 //! - [`ModalController`]: one gain set per Markov-switching mode, the active
 //!   mode an input of every step (out of range: mode 0 and a flag);
 //! - [`trigger`]: periodic, static relative, adaptive (Xu & Huang 2020) and
-//!   mixed (Amrr et al. 2019) transmission triggers.
+//!   mixed (Amrr et al. 2019) transmission triggers;
+//! - [`adaptive`]: the model-reference adaptive law (Wang et al. 2013) with
+//!   projection and a boundary-layer robust term, state caller-owned.
 
 #![cfg_attr(
     not(test),
@@ -33,6 +35,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod adaptive;
 pub mod controller;
 pub mod factored;
 pub mod math;
@@ -41,6 +44,7 @@ pub mod modal;
 mod real;
 pub mod trigger;
 
+pub use adaptive::{Adaptation, AdaptiveError, AdaptiveLaw, AdaptiveState};
 pub use controller::{
     blend, nearest_rule, normalize, premises_linear, rule_weights, saturate, Controller, Flags,
     Rule, Step, Term,

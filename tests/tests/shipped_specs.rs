@@ -64,3 +64,10 @@ fn xue2024_checks_clean() {
         assert!(modes.rates.row(a).sum().abs() < 1e-12);
     }
 }
+
+#[test]
+fn wang2013_adaptive_checks_clean() {
+    let m = check("wang2013_adaptive_mrac.tsf");
+    assert_eq!((m.n, m.m, m.r()), (6, 3, 9));
+    assert!(m.spec.adaptive.is_some() && m.spec.objectives.is_empty());
+}

@@ -44,9 +44,10 @@ fn shipped() -> &'static [Compiled] {
             .filter(|p| p.extension().is_some_and(|x| x == "tsf"))
             .filter(|p| {
                 let text = std::fs::read_to_string(p).expect("spec");
+                // Adaptive specs have their own simulator (tests/tests/adaptive.rs).
                 tsf_lang::check_source(&text)
                     .0
-                    .is_some_and(|s| s.simulate.is_some())
+                    .is_some_and(|s| s.simulate.is_some() && s.adaptive.is_none())
             })
             .collect();
         paths.sort();

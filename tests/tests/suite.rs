@@ -1,6 +1,7 @@
 //! The end-to-end suite: one test binary (one link, one set of debug-free
 //! artifacts) whose modules are the former per-file test crates.
 
+mod adaptive;
 mod amrr;
 mod c_codegen;
 mod common;

@@ -11,6 +11,7 @@
 //! Environments and constant evaluation are shared by all of them
 //! ([`env`], [`values`]).
 
+mod adaptive;
 mod combinations;
 mod decls;
 mod discrete;
@@ -284,6 +285,7 @@ impl<'a> Checker<'a> {
             saturation.is_some(),
             &rules,
         );
+        let adaptive = self.adaptive_block(items, &draft, dims, &objectives, &rules);
         let controller = controller?;
         Some(Spec {
             controller,
@@ -313,6 +315,7 @@ impl<'a> Checker<'a> {
             modes,
             periodic_design: draft.periodic_design,
             sector,
+            adaptive,
         })
     }
 

@@ -200,7 +200,7 @@ impl Checker<'_> {
     }
 
     /// The output's [C E G], found by evaluating at basis vectors; None unless linear.
-    fn output(&mut self, name: &Ident, e: &Expr, dims: Dims) -> Option<Output> {
+    pub(super) fn output(&mut self, name: &Ident, e: &Expr, dims: Dims) -> Option<Output> {
         let Dims { n, m, q } = dims;
         // Evaluate with (x, u, w) set to basis vectors: the columns of [C E G].
         let total = n + m + q;

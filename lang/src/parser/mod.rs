@@ -392,6 +392,9 @@ impl Cx {
             Rule::modes_decl => {
                 ItemKind::Modes(it.map(|p| self.modes_stmt(p)).collect::<PResult<_>>()?)
             }
+            Rule::adaptive_decl => {
+                ItemKind::Adaptive(it.map(|p| self.adaptive_stmt(p)).collect::<PResult<_>>()?)
+            }
             _ => return Err(Diagnostic::error(span, "unsupported item")),
         };
         Ok(Item { kind, span })
@@ -624,6 +627,75 @@ impl Cx {
             settings,
             span,
         })
+    }
+
+    fn adaptive_stmt(&self, p: Pair<Rule>) -> PResult<AdaptiveStmt> {
+        let span = self.span(&p);
+        let s = first(p, span)?;
+        let rule = s.as_rule();
+        if rule == Rule::setting {
+            return Ok(AdaptiveStmt::Setting(Box::new(self.setting(s)?)));
+        }
+        let mut parts = s.into_inner();
+        match rule {
+            Rule::signal_def => {
+                let name = self.ident(next(&mut parts, span)?);
+                let param = self.ident(next(&mut parts, span)?);
+                let value = self.expr(next(&mut parts, span)?)?;
+                Ok(AdaptiveStmt::Signal {
+                    name,
+                    param,
+                    value,
+                    span,
+                })
+            }
+            Rule::mc_converged => {
+                let mut parts = parts
+                    .filter(|q| q.as_rule() != Rule::kw_converged && q.as_rule() != Rule::kw_by);
+                let signal = self.ident(next(&mut parts, span)?);
+                let tol = self.expr(next(&mut parts, span)?)?;
+                let by = self.expr(next(&mut parts, span)?)?;
+                Ok(AdaptiveStmt::Converged {
+                    signal,
+                    tol,
+                    by,
+                    span,
+                })
+            }
+            _ => {
+                let robust = next(&mut parts, span)?.as_rule() == Rule::kw_robust;
+                let name = self.ident(next(&mut parts, span)?);
+                let (mut rate, mut lo, mut hi, mut init, mut layer) =
+                    (None, None, None, None, None);
+                let mut last = Rule::kw_rate;
+                for q in parts {
+                    match q.as_rule() {
+                        Rule::expr => {
+                            let e = Some(self.expr(q)?);
+                            match last {
+                                Rule::kw_rate => rate = e,
+                                Rule::kw_bounds if lo.is_none() => lo = e,
+                                Rule::kw_bounds => hi = e,
+                                Rule::kw_init => init = e,
+                                _ => layer = e,
+                            }
+                        }
+                        r => last = r,
+                    }
+                }
+                let missing = || Diagnostic::error(span, "incomplete estimate");
+                Ok(AdaptiveStmt::Estimate {
+                    robust,
+                    name,
+                    rate: rate.ok_or_else(missing)?,
+                    lo: lo.ok_or_else(missing)?,
+                    hi: hi.ok_or_else(missing)?,
+                    init,
+                    layer,
+                    span,
+                })
+            }
+        }
     }
 
     fn sim_stmt(&self, p: Pair<Rule>) -> PResult<SimStmt> {
