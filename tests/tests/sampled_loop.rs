@@ -39,19 +39,6 @@ fn spec_file(tag: &str, text: &str) -> (std::path::PathBuf, std::path::PathBuf) 
     (dir, path)
 }
 
-/// (Phi, Gamma) of x_{k+1} = Phi x_k + Gamma u_k for a hold of `h` seconds.
-fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64) -> (DMatrix<f64>, DMatrix<f64>) {
-    let (n, m) = (a.nrows(), b.ncols());
-    let mut big = DMatrix::zeros(n + m, n + m);
-    big.view_mut((0, 0), (n, n)).copy_from(&(a * h));
-    big.view_mut((0, n), (n, m)).copy_from(&(b * h));
-    let e = big.exp();
-    (
-        e.view((0, 0), (n, n)).into_owned(),
-        e.view((0, n), (n, m)).into_owned(),
-    )
-}
-
 fn spectral_radius(m: &DMatrix<f64>) -> f64 {
     m.complex_eigenvalues()
         .iter()
@@ -63,7 +50,7 @@ fn spectral_radius(m: &DMatrix<f64>) -> f64 {
 fn worst_frozen_radius(model: &tsfc::model::TsModel, gains: &[DMatrix<f64>], h: f64) -> f64 {
     let mut worst: f64 = 0.0;
     for rule in &model.rules {
-        let (phi, gamma) = zoh(&rule.a, &rule.b, h);
+        let (phi, gamma) = tsfc::synth::objectives::discrete::zoh(&rule.a, &rule.b, h);
         for f in gains {
             worst = worst.max(spectral_radius(&(&phi + &gamma * f)));
         }

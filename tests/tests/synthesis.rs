@@ -263,6 +263,13 @@ fn linf_bound_with_saturation_searches_xi_below_the_bound() {
         "objective linf(tau -> y) minimize with phi = 0.05",
         "objective linf(tau -> y) <= 0.5 with phi = 0.05",
     );
+    // Without the trigger the loop is continuous, where kappa = 0.12 would be
+    // relied on (the kappa-bounded relaxation); this test is about the xi
+    // search of the every-pair problem the shipped spec solves: kappa = 1.
+    let bounded = bounded.replace(
+        "relaxation membership_mismatch(kappa = 0.12);",
+        "relaxation membership_mismatch(kappa = 1);",
+    );
     assert!(bounded.contains("<= 0.5") && !bounded.contains("trigger aperiodic"));
     let model = model_of("xu_bounded.tsf", &bounded);
     let c = compile(&model, info(), &Settings::default(), Default::default());

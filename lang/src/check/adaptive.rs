@@ -450,25 +450,7 @@ impl<'a> Checker<'a> {
         span: Span,
         n: usize,
     ) -> Option<Convergence> {
-        let at = if signal.node == "x" {
-            Some((0, n))
-        } else {
-            self.states
-                .iter()
-                .find(|s| s.name == signal.node)
-                .map(|s| (s.offset, s.len))
-        };
-        if at.is_none() {
-            let mut names: Vec<&str> = vec!["x"];
-            names.extend(self.states.iter().map(|s| s.name.as_str()));
-            self.err(unknown_choice(
-                signal.span,
-                "state",
-                "states",
-                &signal.node,
-                &names,
-            ));
-        }
+        let at = self.state_signal(signal, n);
         let tol_v = self.positive(tol, "the convergence bound");
         let by_v = self.positive(by, "the convergence time");
         Some(Convergence {

@@ -4,7 +4,7 @@
 
 use super::env::walk_names;
 use super::{unknown_choice, Checker};
-use crate::ast::{Expr, ExprKind, ItemKind, McStmt, Value, Vary};
+use crate::ast::{Expr, ExprKind, Ident, ItemKind, McStmt, Value, Vary};
 use crate::diag::Diagnostic;
 use crate::limits::MAX_MONTE_CARLO_RUNS;
 use crate::span::Span;
@@ -116,25 +116,7 @@ impl Checker<'_> {
                         ok = false;
                         continue;
                     }
-                    let at = if signal.node == "x" {
-                        Some((0, n))
-                    } else {
-                        self.states
-                            .iter()
-                            .find(|s| s.name == signal.node)
-                            .map(|s| (s.offset, s.len))
-                    };
-                    if at.is_none() {
-                        let mut names: Vec<&str> = vec!["x"];
-                        names.extend(self.states.iter().map(|s| s.name.as_str()));
-                        self.err(unknown_choice(
-                            signal.span,
-                            "state",
-                            "states",
-                            &signal.node,
-                            &names,
-                        ));
-                    }
+                    let at = self.state_signal(signal, n);
                     let tol_v = self.positive(tol, "the convergence bound");
                     let by_v = self.scalar(by, "the convergence time");
                     if let Some(b) = by_v {
@@ -258,6 +240,31 @@ impl Checker<'_> {
     }
 
     /// Whether the truth plant's expressions name `name` (through user functions too).
+    /// (offset, length) of the state signal a `converged` claim names (`x`
+    /// is the whole state), or an error at the name listing the states.
+    pub(super) fn state_signal(&mut self, signal: &Ident, n: usize) -> Option<(usize, usize)> {
+        let at = if signal.node == "x" {
+            Some((0, n))
+        } else {
+            self.states
+                .iter()
+                .find(|s| s.name == signal.node)
+                .map(|s| (s.offset, s.len))
+        };
+        if at.is_none() {
+            let mut names: Vec<&str> = vec!["x"];
+            names.extend(self.states.iter().map(|s| s.name.as_str()));
+            self.err(unknown_choice(
+                signal.span,
+                "state",
+                "states",
+                &signal.node,
+                &names,
+            ));
+        }
+        at
+    }
+
     fn plant_uses(&self, name: &str, dynamics: Option<&Dynamics>) -> bool {
         let exprs: Vec<&Expr> = match dynamics {
             Some(d) => d.derivatives.iter().map(|(_, e)| e).collect(),
