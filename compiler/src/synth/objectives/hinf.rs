@@ -12,8 +12,8 @@
 //!
 //! so V' + y'y - gamma^2 w'w < 0 wherever the sector condition holds (the
 //! linear region, which contains E(P, 1)). Hence, with x(0)'P x(0) + gamma^2
-//! ||w||_2^2 <= 1, the state stays in E(P, 1) and ||y||_2^2 < gamma^2 ||w||_2^2
-//! + x(0)'P x(0): a regional L2 gain, for disturbance energies up to
+//! ||w||_2^2 <= 1, the state stays in E(P, 1) and ||y||_2^2 is below
+//! gamma^2 ||w||_2^2 + x(0)'P x(0): a regional L2 gain, for disturbance energies up to
 //! (1 - x(0)'P x(0)) / gamma^2 (Tarbouriech, Garcia, Gomes da Silva &
 //! Queinnec, *Stability and Stabilization of Linear Systems with Saturating
 //! Actuators*, 2011, ch. 6).
