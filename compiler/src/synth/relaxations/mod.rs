@@ -24,7 +24,7 @@ fn double_sum(model: &TsModel, r: Relaxation) -> Box<dyn DoubleSum> {
         Relaxation::Tanaka { s } => Box::new(tanaka::Tanaka { s }),
         Relaxation::Tuan => Box::new(tuan::Tuan),
         Relaxation::Polya { d } => Box::new(polya::Polya { d }),
-        Relaxation::MembershipMismatch { kappa } if continuous(model) => {
+        Relaxation::MembershipMismatch { kappa } if relies(model, kappa) => {
             Box::new(mismatch_bounded::MismatchBounded { kappa })
         }
         Relaxation::MembershipMismatch { .. } => Box::new(mismatch::Mismatch),
@@ -35,12 +35,19 @@ fn double_sum(model: &TsModel, r: Relaxation) -> Box<dyn DoubleSum> {
 /// `membership_mismatch(kappa = ..)` in a continuous loop without modes. A sampled or
 /// event-triggered loop holds the controller's memberships from the last
 /// transmitted sample, so no kappa bounds its mismatch: every plant/controller
-/// pair is imposed there (`None`), and kappa is not used.
+/// pair is imposed there (`None`), and kappa is not used; nor with kappa = 1.
 pub fn kappa_relied_on(model: &TsModel) -> Option<f64> {
     match model.spec.relaxation.node {
-        Relaxation::MembershipMismatch { kappa } if continuous(model) => Some(kappa),
+        Relaxation::MembershipMismatch { kappa } if relies(model, kappa) => Some(kappa),
         _ => None,
     }
+}
+
+/// Whether the bounded-mismatch LMIs are used: a continuous loop (below) and
+/// kappa < 1. kappa = 1 bounds nothing: it is the every-pair condition, imposed
+/// as such (the same feasible set without the 2 r^2 slacks per objective).
+fn relies(model: &TsModel, kappa: f64) -> bool {
+    kappa < 1.0 && continuous(model)
 }
 
 /// Whether the bounded-mismatch LMIs apply: the controller is updated
