@@ -105,6 +105,20 @@ impl Rk4 {
         h: f64,
         y: &mut [f64],
     ) -> Result<(), SimError> {
+        self.step_to(sys, t, h, t + h, y)
+    }
+
+    /// [`Rk4::step`] whose last stage is evaluated at `t_end` (`t + h` up to
+    /// rounding): the time the next step starts from, so a time-only input
+    /// such as a disturbance signal is evaluated once for both.
+    fn step_to(
+        &mut self,
+        sys: &mut impl System,
+        t: f64,
+        h: f64,
+        t_end: f64,
+        y: &mut [f64],
+    ) -> Result<(), SimError> {
         let [k1, k2, k3, k4] = &mut self.k;
         sys.rhs(t, y, k1)?;
         combine(&mut self.tmp, y, 0.5 * h, &[1.0], [k1]);
@@ -112,7 +126,7 @@ impl Rk4 {
         combine(&mut self.tmp, y, 0.5 * h, &[1.0], [k2]);
         sys.rhs(t + 0.5 * h, &self.tmp, k3)?;
         combine(&mut self.tmp, y, h, &[1.0], [k3]);
-        sys.rhs(t + h, &self.tmp, k4)?;
+        sys.rhs(t_end, &self.tmp, k4)?;
         self.evals += 4;
         update(y, None, h, &RK4_WEIGHTS, [k1, k2, k3, k4]);
         Ok(())
@@ -135,7 +149,12 @@ impl Rk4 {
         let h = span / steps;
         let steps = steps as u64;
         for i in 0..steps {
-            self.step(sys, t0 + i as f64 * h, h, y)?;
+            let t_end = if i + 1 == steps {
+                t1
+            } else {
+                t0 + (i + 1) as f64 * h
+            };
+            self.step_to(sys, t0 + i as f64 * h, h, t_end, y)?;
         }
         Ok(())
     }
