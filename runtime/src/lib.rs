@@ -44,7 +44,9 @@ pub mod modal;
 mod real;
 pub mod trigger;
 
-pub use adaptive::{Adaptation, AdaptiveError, AdaptiveLaw, AdaptiveState};
+pub use adaptive::{
+    Adaptation, AdaptiveController, AdaptiveError, AdaptiveLaw, AdaptiveState, AdaptiveStep,
+};
 pub use controller::{
     blend, nearest_rule, normalize, premises_linear, rule_weights, saturate, Controller, Flags,
     Rule, Step, Term,
