@@ -233,7 +233,7 @@ static double tsf_mrac_drift(const double *row, const double *s, const double *r
 static double tsf_mrac_update(const tsf_adaptation *q, double v, double dv) {
     const double step = q->rate * dv;
     const double next = v + step;
-    if (!isfinite(next)) {
+    if (isfinite(next) == 0) {
         return v;
     }
     if (next < q->lo) {
@@ -258,22 +258,22 @@ static double tsf_mrac_sat(double v) {
 
 /* Whether the n values of v are all finite. */
 static int tsf_mrac_finite(const double *v, int n) {
+    int all = 1;
     int k;
     for (k = 0; k < n; k++) {
-        if (!isfinite(v[k])) {
-            return 0;
+        if (isfinite(v[k]) == 0) {
+            all = 0;
         }
     }
-    return 1;
+    return all;
 }
 
 /* The update laws over dt with projection, then the reference model
-   (AdaptiveLaw::adapt). */
+   (AdaptiveLaw::adapt); ds is scratch space of m values. */
 static void tsf_mrac_adapt(const tsf_mrac_law *law, double *a_hat, double *b_hat, double *d_hat,
                            double *s_m, const double *x, const double *h, const double *r,
-                           const double *p, const double *u, double dt) {
+                           const double *p, const double *u, double dt, double *ds) {
     const int n = law->n, m = law->m;
-    double ds[TSF_MRAC_MAX_INPUTS];
     int i, k, j;
     for (i = 0; i < law->r; i++) {
         const double dh = dt * h[i];
@@ -309,7 +309,7 @@ static void tsf_mrac_adapt(const tsf_mrac_law *law, double *a_hat, double *b_hat
     for (k = 0; k < m; k++) {
         const double step = dt * ds[k];
         const double next = s_m[k] + step;
-        if (isfinite(next)) {
+        if (isfinite(next) != 0) {
             s_m[k] = next;
         }
     }
@@ -317,12 +317,11 @@ static void tsf_mrac_adapt(const tsf_mrac_law *law, double *a_hat, double *b_hat
 
 int tsf_mrac_step(const tsf_mrac_law *law, double *a_hat, double *b_hat, double *d_hat,
                   double *s_m, const double *x, const double *h, const double *r, double dt,
-                  double *u) {
+                  double *u, double *work) {
     const int n = law->n, m = law->m;
-    double s[TSF_MRAC_MAX_INPUTS];
-    double eps[TSF_MRAC_MAX_INPUTS];
-    double p[TSF_MRAC_MAX_INPUTS];
-    int i, k;
+    double *s = work;
+    double *p = &work[m > 0 ? m : 0];
+    int i, k, l;
     if (m > 0 && m <= TSF_MRAC_MAX_INPUTS) {
         for (k = 0; k < m; k++) {
             u[k] = 0.0;
@@ -331,16 +330,22 @@ int tsf_mrac_step(const tsf_mrac_law *law, double *a_hat, double *b_hat, double 
     if (!(n > 0 && m > 0 && m <= TSF_MRAC_MAX_INPUTS && law->r >= 0)) {
         return TSF_MRAC_SHAPE;
     }
-    if (!(tsf_mrac_finite(x, n) && tsf_mrac_finite(h, law->r) && tsf_mrac_finite(r, m) &&
-          isfinite(dt) && dt >= 0.0)) {
+    if (!((tsf_mrac_finite(x, n) != 0) && (tsf_mrac_finite(h, law->r) != 0) &&
+          (tsf_mrac_finite(r, m) != 0) && (isfinite(dt) != 0) && (dt >= 0.0))) {
         return TSF_MRAC_NONFINITE;
     }
     for (k = 0; k < m; k++) {
         s[k] = tsf_mrac_dot(&law->c[k * n], x, n);
-        eps[k] = s[k] - s_m[k];
     }
+    /* p = P eps, eps_l = s_l - s_m_l formed where it is used (same value). */
     for (k = 0; k < m; k++) {
-        p[k] = tsf_mrac_dot(&law->p[k * m], eps, m);
+        double acc = 0.0;
+        for (l = 0; l < m; l++) {
+            const double e = s[l] - s_m[l];
+            const double t = law->p[k * m + l] * e;
+            acc = acc + t;
+        }
+        p[k] = acc;
     }
     for (k = 0; k < m; k++) {
         double ax = 0.0, bh = 0.0;
@@ -360,13 +365,14 @@ int tsf_mrac_step(const tsf_mrac_law *law, double *a_hat, double *b_hat, double 
             u[k] = top / bh;
         }
     }
-    if (!tsf_mrac_finite(u, m)) {
+    if (tsf_mrac_finite(u, m) == 0) {
         for (k = 0; k < m; k++) {
             u[k] = 0.0;
         }
         return TSF_MRAC_NONFINITE;
     }
-    tsf_mrac_adapt(law, a_hat, b_hat, d_hat, s_m, x, h, r, p, u, dt);
+    /* s is no longer needed: its space holds the reference model's drift. */
+    tsf_mrac_adapt(law, a_hat, b_hat, d_hat, s_m, x, h, r, p, u, dt, s);
     return TSF_MRAC_OK;
 }
 
@@ -672,8 +678,8 @@ static uint8_t TSF_FN(tsf_saturate)(const TSF_FN(tsf_controller) *c, TSF_R *u) {
     return flags;
 }
 
-uint8_t TSF_FN(tsf_strengths)(const TSF_FN(tsf_controller) *c, const TSF_R *x, const TSF_R *z,
-                              TSF_R *deg, TSF_R *h) {
+uint8_t TSF_FN(tsf_step_with_premises)(const TSF_FN(tsf_controller) *c, const TSF_R *x,
+                                       const TSF_R *z, TSF_R *deg, TSF_R *h, TSF_R *u) {
     uint8_t flags = 0;
     int i;
     for (i = 0; i < c->n; i++) {
@@ -690,6 +696,9 @@ uint8_t TSF_FN(tsf_strengths)(const TSF_FN(tsf_controller) *c, const TSF_R *x, c
         for (i = 0; i < c->r; i++) {
             h[i] = TSF_C(0);
         }
+        for (i = 0; i < c->m; i++) {
+            u[i] = TSF_C(0);
+        }
         return flags;
     }
     for (i = 0; i < c->d; i++) {
@@ -702,19 +711,6 @@ uint8_t TSF_FN(tsf_strengths)(const TSF_FN(tsf_controller) *c, const TSF_R *x, c
         }
         h[TSF_FN(tsf_nearest_rule)(c, z)] = TSF_C(1);
         flags |= TSF_FLAG_NO_RULE_FIRED;
-    }
-    return flags;
-}
-
-uint8_t TSF_FN(tsf_step_with_premises)(const TSF_FN(tsf_controller) *c, const TSF_R *x,
-                                       const TSF_R *z, TSF_R *deg, TSF_R *h, TSF_R *u) {
-    uint8_t flags = TSF_FN(tsf_strengths)(c, x, z, deg, h);
-    int i;
-    if ((flags & (TSF_FLAG_STATE_NONFINITE | TSF_FLAG_PREMISE_NONFINITE)) != 0u) {
-        for (i = 0; i < c->m; i++) {
-            u[i] = TSF_C(0);
-        }
-        return flags;
     }
     TSF_FN(tsf_blend)(c, h, x, u);
     flags |= TSF_FN(tsf_saturate)(c, u);

@@ -169,15 +169,6 @@ uint8_t tsf_step_with_premises(const tsf_controller *c, const double *x, const d
 uint8_t tsf_step_with_premisesf(const tsf_controllerf *c, const float *x, const float *z,
                                 float *deg, float *h, float *u);
 
-/* Stages 2-4 of tsf_step_with_premises: the fault check, the normalised
-   firing strengths h (c->r values; all 0 on a NaN or infinite x or z, the
-   nearest rule centre's 1 when no rule fires) and the TSF_FLAG_* bits.
-   c->gains and c->u_max are not read. */
-uint8_t tsf_strengths(const tsf_controller *c, const double *x, const double *z, double *deg,
-                      double *h);
-uint8_t tsf_strengthsf(const tsf_controllerf *c, const float *x, const float *z, float *deg,
-                       float *h);
-
 /* Model-reference adaptive T-S law (tsf_runtime::adaptive; Wang, Gao & He
    2013, several inputs), double only. With s = C x, p = P (s - s_m):
    u_k = ((A_m (s - r))_k - sum_i h_i a_ik'x - d sat(p_k / layer)) / sum_i h_i b_ik,
@@ -186,7 +177,7 @@ uint8_t tsf_strengthsf(const tsf_controllerf *c, const float *x, const float *z,
    d += rate_d dt sum_k |p_k|, s_m += dt A_m (s_m - r). A rate of 0 keeps the
    quantity. */
 
-/* Most inputs of an adaptive law (the step's work is on the stack). */
+/* Most inputs of an adaptive law (as tsf_runtime::adaptive::MAX_INPUTS). */
 #define TSF_MRAC_MAX_INPUTS 8
 /* Status of tsf_mrac_step: done; a dimension out of range (u = 0); a NaN or
    infinite input, strength, step or command (u = 0). Refused steps leave the
@@ -219,10 +210,12 @@ typedef struct tsf_mrac_law {
 /* One step of the law: writes u (m values) from x (n), the normalised
    strengths h (r) and the reference r (m), then advances the caller's
    estimates a_hat (r x m x n), b_hat (r x m), *d_hat and the reference-model
-   state s_m (m) over dt. Returns a TSF_MRAC_* status. */
+   state s_m (m) over dt; work is scratch space of 2 m values. Returns a
+   TSF_MRAC_* status. The strengths come from tsf_step_with_premises on a
+   descriptor with m = 0 (no gains, no command). */
 int tsf_mrac_step(const tsf_mrac_law *law, double *a_hat, double *b_hat, double *d_hat,
                   double *s_m, const double *x, const double *h, const double *r, double dt,
-                  double *u);
+                  double *u, double *work);
 
 /* The gain set of `mode` among k Markov-switching modes
    (tsf_runtime::select_mode): mode itself when mode < k, else 0 with

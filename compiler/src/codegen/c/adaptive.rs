@@ -2,10 +2,11 @@
 //! declares the caller-owned `<name>_state_t` (estimates, reference-model
 //! state, strengths, flags, status) and `<name>_init` / `<name>_step`;
 //! `<name>.c` holds the const tables (premise map, rule terms and centres in
-//! a `tsf_controller` without gains, the law in a `tsf_mrac_law`, the
-//! initial estimates) and thin wrappers over the runtime's `tsf_strengths`
-//! and `tsf_mrac_step`, which mirror `tsf_runtime::AdaptiveController`
-//! operation by operation. Double only.
+//! a `tsf_controller` with no commands, the law in a `tsf_mrac_law`, the
+//! initial estimates) and thin wrappers over the runtime's
+//! `tsf_step_with_premises` (the strengths only) and `tsf_mrac_step`, which
+//! mirror `tsf_runtime::AdaptiveController` operation by operation. Double
+//! only.
 
 use super::{flat_rows, lit, CFiles, Gen};
 use crate::codegen::header::generated_lines;
@@ -103,6 +104,7 @@ typedef struct {p}state_t {{
     double d_hat;                     /* disturbance-bound estimate d */
     double s_m[{u}M];                 /* reference-model state */
     double h[{u}R];                   /* normalised firing strengths of the last step */
+    double work[2 * {u}M];            /* scratch space of the step */
     uint8_t flags;                    /* {u}FLAG_* bits of the last step */
     int status;                       /* {u}STATUS_* of the last step */
 }} {p}state_t;
@@ -163,8 +165,8 @@ fn source(g: &Gen<'_>, at: &AdaptiveTables) -> String {
     let dd = t.factored.terms.len();
     let _ = write!(
         s,
-        r#"/* The rule part of the runtime's controller descriptor: the strengths only
-   (no gains, no saturation). */
+        r#"/* The rule part of the runtime's controller descriptor: no commands (m = 0),
+   so its step computes the strengths and flags only (no gains, no saturation). */
 static const tsf_controller {p}rules = {rules};
 
 /* The error signal s = C x ({u}M x {u}N, row-major). */
@@ -202,7 +204,7 @@ static const tsf_mrac_law {p}law = {{
 }};
 
 "#,
-        rules = g.descriptor_entry(dd, "NULL", "NULL"),
+        rules = g.descriptor_entry(dd, "0", "NULL", "NULL"),
         c = rows(&d.c, t.n),
         a_m = rows(&d.a_m, t.m),
         p_mat = rows(&d.p, t.m),
@@ -240,7 +242,7 @@ static const tsf_mrac_law {p}law = {{
 void {p}step_with_premises({p}state_t *s, const double x[{u}N], const double z[],
     const double r[{u}M], double u[{u}M]) {{
     double deg[{dd}]; /* degrees of the distinct premise terms */
-    s->flags = tsf_strengths(&{p}rules, x, z, deg, s->h);
+    s->flags = tsf_step_with_premises(&{p}rules, x, z, deg, s->h, u);
     if ((s->flags & ({u}FLAG_STATE_NONFINITE | {u}FLAG_PREMISE_NONFINITE)) != 0u) {{
         int k;
         for (k = 0; k < {u}M; k++) {{
@@ -250,7 +252,7 @@ void {p}step_with_premises({p}state_t *s, const double x[{u}N], const double z[]
         return;
     }}
     s->status = tsf_mrac_step(&{p}law, s->a_hat, s->b_hat, &s->d_hat, s->s_m, x, s->h, r,
-        {u}SAMPLE_PERIOD, u);
+        {u}SAMPLE_PERIOD, u, s->work);
 }}
 
 void {p}step({p}state_t *s, const double x[{u}N], const double r[{u}M], double u[{u}M]) {{

@@ -171,7 +171,9 @@ static const {real} {p}about_points[{np}] = {pts};
     /// per mode `<name>_tables[K]` (each pointing at its mode's gains).
     fn descriptor(&self, d: usize) -> String {
         let (p, u) = (&self.p, &self.u);
-        let entry = |gains: String| self.descriptor_entry(d, &gains, &format!("{p}u_max"));
+        let entry = |gains: String| {
+            self.descriptor_entry(d, &format!("{u}M"), &gains, &format!("{p}u_max"))
+        };
         match &self.t.modes {
             Some(mt) => {
                 let entries: Vec<String> = (0..mt.names.len())
@@ -190,11 +192,11 @@ static const {real} {p}about_points[{np}] = {pts};
     }
 
     /// One `tsf_controller` initializer over this module's rule tables with
-    /// the given gains and saturation levels.
-    pub(super) fn descriptor_entry(&self, d: usize, gains: &str, u_max: &str) -> String {
+    /// `m` commands, the given gains and saturation levels.
+    pub(super) fn descriptor_entry(&self, d: usize, m: &str, gains: &str, u_max: &str) -> String {
         let (p, u) = (&self.p, &self.u);
         format!(
-            "{{\n    {u}N, {u}M, {u}P, {u}R, {d},\n    {p}terms, {p}factors, {p}rule_factors, {p}about_points,\n    {p}centres, {gains}, {u_max}\n}}"
+            "{{\n    {u}N, {m}, {u}P, {u}R, {d},\n    {p}terms, {p}factors, {p}rule_factors, {p}about_points,\n    {p}centres, {gains}, {u_max}\n}}"
         )
     }
 
