@@ -44,10 +44,9 @@ fn initial_state_is_the_design_model() {
     let s = State::new();
     assert_eq!(s, State::INIT);
     let j = [2043.0, 3044.0, 1989.0];
-    for i in 0..R {
-        for k in 0..M {
-            let b = s.b_hat[i * M + k];
-            assert!((b - 1.0 / j[k]).abs() <= 1e-15 / j[k], "b[{i}][{k}] = {b}");
+    for (i, rule) in s.b_hat.chunks_exact(M).enumerate() {
+        for (k, (b, jk)) in rule.iter().zip(j).enumerate() {
+            assert!((b - 1.0 / jk).abs() <= 1e-15 / jk, "b[{i}][{k}] = {b}");
         }
     }
     // Rule R1 (the origin): e' = omega' + k1 rho' = 0.5 * 0.5 omega.
