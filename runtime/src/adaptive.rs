@@ -18,7 +18,12 @@
 //!
 //! The state (estimates and reference model) is owned by the caller; the
 //! step allocates nothing and never panics. Non-finite inputs give `u = 0`,
-//! an error, and leave the state unchanged.
+//! an error, and leave the state unchanged. Every sum starts from +0 and adds
+//! in index order (the C runtime's `tsf_mrac_step` does the same).
+//!
+//! [`AdaptiveController`] is what generated code runs: the rules' firing
+//! strengths (as [`FactoredController`](crate::FactoredController)) and the
+//! law over a fixed period.
 
 use crate::controller::{premises_linear, strengths, Flags, Term};
 use crate::factored::{factored_weights, term_degrees};
