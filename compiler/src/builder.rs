@@ -117,8 +117,10 @@ impl Builder {
     }
 
     fn compile_one(&self, spec: &Path, targets: &[Emit]) -> Result<Vec<GeneratedFile>, Error> {
-        pipeline::read(spec)?
-            .compile(&self.settings)?
-            .generate(targets)
+        let front = pipeline::read(spec)?;
+        if let Some(files) = crate::adaptive::cli::generated(&front, targets) {
+            return files;
+        }
+        front.compile(&self.settings)?.generate(targets)
     }
 }

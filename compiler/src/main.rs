@@ -218,7 +218,13 @@ fn compile(
     if front.checked.model.is_none() {
         return ExitCode::from(exit::SPEC);
     }
-    if let Some(code) = tsfc::adaptive::cli::compile(&front, out) {
+    let spec_emit = front
+        .checked
+        .model
+        .as_ref()
+        .map_or_else(Vec::new, |m| m.spec.emit.clone());
+    let targets = emit_targets(emit.as_deref(), &spec_emit);
+    if let Some(code) = tsfc::adaptive::cli::compile(&front, out, &targets) {
         return ExitCode::from(code);
     }
     let run = match front.compile(&tsfc::synth::Settings::default()) {
@@ -245,16 +251,6 @@ fn compile(
     };
     let mut files = vec![(report_path.clone(), json.into_bytes())];
     if certified {
-        let targets: Vec<Emit> = match emit {
-            Some(t) => t
-                .iter()
-                .map(|t| match t {
-                    Target::Rust => Emit::Rust,
-                    Target::C => Emit::C,
-                })
-                .collect(),
-            None => run.model.spec.emit.clone(),
-        };
         match run.generate(&targets) {
             Ok(generated) => files.extend(
                 generated
@@ -281,6 +277,20 @@ fn compile(
         eprintln!("  wrote                {}", path.display());
     }
     ExitCode::from(run.exit_code())
+}
+
+/// The `--emit` targets, else the spec's `emit`.
+fn emit_targets(emit: Option<&[Target]>, spec: &[Emit]) -> Vec<Emit> {
+    match emit {
+        Some(t) => t
+            .iter()
+            .map(|t| match t {
+                Target::Rust => Emit::Rust,
+                Target::C => Emit::C,
+            })
+            .collect(),
+        None => spec.to_vec(),
+    }
 }
 
 fn simulate(

@@ -52,6 +52,11 @@ impl Front {
         }
     }
 
+    /// How reports and generated headers name the spec (its file name).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
     /// The diagnostics, rendered for a terminal.
     pub fn render(&self, color: bool) -> String {
         tsf_lang::diag::render(

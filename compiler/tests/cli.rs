@@ -630,3 +630,42 @@ fn simulate_refuses_a_csv_target_that_is_not_a_regular_file() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An adaptive spec's `emit rust, c;` writes the Rust module, the C files
+/// and the C runtime next to its report; `--emit` overrides it; `precision
+/// f32` is refused at generation (exit 3, no outputs).
+#[test]
+fn compile_of_an_adaptive_spec_writes_its_code() {
+    let dir = tmp_dir("adaptive");
+    let spec = fixture("specs/wang2013_adaptive_mrac.tsf");
+    let out = compile_into(&spec, &dir, &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    for f in [
+        "wang_adaptive.adaptive.json",
+        "wang_adaptive.rs",
+        "wang_adaptive.h",
+        "wang_adaptive.c",
+        "tsf_runtime.h",
+        "tsf_runtime.c",
+    ] {
+        assert!(dir.join(f).exists(), "{f}: {stderr}");
+    }
+    let only_rust = tmp_dir("adaptive-rust");
+    let out = compile_into(&spec, &only_rust, &["--emit", "rust"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(only_rust.join("wang_adaptive.rs").exists());
+    assert!(!only_rust.join("wang_adaptive.c").exists());
+    let f32 = dir.join("f32.tsf");
+    let text = std::fs::read_to_string(&spec).expect("spec");
+    std::fs::write(&f32, format!("{text}\nprecision f32;\n")).expect("write");
+    let refused = tmp_dir("adaptive-f32");
+    let out = compile_into(&f32, &refused, &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("generated in f64 only"), "{stderr}");
+    assert!(!refused.join("wang_adaptive.rs").exists());
+    for d in [dir, only_rust, refused] {
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}

@@ -201,6 +201,181 @@ int tsf_periodic_decide(uint32_t *count, uint32_t every) {
 #undef TSF_TINY_SCALE
 #undef TSF_RUNTIME_INSTANCE
 
+/* ------------------------------------- model-reference adaptive law (double) */
+
+/* tsf_runtime::adaptive, operation by operation: every sum starts from +0
+   and adds in index order, one product per statement. */
+
+/* ((0 + a_0 b_0) + a_1 b_1) + ... */
+static double tsf_mrac_dot(const double *a, const double *b, int n) {
+    double acc = 0.0;
+    int k;
+    for (k = 0; k < n; k++) {
+        const double t = a[k] * b[k];
+        acc = acc + t;
+    }
+    return acc;
+}
+
+/* sum_l row_l (s_l - r_l), from +0 in index order. */
+static double tsf_mrac_drift(const double *row, const double *s, const double *r, int m) {
+    double acc = 0.0;
+    int l;
+    for (l = 0; l < m; l++) {
+        const double e = s[l] - r[l];
+        const double t = row[l] * e;
+        acc = acc + t;
+    }
+    return acc;
+}
+
+/* v + rate dv projected onto [lo, hi]; v when that is not finite. */
+static double tsf_mrac_update(const tsf_adaptation *q, double v, double dv) {
+    const double step = q->rate * dv;
+    const double next = v + step;
+    if (isfinite(next) == 0) {
+        return v;
+    }
+    if (next < q->lo) {
+        return q->lo;
+    }
+    if (next > q->hi) {
+        return q->hi;
+    }
+    return next;
+}
+
+/* max(-1, min(1, v)); NaN stays NaN. */
+static double tsf_mrac_sat(double v) {
+    if (v < -1.0) {
+        return -1.0;
+    }
+    if (v > 1.0) {
+        return 1.0;
+    }
+    return v;
+}
+
+/* Whether the n values of v are all finite. */
+static int tsf_mrac_finite(const double *v, int n) {
+    int all = 1;
+    int k;
+    for (k = 0; k < n; k++) {
+        if (isfinite(v[k]) == 0) {
+            all = 0;
+        }
+    }
+    return all;
+}
+
+/* The update laws over dt with projection, then the reference model
+   (AdaptiveLaw::adapt); ds is scratch space of m values. */
+static void tsf_mrac_adapt(const tsf_mrac_law *law, double *a_hat, double *b_hat, double *d_hat,
+                           double *s_m, const double *x, const double *h, const double *r,
+                           const double *p, const double *u, double dt, double *ds) {
+    const int n = law->n, m = law->m;
+    int i, k, j;
+    for (i = 0; i < law->r; i++) {
+        const double dh = dt * h[i];
+        for (k = 0; k < m; k++) {
+            if (law->a.rate > 0.0) {
+                double *row = &a_hat[(i * m + k) * n];
+                for (j = 0; j < n; j++) {
+                    const double dx = dh * x[j];
+                    const double dv = dx * p[k];
+                    row[j] = tsf_mrac_update(&law->a, row[j], dv);
+                }
+            }
+            if (law->b.rate > 0.0) {
+                const double du = dh * u[k];
+                const double dv = du * p[k];
+                b_hat[i * m + k] = tsf_mrac_update(&law->b, b_hat[i * m + k], dv);
+            }
+        }
+    }
+    if (law->d.rate > 0.0) {
+        double sum = 0.0;
+        for (k = 0; k < m; k++) {
+            sum = sum + fabs(p[k]);
+        }
+        {
+            const double dv = dt * sum;
+            *d_hat = tsf_mrac_update(&law->d, *d_hat, dv);
+        }
+    }
+    for (k = 0; k < m; k++) {
+        ds[k] = tsf_mrac_drift(&law->a_m[k * m], s_m, r, m);
+    }
+    for (k = 0; k < m; k++) {
+        const double step = dt * ds[k];
+        const double next = s_m[k] + step;
+        if (isfinite(next) != 0) {
+            s_m[k] = next;
+        }
+    }
+}
+
+int tsf_mrac_step(const tsf_mrac_law *law, double *a_hat, double *b_hat, double *d_hat,
+                  double *s_m, const double *x, const double *h, const double *r, double dt,
+                  double *u, double *work) {
+    const int n = law->n, m = law->m;
+    double *s = work;
+    double *p = &work[m > 0 ? m : 0];
+    int i, k, l;
+    if (m > 0 && m <= TSF_MRAC_MAX_INPUTS) {
+        for (k = 0; k < m; k++) {
+            u[k] = 0.0;
+        }
+    }
+    if (!(n > 0 && m > 0 && m <= TSF_MRAC_MAX_INPUTS && law->r >= 0)) {
+        return TSF_MRAC_SHAPE;
+    }
+    if (!((tsf_mrac_finite(x, n) != 0) && (tsf_mrac_finite(h, law->r) != 0) &&
+          (tsf_mrac_finite(r, m) != 0) && (isfinite(dt) != 0) && (dt >= 0.0))) {
+        return TSF_MRAC_NONFINITE;
+    }
+    for (k = 0; k < m; k++) {
+        s[k] = tsf_mrac_dot(&law->c[k * n], x, n);
+    }
+    /* p = P eps, eps_l = s_l - s_m_l formed where it is used (same value). */
+    for (k = 0; k < m; k++) {
+        double acc = 0.0;
+        for (l = 0; l < m; l++) {
+            const double e = s[l] - s_m[l];
+            const double t = law->p[k * m + l] * e;
+            acc = acc + t;
+        }
+        p[k] = acc;
+    }
+    for (k = 0; k < m; k++) {
+        double ax = 0.0, bh = 0.0;
+        for (i = 0; i < law->r; i++) {
+            const double ai = tsf_mrac_dot(&a_hat[(i * m + k) * n], x, n);
+            const double ta = h[i] * ai;
+            const double tb = h[i] * b_hat[i * m + k];
+            ax = ax + ta;
+            bh = bh + tb;
+        }
+        {
+            const double v = tsf_mrac_drift(&law->a_m[k * m], s, r, m);
+            const double q = p[k] / law->layer;
+            const double w = *d_hat * tsf_mrac_sat(q);
+            const double num = v - ax;
+            const double top = num - w;
+            u[k] = top / bh;
+        }
+    }
+    if (tsf_mrac_finite(u, m) == 0) {
+        for (k = 0; k < m; k++) {
+            u[k] = 0.0;
+        }
+        return TSF_MRAC_NONFINITE;
+    }
+    /* s is no longer needed: its space holds the reference model's drift. */
+    tsf_mrac_adapt(law, a_hat, b_hat, d_hat, s_m, x, h, r, p, u, dt, s);
+    return TSF_MRAC_OK;
+}
+
 #else /* TSF_RUNTIME_INSTANCE: the functions of one real type TSF_R */
 
 /* A constant of the real type. */

@@ -169,6 +169,54 @@ uint8_t tsf_step_with_premises(const tsf_controller *c, const double *x, const d
 uint8_t tsf_step_with_premisesf(const tsf_controllerf *c, const float *x, const float *z,
                                 float *deg, float *h, float *u);
 
+/* Model-reference adaptive T-S law (tsf_runtime::adaptive; Wang, Gao & He
+   2013, several inputs), double only. With s = C x, p = P (s - s_m):
+   u_k = ((A_m (s - r))_k - sum_i h_i a_ik'x - d sat(p_k / layer)) / sum_i h_i b_ik,
+   then over dt (explicit Euler, projection onto each box after the step):
+   a_ik += rate_a dt h_i x p_k, b_ik += rate_b dt h_i u_k p_k,
+   d += rate_d dt sum_k |p_k|, s_m += dt A_m (s_m - r). A rate of 0 keeps the
+   quantity. */
+
+/* Most inputs of an adaptive law (as tsf_runtime::adaptive::MAX_INPUTS). */
+#define TSF_MRAC_MAX_INPUTS 8
+/* Status of tsf_mrac_step: done; a dimension out of range (u = 0); a NaN or
+   infinite input, strength, step or command (u = 0). Refused steps leave the
+   estimates and the reference model unchanged. */
+#define TSF_MRAC_OK 0
+#define TSF_MRAC_SHAPE 1
+#define TSF_MRAC_NONFINITE 2
+
+/* Rate and projection box of one adapted quantity. */
+typedef struct tsf_adaptation {
+    double rate; /* 0: not adapted */
+    double lo;
+    double hi;
+} tsf_adaptation;
+
+/* The const tables of an adaptive law; matrices row-major. */
+typedef struct tsf_mrac_law {
+    int n;           /* states */
+    int m;           /* inputs = error components (<= TSF_MRAC_MAX_INPUTS) */
+    int r;           /* rules */
+    const double *c;   /* m x n: the error signal s = C x */
+    const double *a_m; /* m x m: the reference model */
+    const double *p;   /* m x m: A_m'P + P A_m = -Q */
+    tsf_adaptation a;  /* a_ik: r x m x n */
+    tsf_adaptation b;  /* b_ik: r x m */
+    tsf_adaptation d;  /* d */
+    double layer;      /* boundary layer (> 0) */
+} tsf_mrac_law;
+
+/* One step of the law: writes u (m values) from x (n), the normalised
+   strengths h (r) and the reference r (m), then advances the caller's
+   estimates a_hat (r x m x n), b_hat (r x m), *d_hat and the reference-model
+   state s_m (m) over dt; work is scratch space of 2 m values. Returns a
+   TSF_MRAC_* status. The strengths come from tsf_step_with_premises on a
+   descriptor with m = 0 (no gains, no command). */
+int tsf_mrac_step(const tsf_mrac_law *law, double *a_hat, double *b_hat, double *d_hat,
+                  double *s_m, const double *x, const double *h, const double *r, double dt,
+                  double *u, double *work);
+
 /* The gain set of `mode` among k Markov-switching modes
    (tsf_runtime::select_mode): mode itself when mode < k, else 0 with
    TSF_FLAG_MODE_OUT_OF_RANGE or-ed into *flags. */

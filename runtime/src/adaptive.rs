@@ -18,7 +18,15 @@
 //!
 //! The state (estimates and reference model) is owned by the caller; the
 //! step allocates nothing and never panics. Non-finite inputs give `u = 0`,
-//! an error, and leave the state unchanged.
+//! an error, and leave the state unchanged. Every sum starts from +0 and adds
+//! in index order (the C runtime's `tsf_mrac_step` does the same).
+//!
+//! [`AdaptiveController`] is what generated code runs: the rules' firing
+//! strengths (as [`FactoredController`](crate::FactoredController)) and the
+//! law over a fixed period.
+
+use crate::controller::{premises_linear, strengths, Flags, Term};
+use crate::factored::{factored_weights, term_degrees};
 
 /// Most inputs (error components) of an adaptive law: the step keeps its
 /// work in fixed arrays of this size.
@@ -106,8 +114,17 @@ fn sat(v: f64) -> f64 {
     v.clamp(-1.0, 1.0)
 }
 
+/// `((0 + a_0 b_0) + a_1 b_1) + ...`: every sum of the law starts from +0 and
+/// adds in index order (the C runtime's `tsf_adaptive_step` does the same).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    a.iter().zip(b).fold(0.0, |acc, (x, y)| acc + x * y)
+}
+
+/// `sum_l row_l (s_l - r_l)` from +0, in index order.
+fn drift(row: &[f64], s: &[f64], r: &[f64]) -> f64 {
+    row.iter()
+        .zip(s.iter().zip(r))
+        .fold(0.0, |acc, (a, (sl, rl))| acc + a * (sl - rl))
 }
 
 impl AdaptiveLaw<'_> {
@@ -184,11 +201,7 @@ impl AdaptiveLaw<'_> {
                 bh += hi * b_rule.get(k).copied().unwrap_or(0.0);
             }
             let row = self.a_m.chunks_exact(m).nth(k).unwrap_or(&[]);
-            let v: f64 = row
-                .iter()
-                .zip(s.iter().zip(r))
-                .map(|(a, (sl, rl))| a * (sl - rl))
-                .sum();
+            let v = drift(row, &s, r);
             let pk = p.get(k).copied().unwrap_or(0.0);
             let w = d_hat * sat(pk / self.layer);
             *uk = (v - ax - w) / bh;
@@ -237,16 +250,12 @@ impl AdaptiveLaw<'_> {
             }
         }
         if self.d.rate > 0.0 {
-            let sum: f64 = p.iter().take(m).map(|v| v.abs()).sum();
+            let sum = p.iter().take(m).fold(0.0, |acc, v| acc + v.abs());
             *st.d_hat = self.d.update(*st.d_hat, dt * sum);
         }
         let mut ds = [0.0; MAX_INPUTS];
         for (dk, row) in ds.iter_mut().zip(self.a_m.chunks_exact(m)) {
-            *dk = row
-                .iter()
-                .zip(st.s_m.iter().zip(r))
-                .map(|(a, (sl, rl))| a * (sl - rl))
-                .sum();
+            *dk = drift(row, st.s_m, r);
         }
         for (sk, dk) in st.s_m.iter_mut().zip(ds) {
             let next = *sk + dt * dk;
@@ -254,6 +263,93 @@ impl AdaptiveLaw<'_> {
                 *sk = next;
             }
         }
+    }
+}
+
+/// The tables of a generated adaptive controller: the premise map and the
+/// rule premises (for the firing strengths, as in
+/// [`FactoredController`](crate::FactoredController)), the law and its step.
+///
+/// `N` states, `M` inputs, `P` premise variables, `R` rules, `D` distinct
+/// premise terms.
+#[derive(Debug, Clone, Copy)]
+pub struct AdaptiveController<
+    'a,
+    const N: usize,
+    const M: usize,
+    const P: usize,
+    const R: usize,
+    const D: usize,
+> {
+    /// Linear premise map `z = L x` used by [`AdaptiveController::step`].
+    pub premise_map: [[f64; N]; P],
+    /// The distinct premise terms, each evaluated once per step.
+    pub terms: [Term<'a, f64>; D],
+    /// Rule premises: indices into `terms`, multiplied in order.
+    pub rules: [&'a [usize]; R],
+    /// Rule centres in premise space (for the no-rule-fired fallback).
+    pub centres: [[f64; P]; R],
+    /// The adaptive law (its slices sized for `N`, `M`, `R`).
+    pub law: AdaptiveLaw<'a>,
+    /// Controller period in seconds: the update laws are integrated over it.
+    pub dt: f64,
+}
+
+/// What one [`AdaptiveController`] step did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdaptiveStep<const M: usize, const R: usize> {
+    /// The command (0 when the step was refused).
+    pub u: [f64; M],
+    /// Normalized firing strengths (all 0 on a non-finite state or premise).
+    pub h: [f64; R],
+    /// [`Flags::STATE_NONFINITE`], [`Flags::PREMISE_NONFINITE`] or
+    /// [`Flags::NO_RULE_FIRED`] (the nearest rule's strength 1).
+    pub flags: Flags,
+    /// Why the law refused the step (`u = 0`, state unchanged), if it did.
+    pub error: Option<AdaptiveError>,
+}
+
+impl<const N: usize, const M: usize, const P: usize, const R: usize, const D: usize>
+    AdaptiveController<'_, N, M, P, R, D>
+{
+    /// One step with premises from the linear map `z = L x`.
+    pub fn step(&self, st: &mut AdaptiveState, x: &[f64; N], r: &[f64; M]) -> AdaptiveStep<M, R> {
+        let z = premises_linear(&self.premise_map, x);
+        self.step_with_premises(st, x, &z, r)
+    }
+
+    /// One step with premise values `z` computed by the caller: the firing
+    /// strengths of the rules at `z` (a non-finite `x` or `z` refuses the
+    /// step with flags, `u = 0` and the state unchanged; no rule firing
+    /// gives the nearest rule's strength 1), then [`AdaptiveLaw::step`] over
+    /// [`AdaptiveController::dt`].
+    pub fn step_with_premises(
+        &self,
+        st: &mut AdaptiveState,
+        x: &[f64; N],
+        z: &[f64; P],
+        r: &[f64; M],
+    ) -> AdaptiveStep<M, R> {
+        let mut out = AdaptiveStep {
+            u: [0.0; M],
+            h: [0.0; R],
+            flags: Flags::NONE,
+            error: None,
+        };
+        if !x.iter().all(|v| v.is_finite()) {
+            out.flags |= Flags::STATE_NONFINITE;
+        }
+        if !z.iter().all(|v| v.is_finite()) {
+            out.flags |= Flags::PREMISE_NONFINITE;
+        }
+        if out.flags.is_fault() {
+            out.error = Some(AdaptiveError::NonFinite);
+            return out;
+        }
+        let w = factored_weights(&term_degrees(&self.terms, z), &self.rules);
+        (out.h, out.flags) = strengths(&w, &self.centres, z);
+        out.error = self.law.step(st, x, &out.h, r, self.dt, &mut out.u).err();
+        out
     }
 }
 
@@ -308,6 +404,91 @@ mod tests {
         assert_eq!(a[0], 0.5);
         assert_eq!(d, 0.1);
         assert_eq!(b[0], 1.0);
+    }
+
+    /// Two rules on z = x (shoulders meeting at 0, centres -1 and 1).
+    fn controller<'a>(l: AdaptiveLaw<'a>) -> AdaptiveController<'a, 1, 1, 1, 2, 2> {
+        use crate::Membership;
+        AdaptiveController {
+            premise_map: [[1.0]],
+            terms: [
+                Term::Is {
+                    var: 0,
+                    set: Membership::Trap {
+                        a: -10.0,
+                        b: -10.0,
+                        c: -1.0,
+                        d: 1.0,
+                    },
+                },
+                Term::Is {
+                    var: 0,
+                    set: Membership::Trap {
+                        a: -1.0,
+                        b: 1.0,
+                        c: 10.0,
+                        d: 10.0,
+                    },
+                },
+            ],
+            rules: [&[0], &[1]],
+            centres: [[-1.0], [1.0]],
+            law: AdaptiveLaw { rules: 2, ..l },
+            dt: 0.1,
+        }
+    }
+
+    #[test]
+    fn controller_step_is_the_law_at_the_rules_strengths() {
+        let (p, a_m, c) = ([0.5], [-2.0], [1.0]);
+        let ctl = controller(law(&p, &a_m, &c));
+        let (mut a, mut b, mut d, mut sm) = ([0.2, -0.1], [1.0, 1.5], 0.0, [0.0]);
+        let (mut a2, mut b2, mut d2, mut sm2) = (a, b, d, sm);
+        let mut st = AdaptiveState {
+            a_hat: &mut a,
+            b_hat: &mut b,
+            d_hat: &mut d,
+            s_m: &mut sm,
+        };
+        let s = ctl.step(&mut st, &[0.5], &[0.25]);
+        assert_eq!((s.h, s.flags, s.error), ([0.25, 0.75], Flags::NONE, None));
+        let mut st2 = AdaptiveState {
+            a_hat: &mut a2,
+            b_hat: &mut b2,
+            d_hat: &mut d2,
+            s_m: &mut sm2,
+        };
+        let mut u = [0.0];
+        ctl.law
+            .step(&mut st2, &[0.5], &[0.25, 0.75], &[0.25], 0.1, &mut u)
+            .unwrap();
+        assert_eq!(s.u, u);
+        assert_eq!((a, b, d, sm), (a2, b2, d2, sm2));
+        // Far outside both sets: the nearest rule alone.
+        let mut st = AdaptiveState {
+            a_hat: &mut a,
+            b_hat: &mut b,
+            d_hat: &mut d,
+            s_m: &mut sm,
+        };
+        let s = ctl.step(&mut st, &[20.0], &[0.0]);
+        assert_eq!(
+            (s.h, s.flags, s.error),
+            ([0.0, 1.0], Flags::NO_RULE_FIRED, None)
+        );
+        // A NaN state: zero command, flags, the state held.
+        let before = (a, b, d, sm);
+        let mut st = AdaptiveState {
+            a_hat: &mut a,
+            b_hat: &mut b,
+            d_hat: &mut d,
+            s_m: &mut sm,
+        };
+        let s = ctl.step(&mut st, &[f64::NAN], &[0.0]);
+        assert_eq!(s.u, [0.0]);
+        assert_eq!(s.error, Some(AdaptiveError::NonFinite));
+        assert!(s.flags.contains(Flags::STATE_NONFINITE) && s.flags.is_fault());
+        assert_eq!((a, b, d, sm), before);
     }
 
     #[test]

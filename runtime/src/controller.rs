@@ -312,7 +312,7 @@ pub fn saturate<T: Real, const M: usize>(u: &[T; M], u_bar: &[T; M]) -> ([T; M],
 /// some rule fires, else the one-hot vector of [`nearest_rule`] at `z` with
 /// [`Flags::NO_RULE_FIRED`].
 #[inline]
-fn strengths<T: Real, const P: usize, const R: usize>(
+pub(crate) fn strengths<T: Real, const P: usize, const R: usize>(
     w: &[T; R],
     centres: &[[T; P]; R],
     z: &[T; P],

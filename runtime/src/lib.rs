@@ -16,7 +16,8 @@
 //! - [`trigger`]: periodic, static relative, adaptive (Xu & Huang 2020) and
 //!   mixed (Amrr et al. 2019) transmission triggers;
 //! - [`adaptive`]: the model-reference adaptive law (Wang et al. 2013) with
-//!   projection and a boundary-layer robust term, state caller-owned.
+//!   projection and a boundary-layer robust term, state caller-owned;
+//!   [`AdaptiveController`] adds the rules' strengths (what generated code runs).
 
 #![cfg_attr(
     not(test),
@@ -44,7 +45,9 @@ pub mod modal;
 mod real;
 pub mod trigger;
 
-pub use adaptive::{Adaptation, AdaptiveError, AdaptiveLaw, AdaptiveState};
+pub use adaptive::{
+    Adaptation, AdaptiveController, AdaptiveError, AdaptiveLaw, AdaptiveState, AdaptiveStep,
+};
 pub use controller::{
     blend, nearest_rule, normalize, premises_linear, rule_weights, saturate, Controller, Flags,
     Rule, Step, Term,

@@ -6,6 +6,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .spec("../../specs/xu2020_event_triggered.tsf")
         .spec("../../specs/inverted_pendulum.tsf")
         .spec("../../specs/xue2024_markov_fault_tolerant.tsf")
+        .spec("../../specs/wang2013_adaptive_mrac.tsf")
         .emit_rust(true)
         .compile()?;
     Ok(())

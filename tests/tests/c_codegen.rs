@@ -215,7 +215,7 @@ fn emitted_runtime_files_are_the_checked_in_ones() {
 
 // ------------------------------------------------------------- C toolchain
 
-fn c_compiler() -> String {
+pub(crate) fn c_compiler() -> String {
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
     let ok = Command::new(&cc)
         .arg("--version")
@@ -238,13 +238,13 @@ const STRICT: [&str; 6] = [
     "-pedantic",
     "-Wshadow",
 ];
-const SANITIZE: [&str; 3] = [
+pub(crate) const SANITIZE: [&str; 3] = [
     "-fsanitize=undefined,address",
     "-fno-sanitize-recover=all",
     "-fno-omit-frame-pointer",
 ];
 
-fn work_dir(tag: &str) -> PathBuf {
+pub(crate) fn work_dir(tag: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("c_codegen_{tag}"));
     std::fs::create_dir_all(&d).expect("temp dir");
     d
@@ -252,7 +252,7 @@ fn work_dir(tag: &str) -> PathBuf {
 
 /// Compiles and links `sources` into `out` with the strict flags plus
 /// `extra`; panics with the compiler's output on failure.
-fn build(cc: &str, sources: &[PathBuf], out: &Path, extra: &[&str]) {
+pub(crate) fn build(cc: &str, sources: &[PathBuf], out: &Path, extra: &[&str]) {
     let o = Command::new(cc)
         .args(STRICT)
         .args(extra)
@@ -270,7 +270,7 @@ fn build(cc: &str, sources: &[PathBuf], out: &Path, extra: &[&str]) {
 }
 
 /// Whether the compiler builds and runs a program with UBSan + ASan.
-fn sanitizers_work(cc: &str) -> bool {
+pub(crate) fn sanitizers_work(cc: &str) -> bool {
     let dir = work_dir("probe");
     let src = dir.join("probe.c");
     std::fs::write(&src, "int main(void) { return 0; }\n").expect("write probe");
@@ -290,7 +290,7 @@ fn sanitizers_work(cc: &str) -> bool {
 }
 
 /// Writes the runtime's header and source into `dir`; returns the source.
-fn write_runtime(dir: &Path) -> PathBuf {
+pub(crate) fn write_runtime(dir: &Path) -> PathBuf {
     for f in runtime::files() {
         std::fs::write(dir.join(&f.name), &f.text).expect("write runtime file");
     }
@@ -521,19 +521,19 @@ fn reference_rows(t: &Tables, states: &[Vec<f64>]) -> Vec<Row> {
 // ------------------------------------------------------------------ states
 
 /// SplitMix64.
-struct Rng(u64);
+pub(crate) struct Rng(pub(crate) u64);
 impl Rng {
-    fn next(&mut self) -> u64 {
+    pub(crate) fn next(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
     }
-    fn unit(&mut self) -> f64 {
+    pub(crate) fn unit(&mut self) -> f64 {
         (self.next() >> 11) as f64 / (1u64 << 53) as f64
     }
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+    pub(crate) fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.unit()
     }
 }
@@ -640,7 +640,7 @@ fn parse_row(line: &str, t: &Tables) -> Row {
 
 /// Relative difference with an absolute floor of 1e-300; 0 for equal values
 /// (including two NaNs), infinite for a NaN against a number.
-fn rel_diff(a: f64, b: f64) -> f64 {
+pub(crate) fn rel_diff(a: f64, b: f64) -> f64 {
     if a == b || (a.is_nan() && b.is_nan()) {
         return 0.0;
     }
@@ -690,7 +690,7 @@ fn compare(t: &Tables, tag: &str, states: &[Vec<f64>], c: &[Row], rust: &[Row]) 
     worst
 }
 
-fn run_driver(exe: &Path, input: &Path) -> String {
+pub(crate) fn run_driver(exe: &Path, input: &Path) -> String {
     let child = Command::new(exe)
         .env("ASAN_OPTIONS", "detect_leaks=0")
         .env("UBSAN_OPTIONS", "print_stacktrace=1")
@@ -1088,7 +1088,7 @@ fn sensor_setup(dir: &Path, t: &Tables) -> Vec<PathBuf> {
     vec![drv, write_runtime(dir)]
 }
 
-fn hex_line(tag: &str, v: &[f64]) -> String {
+pub(crate) fn hex_line(tag: &str, v: &[f64]) -> String {
     let words: Vec<String> = v.iter().map(|x| format!("{:x}", x.to_bits())).collect();
     format!("{tag} {}", words.join(" "))
 }

@@ -2,6 +2,7 @@
 //! artifacts) whose modules are the former per-file test crates.
 
 mod adaptive;
+mod adaptive_codegen;
 mod amrr;
 mod c_codegen;
 mod common;

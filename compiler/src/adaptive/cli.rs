@@ -1,10 +1,14 @@
 //! `tsfc compile` and `tsfc simulate` on an adaptive spec: the design report
 //! (`<name>.adaptive.json`), and the run's metrics, CSV and estimates plot.
 
-use super::{design, sim, Outcome};
+use super::{design, sim, Design, Outcome};
+use crate::codegen::{generate_adaptive, GeneratedFile};
+use crate::error::Error;
 use crate::pipeline::Front;
+use crate::report::sha256_hex;
 use crate::sim::source::SpecSource;
 use std::path::{Path, PathBuf};
+use tsf_lang::spec::Emit;
 
 /// Exit code of a run whose claims failed, or that stopped early (as `tsfc simulate`).
 pub const RUN_FAILED: u8 = 4;
@@ -29,13 +33,58 @@ fn json<T: serde::Serialize>(v: &T) -> Vec<u8> {
         .into_bytes()
 }
 
-/// `tsfc compile` of an adaptive spec: writes the report, prints the verdict;
-/// `None` when the spec is not adaptive.
-pub fn compile(front: &Front, out: &Path) -> Option<u8> {
+/// The generated files of a well-posed adaptive design of `front` for
+/// `targets` (headers name the spec by its file name).
+pub fn generate(
+    front: &Front,
+    design: &Design,
+    targets: &[Emit],
+) -> Result<Vec<GeneratedFile>, Error> {
+    let model = front
+        .checked
+        .model
+        .as_ref()
+        .ok_or_else(|| Error::spec(front.render(false)))?;
+    let sha = sha256_hex(&front.source.bytes);
+    generate_adaptive(model, design, front.name(), &sha, targets)
+        .map_err(|e| Error::not_certified(format!("code generation failed: {e}")))
+}
+
+/// The generated files of an adaptive spec for `targets`: `None` when the
+/// spec is not adaptive, an error when its design is refused.
+pub fn generated(front: &Front, targets: &[Emit]) -> Option<Result<Vec<GeneratedFile>, Error>> {
+    let outcome = outcome(front)?;
+    Some(match &outcome.design {
+        Some(design) => generate(front, design, targets),
+        None => Err(Error::not_certified(format!(
+            "{}: the adaptive design was refused: {}",
+            front.name(),
+            outcome.report.refusals.join("; ")
+        ))),
+    })
+}
+
+/// `tsfc compile` of an adaptive spec: writes the report and the generated
+/// files for `targets` (none when the design is refused), prints the
+/// verdict; `None` when the spec is not adaptive.
+pub fn compile(front: &Front, out: &Path, targets: &[Emit]) -> Option<u8> {
     let outcome = outcome(front)?;
     let name = &front.checked.model.as_ref()?.spec.controller.node;
     let path = out.join(format!("{name}.adaptive.json"));
-    if let Err(code) = write(&[(path.clone(), json(&outcome.report))]) {
+    let mut files = vec![(path.clone(), json(&outcome.report))];
+    if let (Some(design), false) = (&outcome.design, targets.is_empty()) {
+        match generate(front, design, targets) {
+            Ok(g) => files.extend(
+                g.into_iter()
+                    .map(|f| (out.join(&f.name), f.text.into_bytes())),
+            ),
+            Err(e) => {
+                eprintln!("error: {}", e.message);
+                return Some(e.exit_code());
+            }
+        }
+    }
+    if let Err(code) = write(&files) {
         return Some(code);
     }
     let r = &outcome.report;
@@ -61,7 +110,12 @@ pub fn compile(front: &Front, out: &Path) -> Option<u8> {
     for x in &r.x0_outside_operating_range {
         eprintln!("  note: x0 component {x} (the rules' operating range)");
     }
-    eprintln!("  wrote                {}", path.display());
+    if outcome.design.is_none() && !targets.is_empty() {
+        eprintln!("  no code generated: the design was refused");
+    }
+    for (path, _) in &files {
+        eprintln!("  wrote                {}", path.display());
+    }
     Some(outcome.exit_code())
 }
 

@@ -113,9 +113,9 @@ pub struct Options {
     pub x0: Option<Vec<f64>>,
 }
 
-/// Normalized firing strengths at `x`; `false` when no rule fired (one-hot
-/// at the nearest rule centre instead).
-fn strengths(model: &TsModel, x: &[f64], h: &mut [f64]) -> Result<bool, SimError> {
+/// Normalized firing strengths at `x` (premises by the spec's evaluator);
+/// `false` when no rule fired (one-hot at the nearest rule centre instead).
+pub fn strengths(model: &TsModel, x: &[f64], h: &mut [f64]) -> Result<bool, SimError> {
     let z = premise_values(&model.spec, x).map_err(|d| SimError::spec(d.message))?;
     let mut sum = 0.0;
     for (hi, terms) in h.iter_mut().zip(&model.terms) {

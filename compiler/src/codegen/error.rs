@@ -22,6 +22,10 @@ pub enum CodegenError {
     },
     /// A sensor module was asked for but the design has no aperiodic trigger.
     NoSensor,
+    /// An adaptive spec asks for `precision f32`: the law is generated in f64 only.
+    AdaptivePrecision,
+    /// The adaptive design was refused (`adaptive-refused`): no code.
+    AdaptiveRefused,
     /// The generated text of a language does not parse (a generator bug).
     Unparsable {
         /// The language, e.g. `Rust`.
@@ -49,6 +53,12 @@ impl fmt::Display for CodegenError {
             CodegenError::NoSensor => {
                 f.write_str("internal error: no aperiodic trigger: no sensor module")
             }
+            CodegenError::AdaptivePrecision => f.write_str(
+                "the adaptive law is generated in f64 only (docs/limits.md): remove `precision f32`",
+            ),
+            CodegenError::AdaptiveRefused => f.write_str(
+                "the adaptive design was refused (`adaptive-refused`): no code is generated",
+            ),
             CodegenError::Unparsable { language, reason } => write!(
                 f,
                 "internal error: generated {language} does not parse: {reason}"

@@ -55,6 +55,46 @@ pub fn backend(target: Emit) -> Option<&'static dyn Backend> {
     BACKENDS.iter().copied().find(|b| b.target() == target)
 }
 
+/// Generates the requested targets for a well-posed adaptive design
+/// (docs/adaptive.md): `<name>.rs`, or `<name>.h`, `<name>.c` and the C
+/// runtime. The law is generated in f64 only.
+pub fn generate_adaptive(
+    model: &TsModel,
+    design: &crate::adaptive::Design,
+    spec_path: &str,
+    spec_sha256: &str,
+    targets: &[Emit],
+) -> Result<Vec<GeneratedFile>, CodegenError> {
+    if model.spec.precision != tsf_lang::spec::Precision::F64 {
+        return Err(CodegenError::AdaptivePrecision);
+    }
+    let at = crate::tables::adaptive_tables(model, design, spec_path, spec_sha256)?;
+    let mut out = Vec::new();
+    for &target in targets {
+        match target {
+            Emit::Rust => out.push(GeneratedFile {
+                name: format!("{}.rs", at.base.name),
+                text: rust::emit_rust_adaptive(&at)?,
+            }),
+            Emit::C => {
+                c::check_name(&at.base.name)?;
+                let files = c::emit_c_adaptive(&at);
+                let (h, src) = c::c_file_names(&at.base);
+                out.push(GeneratedFile {
+                    name: h,
+                    text: files.header,
+                });
+                out.push(GeneratedFile {
+                    name: src,
+                    text: files.source,
+                });
+                out.extend(c::runtime::files());
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// Generates the requested targets for a certified design.
 pub fn generate(
     model: &TsModel,

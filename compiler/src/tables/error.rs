@@ -40,6 +40,9 @@ pub enum TablesError {
     },
     /// The trigger weight has a NaN or infinite entry.
     TriggerWeightNonFinite,
+    /// An adaptive spec without a `simulate` step: the update laws have no
+    /// controller period.
+    AdaptivePeriod,
 }
 
 impl fmt::Display for TablesError {
@@ -66,6 +69,9 @@ impl fmt::Display for TablesError {
             TablesError::TriggerWeightNonFinite => {
                 f.write_str("the trigger weight has a non-finite entry")
             }
+            TablesError::AdaptivePeriod => f.write_str(
+                "the adaptive law is integrated at the controller period, the `simulate` block's step: add `simulate { time = t0 .. t1 step h; ... }`",
+            ),
         }
     }
 }

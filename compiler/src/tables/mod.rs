@@ -4,12 +4,14 @@
 //! generators render it ([`crate::codegen`]); the simulator runs it in closed
 //! loop ([`crate::sim`]).
 
+mod adaptive;
 mod error;
 mod factored;
 mod sensor;
 mod signal;
 pub mod sym;
 
+pub use adaptive::{adaptive_tables, AdaptiveTables};
 pub use error::TablesError;
 pub use factored::FactoredTerms;
 pub use sensor::{SensorLaw, SensorTables};

@@ -30,3 +30,10 @@ pub mod pendulum {
 pub mod markov {
     include!(concat!(env!("OUT_DIR"), "/xue_markov.rs"));
 }
+
+/// Wang, Gao & He (2013) adaptive model-reference spacecraft controller: the
+/// estimates and the reference model live in the caller's `State` (9 rules,
+/// n = 6, m = 3).
+pub mod adaptive {
+    include!(concat!(env!("OUT_DIR"), "/wang_adaptive.rs"));
+}

@@ -33,6 +33,7 @@ use crate::tables::Tables;
 use std::fmt::Write as _;
 use tsf_lang::spec::Emit;
 
+mod adaptive;
 mod header;
 pub mod runtime;
 mod sensor;
@@ -40,6 +41,7 @@ mod signal_sensor;
 mod source;
 mod step;
 
+pub use adaptive::emit_c_adaptive;
 pub use sensor::{c_sensor_file_names, emit_c_sensor};
 pub use signal_sensor::emit_c_signal_sensor;
 
@@ -70,7 +72,7 @@ impl Backend for CBackend {
 
 /// Controller names whose C symbols would collide with the runtime's
 /// (`tsf`, `tsf_...` in any case) are refused.
-fn check_name(name: &str) -> Result<(), CodegenError> {
+pub(super) fn check_name(name: &str) -> Result<(), CodegenError> {
     let lower = name.to_ascii_lowercase();
     if lower == "tsf" || lower.starts_with("tsf_") {
         return Err(CodegenError::ReservedName {

@@ -49,20 +49,7 @@ impl Gen<'_> {
         let t = self.t;
         let (p, u) = (&self.p, &self.u);
         let real = format!("{u}REAL");
-        let pd = self.pd;
-        let mut s = String::new();
-        if let PremiseCode::Linear(l) = &t.premise {
-            let _ = writeln!(
-                s,
-                "/* Premise map z = L x ({pd} rows of {u}N, row-major, one row per line). */\nstatic const {real} {p}premise_map[{pd} * {u}N] = {{\n{}\n}};\n",
-                flat_rows(&padded(l, t.n))
-            );
-        }
-        let _ = writeln!(
-            s,
-            "/* Rule centres in premise space ({u}R rows of {pd}; nearest-rule fallback). */\nstatic const {real} {p}centres[{u}R * {pd}] = {{\n{}\n}};\n",
-            flat_rows(&padded(&t.centres, pd))
-        );
+        let mut s = self.premise_tables();
         let mut gains = Vec::new();
         match &t.modes {
             Some(mt) => {
@@ -93,6 +80,40 @@ impl Gen<'_> {
             "/* Saturation levels (INFINITY = unlimited). */\nstatic const {real} {p}u_max[{u}M] = {};\n",
             list(&t.u_max)
         );
+        s.push_str(&self.term_tables());
+        let _ = writeln!(s, "{}", self.descriptor(t.factored.terms.len()));
+        s
+    }
+
+    /// The premise map `z = L x` (linear premises only) and the rule centres.
+    pub(super) fn premise_tables(&self) -> String {
+        let t = self.t;
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        let pd = self.pd;
+        let mut s = String::new();
+        if let PremiseCode::Linear(l) = &t.premise {
+            let _ = writeln!(
+                s,
+                "/* Premise map z = L x ({pd} rows of {u}N, row-major, one row per line). */\nstatic const {real} {p}premise_map[{pd} * {u}N] = {{\n{}\n}};\n",
+                flat_rows(&padded(l, t.n))
+            );
+        }
+        let _ = writeln!(
+            s,
+            "/* Rule centres in premise space ({u}R rows of {pd}; nearest-rule fallback). */\nstatic const {real} {p}centres[{u}R * {pd}] = {{\n{}\n}};\n",
+            flat_rows(&padded(&t.centres, pd))
+        );
+        s
+    }
+
+    /// The distinct premise terms, the rules' factor lists and the `about`
+    /// points (every table a descriptor's rule part points at).
+    pub(super) fn term_tables(&self) -> String {
+        let t = self.t;
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        let mut s = String::new();
         let f = &t.factored;
         let mut points: Vec<f64> = Vec::new();
         let mut terms: Vec<String> = f
@@ -134,9 +155,7 @@ static const int {p}rule_factors[{u}R + 1] = {{{firsts}}};
 /* Operating points of `about` terms. */
 static const {real} {p}about_points[{np}] = {pts};
 
-{descriptor}
 "#,
-            descriptor = self.descriptor(f.terms.len()),
             nt = terms.len(),
             terms = terms.join(",\n"),
             nf = factors.len(),
@@ -153,9 +172,7 @@ static const {real} {p}about_points[{np}] = {pts};
     fn descriptor(&self, d: usize) -> String {
         let (p, u) = (&self.p, &self.u);
         let entry = |gains: String| {
-            format!(
-                "{{\n    {u}N, {u}M, {u}P, {u}R, {d},\n    {p}terms, {p}factors, {p}rule_factors, {p}about_points,\n    {p}centres, {gains}, {p}u_max\n}}"
-            )
+            self.descriptor_entry(d, &format!("{u}M"), &gains, &format!("{p}u_max"))
         };
         match &self.t.modes {
             Some(mt) => {
@@ -174,8 +191,17 @@ static const {real} {p}about_points[{np}] = {pts};
         }
     }
 
+    /// One `tsf_controller` initializer over this module's rule tables with
+    /// `m` commands, the given gains and saturation levels.
+    pub(super) fn descriptor_entry(&self, d: usize, m: &str, gains: &str, u_max: &str) -> String {
+        let (p, u) = (&self.p, &self.u);
+        format!(
+            "{{\n    {u}N, {m}, {u}P, {u}R, {d},\n    {p}terms, {p}factors, {p}rule_factors, {p}about_points,\n    {p}centres, {gains}, {u_max}\n}}"
+        )
+    }
+
     /// `name_premises`: `z = L x` or straight-line premise expressions.
-    fn premises(&self) -> String {
+    pub(super) fn premises(&self) -> String {
         let (p, u) = (&self.p, &self.u);
         let real = format!("{u}REAL");
         let mut body = String::new();

@@ -6,10 +6,12 @@
 //! `tokens` builds literals, arrays and premise expressions; `sensor`
 //! the sensor-side module of an aperiodic event trigger.
 
+mod adaptive;
 mod sensor;
 mod signal_sensor;
 mod tokens;
 
+pub use adaptive::emit_rust_adaptive;
 pub use sensor::emit_rust_sensor;
 pub use signal_sensor::emit_rust_signal_sensor;
 
@@ -72,72 +74,23 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         Literal::usize_unsuffixed(t.p),
         Literal::usize_unsuffixed(t.r),
     );
-    // Rule premises: the distinct terms (each evaluated once per step) and
-    // one static index array per rule.
-    let mut statics = Vec::new();
-    let mut term_items = Vec::new();
-    for (k, term) in t.factored.terms.iter().enumerate() {
-        match term {
-            TermSpec::Is { var, set } => {
-                let var = Literal::usize_unsuffixed(*var);
-                let set = membership(set, prec);
-                term_items.push(quote!(Term::Is { var: #var, set: #set }));
-            }
-            TermSpec::About {
-                first,
-                point,
-                sigma,
-            } => {
-                let pt = format_ident!("POINT_{}", k + 1);
-                let len = Literal::usize_unsuffixed(point.len());
-                let vals = array(point, prec);
-                let doc = format!(" Operating point of `about` term {k} of `TABLE.terms`.");
-                statics.push(quote! {
-                    #[doc = #doc]
-                    #[allow(clippy::approx_constant, clippy::excessive_precision)]
-                    static #pt: [#ty; #len] = #vals;
-                });
-                let first = Literal::usize_unsuffixed(*first);
-                let sigma = float(*sigma, prec);
-                term_items.push(quote!(Term::About { first: #first, point: &#pt, sigma: #sigma }));
-            }
-        }
-    }
-    let mut rule_refs = Vec::new();
-    for (ri, indices) in t.factored.rules.iter().enumerate() {
-        let ident = format_ident!("RULE_{}", ri + 1);
-        let count = Literal::usize_unsuffixed(indices.len());
-        let items = indices.iter().map(|k| Literal::usize_unsuffixed(*k));
-        let doc = format!(
-            " Premise of rule {}: indices into `TABLE.terms`, multiplied in order.",
-            t.rule_names.get(ri).map_or("?", String::as_str)
-        );
-        statics.push(quote! {
-            #[doc = #doc]
-            static #ident: [usize; #count] = [#(#items),*];
-        });
-        rule_refs.push(quote!(&#ident));
-    }
+    let Rules {
+        statics,
+        terms: term_items,
+        rules: rule_refs,
+    } = Rules::of(t);
     let d = Literal::usize_unsuffixed(t.factored.terms.len());
     let modal = Modal::of(t);
     let mode_arg = modal.as_ref().map(|_| quote!(mode,));
-    let (premise_map, step_body, premise_fn) = match &t.premise {
-        PremiseCode::Linear(l) => (matrix(l, prec), quote!(TABLE.step(#mode_arg x)), quote!()),
-        PremiseCode::Exprs(exprs) => {
-            let zero_rows: Vec<Vec<f64>> = (0..t.p).map(|_| vec![0.0; t.n]).collect();
-            let items = exprs.iter().map(|e| sym(e, prec));
-            (
-                matrix(&zero_rows, prec),
-                quote!(TABLE.step_with_premises(#mode_arg x, &premises(x))),
-                quote! {
-                    /// The premise variables z as functions of the state (from the spec).
-                    #[allow(clippy::approx_constant, clippy::excessive_precision)]
-                    pub fn premises(x: &[#ty; N]) -> [#ty; P] {
-                        [#(#items),*]
-                    }
-                },
-            )
-        }
+    let Premises {
+        map: premise_map,
+        function: premise_fn,
+        linear,
+    } = Premises::of(t);
+    let step_body = if linear {
+        quote!(TABLE.step(#mode_arg x))
+    } else {
+        quote!(TABLE.step_with_premises(#mode_arg x, &premises(x)))
     };
     let centres = matrix(&t.centres, prec);
     let gain_set = |set: &[Vec<Vec<f64>>]| {
@@ -154,27 +107,13 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     let u_max = array(&t.u_max, prec);
     let state_doc = format!("State order: {}.", t.state_names.join(", "));
     let input_doc = format!("Input order: {}.", t.input_names.join(", "));
-    let uses_real = matches!(t.premise, PremiseCode::Exprs(_));
-    let uses_membership = t
-        .factored
-        .terms
-        .iter()
-        .any(|x| matches!(x, TermSpec::Is { .. }));
     let mut imports = vec![
         modal
             .as_ref()
             .map_or(quote!(FactoredController), |_| quote!(ModalController)),
         quote!(Flags),
     ];
-    if uses_membership {
-        imports.push(quote!(Membership));
-    }
-    if uses_real {
-        imports.push(quote!(Real));
-    }
-    if !t.factored.terms.is_empty() {
-        imports.push(quote!(Term));
-    }
+    imports.extend(premise_imports(t));
     let sampling = sampling_consts(t.header.sampling);
     let (table_ty, table_ctor, mode_consts, step_sig, step_doc, mode_accessor) = match &modal {
         Some(md) => (
@@ -305,6 +244,131 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     };
     let body = unparse(tokens)?;
     Ok(format!("{}{body}", header(t)))
+}
+
+/// The rule premises as tokens: the statics (`about` points, one index array
+/// per rule), the distinct terms' initializers (`Term::Is { .. }`, ...) and
+/// the rules' references to their index arrays.
+struct Rules {
+    statics: Vec<TokenStream>,
+    terms: Vec<TokenStream>,
+    rules: Vec<TokenStream>,
+}
+
+impl Rules {
+    /// The distinct terms (each evaluated once per step) and one static
+    /// index array per rule.
+    fn of(t: &Tables) -> Self {
+        let prec = t.precision;
+        let ty = real_ty(prec);
+        let mut statics = Vec::new();
+        let mut term_items = Vec::new();
+        for (k, term) in t.factored.terms.iter().enumerate() {
+            match term {
+                TermSpec::Is { var, set } => {
+                    let var = Literal::usize_unsuffixed(*var);
+                    let set = membership(set, prec);
+                    term_items.push(quote!(Term::Is { var: #var, set: #set }));
+                }
+                TermSpec::About {
+                    first,
+                    point,
+                    sigma,
+                } => {
+                    let pt = format_ident!("POINT_{}", k + 1);
+                    let len = Literal::usize_unsuffixed(point.len());
+                    let vals = array(point, prec);
+                    let doc = format!(" Operating point of `about` term {k} of `TABLE.terms`.");
+                    statics.push(quote! {
+                        #[doc = #doc]
+                        #[allow(clippy::approx_constant, clippy::excessive_precision)]
+                        static #pt: [#ty; #len] = #vals;
+                    });
+                    let first = Literal::usize_unsuffixed(*first);
+                    let sigma = float(*sigma, prec);
+                    term_items
+                        .push(quote!(Term::About { first: #first, point: &#pt, sigma: #sigma }));
+                }
+            }
+        }
+        let mut rule_refs = Vec::new();
+        for (ri, indices) in t.factored.rules.iter().enumerate() {
+            let ident = format_ident!("RULE_{}", ri + 1);
+            let count = Literal::usize_unsuffixed(indices.len());
+            let items = indices.iter().map(|k| Literal::usize_unsuffixed(*k));
+            let doc = format!(
+                " Premise of rule {}: indices into `TABLE.terms`, multiplied in order.",
+                t.rule_names.get(ri).map_or("?", String::as_str)
+            );
+            statics.push(quote! {
+                #[doc = #doc]
+                static #ident: [usize; #count] = [#(#items),*];
+            });
+            rule_refs.push(quote!(&#ident));
+        }
+        Rules {
+            statics,
+            terms: term_items,
+            rules: rule_refs,
+        }
+    }
+}
+
+/// The premise code as tokens: the table's `premise_map` (zeros when the
+/// premises are expressions) and, for expressions, `fn premises(x)`.
+struct Premises {
+    map: TokenStream,
+    function: TokenStream,
+    /// Whether `z = L x` (the table's own step computes the premises).
+    linear: bool,
+}
+
+impl Premises {
+    fn of(t: &Tables) -> Self {
+        let prec = t.precision;
+        let ty = real_ty(prec);
+        match &t.premise {
+            PremiseCode::Linear(l) => Premises {
+                map: matrix(l, prec),
+                function: quote!(),
+                linear: true,
+            },
+            PremiseCode::Exprs(exprs) => {
+                let zero_rows: Vec<Vec<f64>> = (0..t.p).map(|_| vec![0.0; t.n]).collect();
+                let items = exprs.iter().map(|e| sym(e, prec));
+                Premises {
+                    map: matrix(&zero_rows, prec),
+                    function: quote! {
+                        /// The premise variables z as functions of the state (from the spec).
+                        #[allow(clippy::approx_constant, clippy::excessive_precision)]
+                        pub fn premises(x: &[#ty; N]) -> [#ty; P] {
+                            [#(#items),*]
+                        }
+                    },
+                    linear: false,
+                }
+            }
+        }
+    }
+}
+
+/// The runtime items the premise code and rule terms use.
+fn premise_imports(t: &Tables) -> Vec<TokenStream> {
+    let mut imports = Vec::new();
+    if t.factored
+        .terms
+        .iter()
+        .any(|x| matches!(x, TermSpec::Is { .. }))
+    {
+        imports.push(quote!(Membership));
+    }
+    if matches!(t.premise, PremiseCode::Exprs(_)) {
+        imports.push(quote!(Real));
+    }
+    if !t.factored.terms.is_empty() {
+        imports.push(quote!(Term));
+    }
+    imports
 }
 
 /// The mode constants of a mode-dependent design (`K`, `MODE_NAMES`).
