@@ -17,23 +17,74 @@ use tsfc::synth::Settings;
 /// rule pair for not overlapping (the benchmark is about the relaxations, not
 /// the membership shapes).
 fn spec(a: f64, b: f64, relaxation: &str) -> String {
+    spec_with(a, b, relaxation, "")
+}
+
+/// [`spec`] with `extra` items appended (e.g. a `lyapunov` item).
+fn spec_with(a: f64, b: f64, relaxation: &str, extra: &str) -> String {
     format!(
         "tsf 1;\ncontroller kim_lee;\nstate x1, x2;\ninput u;\n\
          premise z = x1 range -1 .. 1 {{ neg = gauss(-1, 0.6); zero = gauss(0, 0.6); pos = gauss(1, 0.6); }}\n\
          rule R1: z is neg => A = [1.59, -7.29; 0.01, 0], B = [1; 0];\n\
          rule R2: z is zero => A = [0.02, -4.64; 0.35, 0.21], B = [8; 0];\n\
          rule R3: z is pos => A = [-{a}, -4.33; 0, 0.05], B = [-{b} + 6; -1];\n\
-         objective stability;\nrelaxation {relaxation};\n"
+         objective stability;\nrelaxation {relaxation};\n{extra}"
     )
 }
 
 fn certified(a: f64, b: f64, relaxation: &str) -> bool {
-    let model = common::model_of("kim_lee.tsf", &spec(a, b, relaxation));
+    certified_src(&spec(a, b, relaxation))
+}
+
+fn certified_src(src: &str) -> bool {
+    let model = common::model_of("kim_lee.tsf", src);
     let info = SpecInfo {
         path: "kim_lee.tsf".into(),
         sha256: String::new(),
     };
     compile(&model, info, &Settings::default(), Default::default()).status == Status::Certified
+}
+
+/// The benchmark grid: a in 0..=10, b in -10..=20 step 2 (176 points).
+fn grid() -> Vec<(f64, f64)> {
+    (0..=10)
+        .flat_map(|a| (0..=15).map(move |k| (a as f64, -10.0 + 2.0 * k as f64)))
+        .collect()
+}
+
+#[test]
+fn fuzzy_lyapunov_maps_against_the_quadratic_ones() {
+    let grid = grid();
+    let cases = [
+        ("tuan", ""),
+        ("tuan", "lyapunov fuzzy(phi = 0.01);"),
+        ("tuan", "lyapunov fuzzy(phi = 0.1);"),
+        ("polya(d = 2)", ""),
+        ("polya(d = 2)", "lyapunov fuzzy(phi = 0.01);"),
+    ];
+    let maps: Vec<Vec<bool>> = cases
+        .iter()
+        .map(|(r, extra)| {
+            grid.iter()
+                .map(|&(a, b)| certified_src(&spec_with(a, b, r, extra)))
+                .collect()
+        })
+        .collect();
+    let counts: Vec<usize> = maps
+        .iter()
+        .map(|m| m.iter().filter(|v| **v).count())
+        .collect();
+    eprintln!(
+        "certified points of {}: {cases:?} -> {counts:?}",
+        grid.len()
+    );
+    for (k, p) in grid.iter().enumerate() {
+        for (c, m) in maps.iter().enumerate() {
+            if m[k] != maps[0][k] {
+                eprintln!("{p:?}: {:?} {} vs tuan {}", cases[c], m[k], maps[0][k]);
+            }
+        }
+    }
 }
 
 #[test]
@@ -45,9 +96,7 @@ fn the_feasibility_map_grows_from_basic_to_tuan_to_polya() {
         "polya(d = 2)",
         "polya(d = 3)",
     ];
-    let grid: Vec<(f64, f64)> = (0..=10)
-        .flat_map(|a| (0..=15).map(move |k| (a as f64, -10.0 + 2.0 * k as f64)))
-        .collect();
+    let grid = grid();
     let maps: Vec<Vec<bool>> = relaxations
         .iter()
         .map(|r| grid.iter().map(|&(a, b)| certified(a, b, r)).collect())
