@@ -90,10 +90,16 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
     }
     let analysis = given::analysis(model);
     let (mut plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
-    if lyapunov::fuzzy::phi(model).is_some() {
+    let fuzzy = lyapunov::fuzzy::phi(model).is_some();
+    if fuzzy {
         plan.mu = Some(lyapunov::fuzzy::choose_mu(runner, &plan, goal)?);
     }
-    match runner.run(&plan, goal) {
+    let outcome = if fuzzy && goal == Goal::MaxDecay {
+        lyapunov::fuzzy::max_decay_over_mu(runner, &plan)
+    } else {
+        runner.run(&plan, goal)
+    };
+    match outcome {
         Ok(Some(mut d)) => {
             if let Some(f) = &mut d.fuzzy {
                 f.region = lyapunov::region::verify(model, &d.gains, &f.p, &f.phi);

@@ -239,3 +239,33 @@ pub(in crate::synth) fn choose_mu(
     }
     Ok(DEFAULT_MU)
 }
+
+/// A maximized decay rate with a fuzzy Lyapunov function: the bisection at
+/// every mu of [`MU_GRID`] feasible at rate 0 (the best rate needs its own mu:
+/// the quadratic limit needs a small one), keeping the largest rate (the
+/// first mu on ties). `plan.mu` is feasible at rate 0 when any is.
+pub(in crate::synth) fn max_decay_over_mu(
+    runner: &mut crate::synth::search::Runner<'_>,
+    plan: &Plan,
+) -> Result<Option<crate::synth::Design>, crate::synth::SynthError> {
+    use crate::synth::{Goal, Quantity};
+    let rate = |d: &crate::synth::Design| d.achieved.get(Quantity::DecayRate).unwrap_or(0.0);
+    let mut best: Option<crate::synth::Design> = runner.run(plan, Goal::MaxDecay)?;
+    if best.is_none() {
+        return Ok(None);
+    }
+    for mu in MU_GRID {
+        if Some(mu) == plan.mu {
+            continue;
+        }
+        let mut p = plan.clone();
+        p.mu = Some(mu);
+        // A mu at which the solver stalls is skipped, not fatal.
+        if let Ok(Some(d)) = runner.run(&p, Goal::MaxDecay) {
+            if best.as_ref().is_none_or(|b| rate(&d) > rate(b)) {
+                best = Some(d);
+            }
+        }
+    }
+    Ok(best)
+}
