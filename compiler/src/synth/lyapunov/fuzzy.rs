@@ -162,6 +162,9 @@ pub fn build(
     })
 }
 
+/// PDC gains F_j, in rule order.
+pub type Gains = Vec<DMatrix<f64>>;
+
 /// The gains F_j = Z_j G^{-1} and the Lyapunov matrices P_k = G^{-T} P~_k G^{-1}
 /// of a solution (`g` the solved G, `z` the Z_j, `pt` the P~_k); `None` when G
 /// is numerically singular.
@@ -169,7 +172,7 @@ pub fn recover(
     g: &DMatrix<f64>,
     z: &[DMatrix<f64>],
     pt: &[DMatrix<f64>],
-) -> Option<(Vec<DMatrix<f64>>, Vec<DMatrix<f64>>)> {
+) -> Option<(Gains, Vec<DMatrix<f64>>)> {
     let ginv = g.clone().try_inverse()?;
     if ginv.iter().any(|v| !v.is_finite()) {
         return None;
