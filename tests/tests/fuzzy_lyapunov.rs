@@ -293,3 +293,18 @@ fn the_fuzzy_decay_rate_is_at_least_the_quadratic_one() {
     assert!(fuzzy >= quadratic * (1.0 - 1e-2), "{fuzzy} < {quadratic}");
     assert!(fuzzy > 0.0);
 }
+
+#[test]
+fn a_bound_no_level_set_keeps_is_refused() {
+    // phi = 1e-9: the LMIs hold (the P_k may all be equal), but already the
+    // first samples near the origin move faster than that: no region.
+    let c = compiled_src(&spec_of("stability", "lyapunov fuzzy(phi = 1e-9);"));
+    assert_eq!(c.status, Status::Refused);
+    let (_, cert) = c
+        .outcome
+        .as_ref()
+        .expect("a design whose certificate fails");
+    assert_eq!(cert.worst, tsfc::certify::FUZZY_REGION);
+    let json = serde_json::to_value(&c.report).expect("report JSON");
+    assert!(json["fuzzy_lyapunov"]["region"].is_null());
+}
