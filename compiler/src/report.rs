@@ -225,6 +225,10 @@ pub struct Report {
     /// under every other relaxation).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub membership_mismatch: Option<MismatchReport>,
+    /// The fuzzy Lyapunov function of a `lyapunov fuzzy(..)` design (absent
+    /// with the quadratic one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fuzzy_lyapunov: Option<FuzzyLyapunovReport>,
     /// Margin eps of strict LMIs.
     pub lmi_margin_eps: Option<f64>,
     /// Achieved objective values.
@@ -469,6 +473,9 @@ pub fn report(
         verdicts,
         relaxation: model.spec.relaxation.node.to_string(),
         membership_mismatch: MismatchReport::of(model),
+        fuzzy_lyapunov: design
+            .and_then(|d| d.fuzzy.as_ref())
+            .map(FuzzyLyapunovReport::of),
         lmi_margin_eps: design.map(|d| d.eps),
         objectives: design.map(|d| objectives(model, d)).unwrap_or_default(),
         gains: if certified {
@@ -581,6 +588,36 @@ pub fn report(
             problem,
         },
         timings_s: timings,
+    }
+}
+
+/// A fuzzy Lyapunov function V = x' (sum_k h_k P_k) x and what its
+/// certificate assumes.
+#[derive(Debug, Clone, Serialize)]
+pub struct FuzzyLyapunovReport {
+    /// The assumption the certificate relies on.
+    pub assumption: &'static str,
+    /// phi_k, in rule order.
+    pub phi: Vec<f64>,
+    /// The Finsler scalar mu of the LMIs.
+    pub mu: f64,
+    /// P_k, in rule order.
+    #[serde(rename = "P_k")]
+    pub p_k: Vec<Vec<Vec<f64>>>,
+    /// Where the assumption was checked (sampled) to hold: the level c of
+    /// V <= c; absent when no level passed (the design is refused).
+    pub region: Option<crate::synth::lyapunov::Region>,
+}
+
+impl FuzzyLyapunovReport {
+    fn of(f: &crate::synth::lyapunov::FuzzyDesign) -> Self {
+        FuzzyLyapunovReport {
+            assumption: "|dh_k/dt| <= phi_k for every rule k along the closed loop (checked by sampling on the level set region.level of V)",
+            phi: f.phi.clone(),
+            mu: f.mu,
+            p_k: f.p.iter().map(rows).collect(),
+            region: f.region.clone(),
+        }
     }
 }
 

@@ -338,6 +338,8 @@ pub enum ItemKind {
     },
     /// `relaxation name[(args)];`
     Relaxation(Ident, Vec<NamedArg>),
+    /// `lyapunov kind[(args)];`
+    Lyapunov(Ident, Vec<NamedArg>),
     /// `rules kind;`: rules the compiler builds (`rules sector;`).
     Rules(Ident),
     /// `trigger kind { settings }`

@@ -5,8 +5,8 @@
 use crate::eval::Mat;
 use crate::num::Num;
 use crate::spec::{
-    Emit, InitialSet, Integrator, Monitor, Precision, Relaxation, SetShape, Threshold, Trigger,
-    TriggerSynthesis, Weight,
+    Emit, InitialSet, Integrator, Lyapunov, Monitor, Precision, Relaxation, SetShape, Threshold,
+    Trigger, TriggerSynthesis, Weight,
 };
 use std::fmt::{self, Display, Formatter};
 
@@ -49,6 +49,18 @@ fn named(f: &mut Formatter<'_>, args: &[(&str, f64)]) -> fmt::Result {
         write!(f, "{name} = {}", Num(*v))?;
     }
     Ok(())
+}
+
+impl Display for Lyapunov {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        match self {
+            Lyapunov::Quadratic => f.write_str("quadratic"),
+            Lyapunov::Fuzzy { phi } => {
+                let all: Vec<String> = phi.iter().map(|p| Num(*p).to_string()).collect();
+                write!(f, "fuzzy(phi = [{}])", all.join(", "))
+            }
+        }
+    }
 }
 
 impl Display for Relaxation {

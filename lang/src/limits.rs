@@ -69,3 +69,11 @@ pub fn polya_lmis(r: usize, d: usize) -> Option<usize> {
     }
     Some(if k > n { 0 } else { c })
 }
+
+/// Most rules under `lyapunov fuzzy(..)`: one relaxed double sum per rule's
+/// Lyapunov matrix P_k, so r times the LMIs of the relaxation.
+pub const MAX_FUZZY_LYAPUNOV_RULES: usize = 8;
+
+/// Largest bound phi_k of `lyapunov fuzzy(phi = ..)` (1/s): a bound this
+/// loose makes the phi-weighted term dominate every condition.
+pub const MAX_FUZZY_LYAPUNOV_PHI: f64 = 1e3;

@@ -352,6 +352,20 @@ pub enum Relaxation {
     },
 }
 
+/// The Lyapunov function of the design (`lyapunov quadratic | fuzzy(phi = ..);`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Lyapunov {
+    /// V = x' P x (the default).
+    #[default]
+    Quadratic,
+    /// V = x' (sum_k h_k P_k) x, certified under the assumption
+    /// |dh_k/dt| <= phi_k on the closed loop (Tanaka, Hori & Wang 2003).
+    Fuzzy {
+        /// The bound phi_k of each rule's membership derivative, in rule order.
+        phi: Vec<f64>,
+    },
+}
+
 /// Threshold of an event trigger.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Threshold {
@@ -692,6 +706,8 @@ pub struct Spec {
     pub objectives: Vec<SpannedObjective>,
     /// Relaxation (default basic).
     pub relaxation: Spanned<Relaxation>,
+    /// Lyapunov function (default quadratic).
+    pub lyapunov: Spanned<Lyapunov>,
     /// Named signals (`signal name = expr;`), in source order.
     pub signals: Vec<NamedSignal>,
     /// Trigger (default continuous).

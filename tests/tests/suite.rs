@@ -10,6 +10,7 @@ mod diagnostics;
 mod event_trigger;
 mod fuzz;
 mod fuzz_pipeline;
+mod fuzzy_lyapunov;
 mod given_gains;
 mod markov;
 mod markov_performance;

@@ -161,6 +161,7 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
         &|_| {},
     )?);
     lmis.extend(signal_margins(model, design, &design.gains, 1.0));
+    lmis.extend(fuzzy_region(design));
     let mut cert = summarize(lmis);
     if cert.ok {
         let stored = stored::check(model, design)?;
@@ -233,6 +234,24 @@ fn signal_margins(
             size,
         })
         .collect()
+}
+
+/// The name of the certificate's entry for the region of a fuzzy Lyapunov function.
+pub const FUZZY_REGION: &str = "fuzzy Lyapunov: |dh_k/dt| <= phi_k on a level set of V (sampled)";
+
+/// The entry of a fuzzy Lyapunov design's region: its level c as the margin,
+/// passing when a level c > 0 was found (synth/lyapunov/region.rs).
+fn fuzzy_region(design: &Design) -> Option<LmiMargin> {
+    let f = design.fuzzy.as_ref()?;
+    let level = f.region.as_ref().map_or(0.0, |r| r.level);
+    Some(LmiMargin {
+        name: FUZZY_REGION.into(),
+        margin: level,
+        error_bound: 0.0,
+        strict: false,
+        size: 1,
+        ok: level > 0.0,
+    })
 }
 
 /// The certificate of a list of margins: the least strict margin, whether

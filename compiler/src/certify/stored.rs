@@ -213,7 +213,12 @@ pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthE
             "internal error: the certified problem has no X".into(),
         ));
     };
-    let membership = membership_bound(model, &gains, &x, precision, available);
+    let mut membership = membership_bound(model, &gains, &x, precision, available);
+    if let Some(f) = &design.fuzzy {
+        // The gain error also enters the Finsler block mu N_ij': ||E|| <= (2 + mu) ||B dF G||.
+        membership.required_margin *= 1.0 + 0.5 * f.mu;
+        membership.holds = membership.available_margin > membership.required_margin;
+    }
     // Sampled loops: gains, levels, threshold ceiling, sampling bounds of a
     // sensor module and the trigger weight as stored.
     let sensor = matches!(

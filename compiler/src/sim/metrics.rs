@@ -84,6 +84,16 @@ pub struct Metrics {
     /// those the controller held since its last update (0 with fewer than two
     /// updates' worth of samples).
     pub max_membership_mismatch: f64,
+    /// max over samples of |dh_k/dt| per rule (finite difference between
+    /// consecutive samples), with a fuzzy Lyapunov design; empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub max_membership_rate: Vec<f64>,
+    /// The bounds phi_k a fuzzy Lyapunov certificate assumes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub certified_phi: Option<Vec<f64>>,
+    /// Samples at which some |dh_k/dt| exceeded phi_k.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples_above_phi: Option<u64>,
     /// The mismatch bound the certificate relies on
     /// (`membership_mismatch(kappa = ..)` in a continuous loop).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -158,13 +168,24 @@ impl Metrics {
     /// Warnings about the run that do not fail it: samples whose membership
     /// mismatch exceeds the kappa the certificate relies on.
     pub fn warnings(&self) -> Vec<String> {
-        match (self.certified_kappa, self.samples_above_kappa) {
-            (Some(kappa), Some(above)) if above > 0 => vec![format!(
+        let mut out = Vec::new();
+        if let (Some(kappa), Some(above)) = (self.certified_kappa, self.samples_above_kappa) {
+            if above > 0 {
+                out.push(format!(
                 "the membership mismatch exceeded the certified kappa = {kappa} at {above} of {} samples (max {:.3e}): the certificate assumes |k_j - h_j| <= kappa at every instant",
                 self.samples, self.max_membership_mismatch
-            )],
-            _ => Vec::new(),
+            ));
+            }
         }
+        if let (Some(phi), Some(above)) = (&self.certified_phi, self.samples_above_phi) {
+            if above > 0 {
+                out.push(format!(
+                    "|dh_k/dt| exceeded the certified phi_k = {phi:?} at {above} of {} samples (max {:?}): the fuzzy Lyapunov certificate assumes |dh_k/dt| <= phi_k at every instant",
+                    self.samples, self.max_membership_rate
+                ));
+            }
+        }
+        out
     }
 }
 
@@ -217,6 +238,65 @@ impl MismatchTally {
         metrics.max_membership_mismatch = self.max;
         metrics.certified_kappa = self.kappa;
         metrics.samples_above_kappa = self.kappa.map(|_| self.above);
+    }
+}
+
+/// The membership rates of a run: |dh_k/dt| by finite differences between
+/// consecutive samples, against the phi_k a fuzzy Lyapunov certificate assumes.
+pub struct RateTally {
+    phi: Option<Vec<f64>>,
+    last: Option<(f64, Vec<f64>)>,
+    max: Vec<f64>,
+    above: u64,
+}
+
+impl RateTally {
+    /// A tally checking against `phi` (the certified bounds, if any).
+    pub fn new(phi: Option<Vec<f64>>) -> Self {
+        RateTally {
+            phi,
+            last: None,
+            max: Vec::new(),
+            above: 0,
+        }
+    }
+
+    /// Records the memberships `h` at time `t` (nothing without phi).
+    pub fn sample(&mut self, t: f64, h: &[f64]) {
+        let Some(phi) = &self.phi else {
+            return;
+        };
+        if let Some((t0, h0)) = &self.last {
+            let dt = t - t0;
+            if dt > 0.0 {
+                self.max.resize(h.len(), 0.0);
+                let mut over = false;
+                for (k, (a, b)) in h.iter().zip(h0).enumerate() {
+                    let rate = ((a - b) / dt).abs();
+                    if rate.is_finite() {
+                        self.max[k] = self.max[k].max(rate);
+                        over |= phi.get(k).is_some_and(|p| rate > *p);
+                    }
+                }
+                self.above += u64::from(over);
+            }
+        }
+        match &mut self.last {
+            Some((t0, h0)) if h0.len() == h.len() => {
+                *t0 = t;
+                h0.copy_from_slice(h);
+            }
+            _ => self.last = Some((t, h.to_vec())),
+        }
+    }
+
+    /// Writes the rate figures into `metrics`.
+    pub fn finish(self, metrics: &mut Metrics) {
+        if self.phi.is_some() {
+            metrics.max_membership_rate = self.max;
+            metrics.samples_above_phi = Some(self.above);
+        }
+        metrics.certified_phi = self.phi;
     }
 }
 
@@ -498,6 +578,9 @@ impl Tally {
             out_of_region_samples: self.out_of_region,
             left_region_at_s: self.left_region_at,
             max_membership_mismatch: 0.0,
+            max_membership_rate: Vec::new(),
+            certified_phi: None,
+            samples_above_phi: None,
             certified_kappa: None,
             samples_above_kappa: None,
             lyapunov_ratio,

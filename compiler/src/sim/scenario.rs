@@ -4,7 +4,7 @@
 use super::controller::{law, runtime_terms};
 use super::integrator::{Dopri5, Rk4, Stepper};
 use super::limits::step_count;
-use super::metrics::{Metrics, MismatchTally, RunFacts, Sample, Tally, Trace};
+use super::metrics::{Metrics, MismatchTally, RateTally, RunFacts, Sample, Tally, Trace};
 use super::modes::{Actuation, ModeProcess, ModeTally};
 use super::plant::Plant;
 use super::premise::Premises;
@@ -376,6 +376,7 @@ pub fn run_truth(
     }
     let mut tally = Tally::new(n, m, &x, opts.convergence_rel_tol);
     let mut mismatch = MismatchTally::new(crate::synth::relaxations::kappa_relied_on(model));
+    let mut rates = RateTally::new(crate::synth::lyapunov::fuzzy::phi(model).map(<[f64]>::to_vec));
     let mut h_now = vec![0.0; tables.r];
     let mut saturated = 0u64;
     let mut nonfinite_at = None;
@@ -401,6 +402,7 @@ pub fn run_truth(
         }
         controller.strengths(&x[..n], premises.as_ref().map(|_| &z[..]), &mut h_now);
         mismatch.sample(&h_now, sent);
+        rates.sample(t, &h_now);
         if sent {
             // The mode's controller (mode-dependent gains), else the one law.
             let ctl = match mode {
@@ -522,6 +524,7 @@ pub fn run_truth(
     };
     let (mut metrics, trace) = tally.finish(&facts, &last, trace);
     mismatch.finish(&mut metrics);
+    rates.finish(&mut metrics);
     metrics.integrator = match &stepper {
         Stepper::Rk4(s) => format!("rk4, fixed step <= {} s", s.h),
         Stepper::Dopri5(s) => format!(

@@ -31,6 +31,9 @@ pub struct Built {
     /// They are solved with the margin too, so that the numeric solution
     /// satisfies them with room, and certified as non-strict.
     pub nonstrict: Vec<String>,
+    /// The Lyapunov matrices of a fuzzy Lyapunov function (then `x` is the
+    /// full slack G and `m` holds Z_j = F_j G; [`super::lyapunov::fuzzy`]).
+    pub fuzzy: Option<super::lyapunov::fuzzy::FuzzyVars>,
 }
 
 impl Built {
@@ -61,6 +64,9 @@ pub fn build(
     eps: f64,
     reduce: bool,
 ) -> Result<Built, BuildError> {
+    if let Some(phi) = super::lyapunov::fuzzy::phi(model) {
+        return super::lyapunov::fuzzy::build(model, plan, relaxation, eps, reduce, phi);
+    }
     let (n, m, r) = (model.n, model.m, model.r());
     let mut problem = Problem::new();
     let x = problem.symmetric("X", n)?;
@@ -112,5 +118,6 @@ pub fn build(
         m: ctx.m,
         reductions: lmis.relaxer.reductions,
         nonstrict: lmis.relaxer.nonstrict,
+        fuzzy: None,
     })
 }

@@ -113,6 +113,9 @@ pub struct Design {
     /// The per-mode design of a spec with `modes` (then `gains`, `x`, `p`
     /// are the first mode's).
     pub modes: Option<super::markov::ModesDesign>,
+    /// The fuzzy Lyapunov function of a spec with `lyapunov fuzzy(..)` (then
+    /// `x` is the Finsler slack G and `p` is P_1).
+    pub fuzzy: Option<super::lyapunov::FuzzyDesign>,
 }
 
 /// The certificate of the sampled loop for the gains of a [`Design`]: every

@@ -56,7 +56,9 @@ pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
     if let Some(line) = coupling(runner, plan) {
         achievable.push(line);
     }
-    let message = if fixed.is_empty() {
+    let message = if fixed.is_empty() && super::lyapunov::fuzzy::phi(runner.model).is_some() {
+        format!("infeasible: no PDC controller with a fuzzy Lyapunov function in the Finsler form (mu in {:?}) meets the objectives under this relaxation and these phi", super::lyapunov::fuzzy::MU_GRID)
+    } else if fixed.is_empty() {
         "infeasible: no PDC controller with a common quadratic Lyapunov function meets the objectives under this relaxation".to_string()
     } else {
         format!("infeasible: the objectives cannot be met together ({list})")

@@ -18,6 +18,7 @@ mod design;
 mod diagnose;
 pub mod experimental;
 pub mod given;
+pub mod lyapunov;
 pub mod markov;
 pub mod objective;
 pub mod objectives;
@@ -88,9 +89,22 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
         return Err(SynthError::Unsupported(why));
     }
     let analysis = given::analysis(model);
-    let (plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
-    match runner.run(&plan, goal) {
+    let (mut plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
+    let fuzzy = lyapunov::fuzzy::phi(model).is_some();
+    if fuzzy {
+        plan.mu = Some(lyapunov::fuzzy::choose_mu(runner, &plan, goal)?);
+    }
+    let outcome = if fuzzy && goal == Goal::MaxDecay {
+        lyapunov::fuzzy::max_decay_over_mu(runner, &plan)
+    } else {
+        runner.run(&plan, goal)
+    };
+    match outcome {
         Ok(Some(mut d)) => {
+            if let Some(f) = &mut d.fuzzy {
+                f.region = lyapunov::region::verify(model, &d.gains, &f.p, &f.phi);
+                d.notes.push(lyapunov::region::note(f));
+            }
             saturation_covered(model, &mut d)?;
             if let Some(note) = objectives::hinf::regional_note(&d) {
                 d.notes.push(note);

@@ -11,12 +11,18 @@ use tsf_lang::spec::{ObjectiveKind, Spec};
 #[derive(Debug, Clone, Default)]
 pub struct Plan {
     objectives: Vec<Box<dyn Objective>>,
+    /// The Finsler scalar mu of a fuzzy Lyapunov design (`None`: the default,
+    /// [`super::lyapunov::fuzzy::DEFAULT_MU`]; unused with a quadratic V).
+    pub mu: Option<f64>,
 }
 
 impl Plan {
     /// A plan of these objectives.
     pub fn new(objectives: Vec<Box<dyn Objective>>) -> Self {
-        Plan { objectives }
+        Plan {
+            objectives,
+            mu: None,
+        }
     }
 
     /// Its objectives, in spec order.

@@ -4,6 +4,8 @@
 use super::achieved::Achieved;
 use super::build::build;
 use super::design::{Design, Settings, SolverLog, SynthError};
+use super::lyapunov::fuzzy;
+use super::objective::GainTerm;
 use super::objectives::Linf;
 use super::plan::{Bound, Goal, Plan};
 use crate::model::TsModel;
@@ -63,11 +65,40 @@ impl Runner<'_> {
                 .map_err(|e| SynthError::Internal(format!("{e}")))
         };
         let x = values_of(built.x)?;
-        let Some(chol) = x.clone().cholesky() else {
-            return Ok(Attempt::Trouble(SolveStatus::NumericalError));
+        let (p, gains, fuzzy) = match &built.fuzzy {
+            Some(fv) => {
+                let z = built
+                    .m
+                    .iter()
+                    .map(|g| match g {
+                        GainTerm::Free(v) => values_of(*v),
+                        GainTerm::Given(_) => Err(SynthError::Internal(
+                            "internal error: a fuzzy Lyapunov design with given gains".into(),
+                        )),
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                let pt =
+                    fv.p.iter()
+                        .map(|v| values_of(*v))
+                        .collect::<Result<Vec<_>, _>>()?;
+                let Some((gains, pk)) = fuzzy::recover(&x, &z, &pt) else {
+                    return Ok(Attempt::Trouble(SolveStatus::NumericalError));
+                };
+                let design = fuzzy::FuzzyDesign {
+                    phi: fuzzy::phi(self.model).unwrap_or_default().to_vec(),
+                    mu: fv.mu,
+                    p: pk.clone(),
+                    region: None,
+                };
+                (pk[0].clone(), gains, Some(design))
+            }
+            None => {
+                let Some(chol) = x.clone().cholesky() else {
+                    return Ok(Attempt::Trouble(SolveStatus::NumericalError));
+                };
+                (chol.inverse(), built.gains(values_of, &chol)?, None)
+            }
         };
-        let p = chol.inverse();
-        let gains = built.gains(values_of, &chol)?;
         let values = built
             .problem
             .vars()
@@ -95,6 +126,7 @@ impl Runner<'_> {
             signal_trigger: None,
             verdicts: Vec::new(),
             modes: None,
+            fuzzy,
         })))
     }
 

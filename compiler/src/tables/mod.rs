@@ -212,7 +212,18 @@ pub fn tables(
                     "{}; valid while the controller's memberships are within {kappa} of the plant's",
                     spec.relaxation.node
                 ),
-                None => spec.relaxation.node.to_string(),
+                None => match &design.fuzzy {
+                    Some(f) => format!(
+                        "{}, lyapunov {}; valid while |dh_k/dt| <= phi_k for every rule{}",
+                        spec.relaxation.node,
+                        spec.lyapunov.node,
+                        f.region.as_ref().map_or(String::new(), |r| format!(
+                            " (checked by sampling on the level set V <= {:.6e})",
+                            r.level
+                        ))
+                    ),
+                    None => spec.relaxation.node.to_string(),
+                },
             },
             sampling: design.sampled.as_ref().map(|s| s.plan.sampling),
         },

@@ -20,6 +20,7 @@ mod env;
 mod finite_time;
 mod gains;
 mod generatable;
+mod lyapunov;
 mod model;
 mod modes;
 mod monte_carlo;
@@ -150,6 +151,8 @@ struct Draft<'a> {
     rules_items: Vec<&'a Item>,
     objective_items: Vec<&'a Item>,
     relaxation: Option<Spanned<Relaxation>>,
+    /// `lyapunov ..;`: the kind and its phi value (settled once the rules are known).
+    lyapunov: Option<Spanned<lyapunov::Draft>>,
     trigger: Option<Spanned<Trigger>>,
     /// The `on = name;` of a mixed trigger, resolved once every signal is checked.
     trigger_on: Option<Ident>,
@@ -286,6 +289,19 @@ impl<'a> Checker<'a> {
             &rules,
         );
         let adaptive = self.adaptive_block(items, &draft, dims, &objectives, &rules);
+        let lyapunov = self.settle_lyapunov(
+            draft.lyapunov.take(),
+            lyapunov::Around {
+                trigger: draft.trigger.as_ref().map(|t| &t.node),
+                rules: &rules,
+                rule_items: draft.rule_items.len(),
+                objectives: &objectives,
+                relaxation: &relaxation,
+                saturated: saturation.is_some(),
+                modes: modes_span,
+                adaptive: adaptive.is_some(),
+            },
+        );
         let controller = controller?;
         Some(Spec {
             controller,
@@ -305,6 +321,7 @@ impl<'a> Checker<'a> {
             rules,
             objectives,
             relaxation,
+            lyapunov,
             signals: draft.signals,
             trigger: draft.trigger,
             trigger_synthesis: draft.trigger_synthesis,
@@ -332,6 +349,7 @@ impl<'a> Checker<'a> {
             ItemKind::Rules(_) => draft.rules_items.push(it),
             ItemKind::Objective { .. } => draft.objective_items.push(it),
             ItemKind::Relaxation(name, args) => self.relaxation_item(it, name, args, draft),
+            ItemKind::Lyapunov(name, args) => self.lyapunov_item(it, name, args, draft),
             ItemKind::Trigger(kind, settings) => {
                 self.trigger_item(it, kind, settings, dims.n, draft)
             }

@@ -375,6 +375,10 @@ impl Cx {
                 let name = self.ident(next(&mut it, span)?);
                 ItemKind::Relaxation(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)
             }
+            Rule::lyapunov_decl => {
+                let name = self.ident(next(&mut it, span)?);
+                ItemKind::Lyapunov(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)
+            }
             Rule::trigger_decl => {
                 let (name, settings) = self.trigger_decl(it, span)?;
                 ItemKind::Trigger(name, settings)

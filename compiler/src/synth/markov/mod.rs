@@ -493,6 +493,7 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         sampled: None,
         signal_trigger: None,
         verdicts: Vec::new(),
+        fuzzy: None,
         modes: Some(solved.modes),
     })
 }
