@@ -662,6 +662,42 @@ mod tests {
     }
 
     #[test]
+    fn a_sampled_loop_is_accepted_and_event_triggers_are_refused_with_help() {
+        // Periodic and threshold-free aperiodic: the sampled mode loop (no
+        // trigger weight is asked for).
+        spec_with(&format!("{TWO}\ntrigger periodic {{ every = 0.01; }}"));
+        let s = spec_with(&format!(
+            "{TWO}\ntrigger aperiodic {{ sampling = 0.001 .. 0.05; }}\nobjective decay_rate >= 0.1;"
+        ));
+        assert!(s.modes.is_some() && s.trigger.is_some());
+        let e = errors(&format!(
+            "{BASE}{TWO}\ntrigger aperiodic {{ sampling = 0.001 .. 0.05; threshold nu = 0.1; weight = 1; }}"
+        ));
+        let d = e
+            .iter()
+            .find(|(d, _)| d.message.starts_with("an event-triggered loop"))
+            .unwrap_or_else(|| panic!("{e:#?}"));
+        assert!(d.1.starts_with("trigger aperiodic"), "{}", d.1);
+        assert!(d
+            .0
+            .help
+            .iter()
+            .any(|h| h.contains("a sampled loop is supported")));
+        let (m, _) = only_error(&format!(
+            "{TWO}\ntrigger periodic {{ every = 0.1; design = discrete; }}"
+        ));
+        assert_eq!(
+            m,
+            "the discrete-time design (`design = discrete`) is not supported with `modes`"
+        );
+        let (m, at) = only_error(&format!(
+            "{TWO}\noutput z = x1;\ndisturbance d;\nD = 1;\nobjective hinf(d -> z) minimize;\ntrigger periodic {{ every = 0.1; }}"
+        ));
+        assert_eq!(m, "objective `hinf` with a sampled loop is not supported with `modes`: the sampled-loop certificate covers mean-square stability");
+        assert!(at.starts_with("objective hinf"), "{at}");
+    }
+
+    #[test]
     fn unsupported_combinations_point_at_the_item() {
         let (m, at) = only_error(&format!("{TWO}\nobjective input_norm(u) <= 1 for x0 = 1;"));
         assert_eq!(m, "objective `input_norm` is not supported with `modes`");
