@@ -468,7 +468,7 @@ impl Checker<'_> {
         performance: &[&SpannedObjective],
         unsupported: &dyn Fn(Span, String) -> Diagnostic,
     ) {
-        let sampled_help = "a sampled loop is supported with `modes`: write `trigger periodic { every = ..; }` or `trigger aperiodic { sampling = .. ..; }` (every sample transmitted)";
+        let sampled_help = "a sampled loop is supported with `modes`: write `trigger periodic { every = ..; }` or `trigger aperiodic { sampling = h_min .. h_max; }` (every sample transmitted)";
         match &t.node {
             Trigger::Continuous => return,
             Trigger::Periodic { .. } => {
