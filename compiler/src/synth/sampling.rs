@@ -116,10 +116,36 @@ pub(super) fn longest_scale<F>(mut certifies: F) -> Result<Option<f64>, SynthErr
 where
     F: FnMut(f64) -> Result<bool, SynthError>,
 {
-    let (mut lo, mut hi) = (1.0 / 1024.0, 1.0);
+    let lo = 1.0 / 1024.0;
     if !certifies(lo)? {
         return Ok(None);
     }
+    bisect(lo, 1.0, certifies).map(Some)
+}
+
+/// As [`longest_scale`], but searching down from s = 1/2 by halving (at most
+/// 10 solves) before the bisection: the shortest intervals, where the SDP is
+/// worst conditioned, are solved only when needed.
+pub(super) fn longest_scale_from_above<F>(mut certifies: F) -> Result<Option<f64>, SynthError>
+where
+    F: FnMut(f64) -> Result<bool, SynthError>,
+{
+    let mut s = 0.5;
+    while !certifies(s)? {
+        s *= 0.5;
+        if s < 1.0 / 1024.0 {
+            return Ok(None);
+        }
+    }
+    bisect(s, 2.0 * s, certifies).map(Some)
+}
+
+/// Bisection on [lo, hi] (lo certified, hi not) to [`PERIOD_REL_TOL`]: the
+/// largest scaling found certified.
+fn bisect<F>(mut lo: f64, mut hi: f64, mut certifies: F) -> Result<f64, SynthError>
+where
+    F: FnMut(f64) -> Result<bool, SynthError>,
+{
     while hi - lo > PERIOD_REL_TOL * hi {
         let mid = 0.5 * (lo + hi);
         if certifies(mid)? {
@@ -128,7 +154,7 @@ where
             hi = mid;
         }
     }
-    Ok(Some(lo))
+    Ok(lo)
 }
 
 /// The trigger text that asks for `sampling` scaled to the longest interval

@@ -45,7 +45,7 @@ use super::ModesDesign;
 use crate::model::TsModel;
 use crate::synth::advice::round_down;
 use crate::synth::design::SynthError;
-use crate::synth::sampling::{longest_scale, write_sampling};
+use crate::synth::sampling::{longest_scale_from_above, write_sampling};
 use crate::synth::search::Runner;
 use nalgebra::DMatrix;
 use tsf_lang::modes::Modes;
@@ -263,8 +263,8 @@ fn attempt(
 }
 
 /// The sampled-loop certificate of the mode design `md` at `sampling`, or
-/// the refusal with the longest certified interval (bisection on a scaling
-/// of [h_min, h_max], the advised value re-solved before it is advised).
+/// the refusal with the longest certified interval (halving, then bisection
+/// on h_max; the advised value re-solved before it is advised).
 pub(in crate::synth) fn certify_loop(
     runner: &mut Runner<'_>,
     modes: &Modes,
@@ -281,10 +281,10 @@ pub(in crate::synth) fn certify_loop(
     } else {
         format!("sampling intervals in [{}, {}] s", sampling.0, sampling.1)
     };
-    let reach = longest_scale(|s| Ok(attempt(runner, modes, md, at(s))?.is_some()))?;
+    let reach = longest_scale_from_above(|s| Ok(attempt(runner, modes, md, at(s))?.is_some()))?;
     let Some(reach) = reach else {
         return Err(SynthError::Infeasible {
-            message: format!("the sampled loop is not certified: the gains of the continuous mode design are not certified for {what}, nor for intervals 1024 times shorter"),
+            message: format!("the sampled loop is not certified: the gains of the continuous mode design are not certified for {what}, nor for any interval down to 1/1024 of it (halved from 1/2)"),
             achievable: vec!["weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger".into()],
         });
     };
