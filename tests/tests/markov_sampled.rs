@@ -43,6 +43,9 @@ impl Lcg {
     }
 }
 
+/// The plant: A_i per rule, and B_ai of (mode, rule).
+type Plant<'p> = (&'p [DMatrix<f64>], &'p dyn Fn(usize, usize) -> DMatrix<f64>);
+
 /// The matrices of a sampled mode loop read from the report alone.
 struct Loop {
     h_max: f64,
@@ -82,12 +85,13 @@ impl Loop {
     }
 
     /// The bound on the generator of V = x'P_a x + (h - tau) int x''Y x' in
-    /// mode `a` as a quadratic form in psi = [x; x(s)]: Xi + (h - tau) Phi'Y Phi
-    /// + tau N Y^{-1} N', with Phi the blended derivative (plant memberships
-    /// `hp`, controller memberships `hc`; plant A_i and B_ai).
+    /// mode `a` as a quadratic form in psi = [x; x(s)], that is
+    /// Xi + (h - tau) Phi'Y Phi + tau N Y^{-1} N', with Phi the blended
+    /// derivative (plant memberships `hp`, controller memberships `hc`;
+    /// plant A_i and B_ai).
     fn bound(
         &self,
-        (a_rules, b_of): (&[DMatrix<f64>], &dyn Fn(usize, usize) -> DMatrix<f64>),
+        (a_rules, b_of): Plant<'_>,
         a: usize,
         (hp, hc): (&[f64], &[f64]),
         h: f64,

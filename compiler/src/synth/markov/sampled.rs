@@ -118,7 +118,7 @@ pub fn build(
     eps: f64,
     reduce: bool,
 ) -> Result<Problem, LmiError> {
-    let (n, r) = (model.n, model.r());
+    let n = model.n;
     let k = 2 * n;
     let mut problem = Problem::new();
     let mut p = Vec::new();
@@ -166,9 +166,9 @@ pub fn build(
             l[a][1],
             &id,
         )?)?;
-        for i in 0..r {
-            for j in 0..r {
-                let phi = &model.rules[i].a * &ex + &b[i] * &gains[a][j] * &es;
+        for (i, (rule, bi)) in model.rules.iter().zip(&b).enumerate() {
+            for (j, fj) in gains[a].iter().enumerate() {
+                let phi = &rule.a * &ex + bi * fj * &es;
                 let xi = Expr::product(&ex.transpose(), p[a], &phi)?
                     .he()?
                     .add(common.clone())?;
