@@ -283,3 +283,30 @@ impl Runner<'_> {
         matches!(sampled, Ok(Some(_)))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{longest_scale, longest_scale_from_above, PERIOD_REL_TOL};
+
+    #[test]
+    fn both_searches_find_a_threshold_from_below_within_the_tolerance() {
+        for edge in [0.9, 0.3, 0.0891, 0.002] {
+            let ok = |s: f64| Ok(s <= edge);
+            for found in [longest_scale(ok), longest_scale_from_above(ok)] {
+                let s = found.expect("no error").expect("found");
+                assert!(
+                    s <= edge && s >= edge * (1.0 - 2.0 * PERIOD_REL_TOL),
+                    "{edge}: {s}"
+                );
+            }
+        }
+        // Nothing certifies: None, and the descending search stops at 1/1024.
+        let mut calls = 0;
+        let none = longest_scale_from_above(|_| {
+            calls += 1;
+            Ok(false)
+        });
+        assert!(none.expect("no error").is_none());
+        assert_eq!(calls, 10);
+    }
+}
