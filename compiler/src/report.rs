@@ -153,6 +153,13 @@ pub struct SampledReport {
     /// is its region of attraction.
     #[serde(rename = "P")]
     pub p: Vec<Vec<f64>>,
+    /// Y of the functional's integral term (with modes; it is mode-independent).
+    #[serde(rename = "Y", skip_serializing_if = "Option::is_none")]
+    pub y: Option<Vec<Vec<f64>>>,
+    /// With modes: per mode P_a, L1_a, L2_a of the functional (`P` above is
+    /// the first mode's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modes: Option<Vec<crate::synth::markov::report::ModeSampledReport>>,
 }
 
 /// One objective's verdict for given gains (analysis mode).
@@ -566,14 +573,18 @@ pub fn report(
         signal_trigger: design
             .filter(|_| certified)
             .and_then(|d| d.signal_trigger.clone()),
-        sampled_loop: design
-            .filter(|_| certified)
-            .and_then(|d| d.sampled.as_ref())
-            .map(|s| SampledReport {
-                sampling: [s.plan.sampling.0, s.plan.sampling.1],
-                covers: crate::synth::sampling::covers(&s.plan),
-                p: rows(&s.p),
-            }),
+        sampled_loop: design.filter(|_| certified).and_then(|d| {
+            d.sampled
+                .as_ref()
+                .map(|s| SampledReport {
+                    sampling: [s.plan.sampling.0, s.plan.sampling.1],
+                    covers: crate::synth::sampling::covers(&s.plan),
+                    p: rows(&s.p),
+                    y: None,
+                    modes: None,
+                })
+                .or_else(|| crate::synth::markov::report::sampled_loop(model, d))
+        }),
         solver: SolverInfo {
             name: "clarabel",
             // A failed synthesis ends on its last SDP; a design on the kept one.

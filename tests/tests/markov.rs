@@ -90,7 +90,7 @@ fn fault_blind_gains_cannot_stabilize_an_unstable_plant_with_a_failed_actuator()
 
 /// A two-rule, two-state plant (a damped nonlinear spring) with three actuator
 /// modes, the last with every actuator lost (rates of Xue et al. 2024).
-fn three_modes(design: &str, relaxation: &str) -> String {
+pub(crate) fn three_modes(design: &str, relaxation: &str) -> String {
     format!(
         "tsf 1; controller sat; state x1, x2; input u[2];\n\
          A(x) = [0, 1; -1 - x1^2, -0.5]; B = [0, 0.2; 1, 1];\n\
@@ -110,7 +110,7 @@ fn three_modes(design: &str, relaxation: &str) -> String {
 }
 
 /// B_ai of the test's plant, written here (not taken from the compiler).
-fn input_matrix(mode: usize, rule: usize) -> DMatrix<f64> {
+pub(crate) fn input_matrix(mode: usize, rule: usize) -> DMatrix<f64> {
     let b = if rule == 0 {
         DMatrix::from_row_slice(2, 2, &[0.0, 0.2, 1.0, 1.0])
     } else {

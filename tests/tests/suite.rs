@@ -15,6 +15,7 @@ mod given_gains;
 mod markov;
 mod markov_performance;
 mod markov_runtime;
+mod markov_sampled;
 mod mismatch_kappa;
 mod mixed_trigger;
 mod model_consistency;

@@ -9,6 +9,10 @@
 //! with P_a > 0 and (tanaka) P_a Y_a P_a >= 0; margins under the rule of every
 //! certificate ([`super::RULE`]). The stored-precision re-check rebuilds the
 //! same conditions with the gains as generated code stores them.
+//!
+//! A sampled loop (`synth/markov/sampled.rs`) adds its conditions, rebuilt
+//! with the same gains at every vertex (h_min and h_max), at the solved
+//! P_a, Y, L1_a, L2_a of the functional.
 
 use super::stored::{membership_bound, stored, StoredPrecision};
 use super::{margins_of, summarize, Certificate, LmiMargin};
@@ -215,6 +219,13 @@ fn margins(
     }
     let mut out = margins_of(&problem, &nonstrict, &values, &[], &|_| {})?;
     out.extend(finite_time_margin(md));
+    if let Some(s) = &md.sampled {
+        // The sampled loop, every vertex (h_min too), with the same `gains`.
+        let problem =
+            crate::synth::markov::sampled::build(model, modes, gains, s.sampling, eps, false)
+                .map_err(|e| SynthError::Internal(format!("internal error: {e}")))?;
+        out.extend(margins_of(&problem, &[], &s.values, &[], &|_| {})?);
+    }
     Ok(out)
 }
 
@@ -265,9 +276,10 @@ fn stored_check(
     let mut worst_membership = None;
     for (a, mode) in modes.modes.iter().enumerate() {
         let prefix = format!("mode {} ", mode.name);
+        // The continuous conditions (P) only: the bound is taken with their P_a.
         let available = lmis
             .iter()
-            .filter(|l| l.strict && l.name.starts_with(&prefix))
+            .filter(|l| l.strict && l.name.starts_with(&prefix) && !l.name.contains(" sampled "))
             .map(|l| l.margin)
             .fold(f64::INFINITY, f64::min);
         let mut mode_model = model.clone();

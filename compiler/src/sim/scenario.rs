@@ -328,9 +328,19 @@ pub fn run_truth(
         .collect::<Result<Vec<_>, _>>()?;
     let mut chain = match &spec.modes {
         Some(modes) => {
-            if plan.trigger.is_some_and(|t| *t != Trigger::Continuous) {
+            if !plan.trigger.is_none_or(|t| {
+                matches!(
+                    t,
+                    Trigger::Continuous
+                        | Trigger::Periodic { .. }
+                        | Trigger::Aperiodic {
+                            threshold: None,
+                            ..
+                        }
+                )
+            }) {
                 return Err(SimError::unsupported(
-                    "a spec with `modes` is simulated in a continuous loop only (no trigger override)",
+                    "a spec with `modes` is simulated in a continuous loop or a sampled one (`periodic`, or `aperiodic` without a threshold)",
                 ));
             }
             let sim = spec
@@ -383,6 +393,14 @@ pub fn run_truth(
     let mut progress = Progress::new(opts.progress, t0, t1);
     let mut t = t0;
     let mut k = 0u64;
+    // A sampled loop with modes: a mode jump between samples is not a
+    // sample; the command is re-blended from the held sample with the new
+    // mode's gains (the mode is known continuously, docs/xue2024.md).
+    let sampled_modes = chain.is_some() && plan.trigger.is_some_and(|t| *t != Trigger::Continuous);
+    let mut held = (x[..n].to_vec(), z.clone());
+    let mut at_jump = false;
+    // The sampling instant a jump cut the step short of, still ahead.
+    let mut pending: Option<f64> = None;
     // Continuous monitoring: each crossing is located to this time tolerance.
     let monitor_tol = (h * 1e-6).max(1e-12);
     let last_sent = loop {
@@ -395,7 +413,8 @@ pub fn run_truth(
             }
             c.process.mode()
         });
-        let sent = sampler.gate.decide(&x[..n]);
+        let rejump = sampled_modes && std::mem::take(&mut at_jump);
+        let sent = !rejump && sampler.gate.decide(&x[..n]);
         let mut no_rule = false;
         if let Some(p) = premises.as_mut() {
             p.eval(&x[..n], &mut z);
@@ -403,17 +422,27 @@ pub fn run_truth(
         controller.strengths(&x[..n], premises.as_ref().map(|_| &z[..]), &mut h_now);
         mismatch.sample(&h_now, sent);
         rates.sample(t, &h_now);
-        if sent {
-            // The mode's controller (mode-dependent gains), else the one law.
+        if sent && sampled_modes {
+            held.0.copy_from_slice(&x[..n]);
+            held.1.copy_from_slice(&z);
+        }
+        if sent || (rejump && !mode_laws.is_empty()) {
+            // The mode's controller (mode-dependent gains), else the one law,
+            // on the sample (at a jump of a sampled loop: the held one).
             let ctl = match mode {
                 Some(a) if !mode_laws.is_empty() => &mode_laws[a.min(mode_laws.len() - 1)],
                 _ => &controller,
             };
-            let flags = match &premises {
-                Some(_) => ctl.command_with(&x[..n], &z, &mut u),
-                None => ctl.command(&x[..n], &mut u),
+            let (xs, zs) = if sent {
+                (&x[..n], &z[..])
+            } else {
+                (&held.0[..], &held.1[..])
             };
-            saturated += u64::from(flags.contains(Flags::SATURATED));
+            let flags = match &premises {
+                Some(_) => ctl.command_with(xs, zs, &mut u),
+                None => ctl.command(xs, &mut u),
+            };
+            saturated += u64::from(flags.contains(Flags::SATURATED) && sent);
             no_rule = flags.contains(Flags::NO_RULE_FIRED);
         }
         let in_region = match &premises {
@@ -440,7 +469,10 @@ pub fn run_truth(
         if t >= t1 || nonfinite_at.is_some() {
             break sent;
         }
-        let mut t_next = sampler.schedule.next(k, t).min(t1);
+        let mut t_next = pending
+            .take()
+            .unwrap_or_else(|| sampler.schedule.next(k, t))
+            .min(t1);
         // Snap to the end instead of leaving a sliver of an interval.
         if t1 - t_next < 1e-9 * h {
             t_next = t1;
@@ -449,6 +481,7 @@ pub fn run_truth(
         let mut jumps = false;
         if let Some(c) = chain.as_mut() {
             if c.process.next_jump() < t_next {
+                pending = Some(t_next);
                 t_next = c.process.next_jump();
                 jumps = true;
             }
@@ -498,6 +531,7 @@ pub fn run_truth(
         if !located && !jumps {
             k += 1;
         }
+        at_jump = jumps;
         if !x.iter().all(|v| v.is_finite()) {
             nonfinite_at = Some(t);
         }

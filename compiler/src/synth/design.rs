@@ -118,6 +118,19 @@ pub struct Design {
     pub fuzzy: Option<super::lyapunov::FuzzyDesign>,
 }
 
+impl Design {
+    /// The sampling intervals [h_min, h_max] of the certified sampled loop
+    /// (fault-free or with Markov modes), if the design ships one.
+    pub fn sampling(&self) -> Option<(f64, f64)> {
+        self.sampled.as_ref().map(|s| s.plan.sampling).or_else(|| {
+            self.modes
+                .as_ref()
+                .and_then(|m| m.sampled.as_ref())
+                .map(|s| s.sampling)
+        })
+    }
+}
+
 /// The certificate of the sampled loop for the gains of a [`Design`]: every
 /// sample transmitted, intervals in `plan.sampling`.
 #[derive(Debug, Clone)]

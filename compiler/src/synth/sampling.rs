@@ -109,6 +109,67 @@ pub fn covers(plan: &TriggerPlan) -> String {
 /// Relative width at which the bisection on the sampling interval stops.
 const PERIOD_REL_TOL: f64 = 0.02;
 
+/// The largest scaling s in [1/1024, 1] of the sampling intervals that
+/// `certifies` (bisection to [`PERIOD_REL_TOL`]; s = 1 is taken as already
+/// refused), or None when even s = 1/1024 does not.
+pub(super) fn longest_scale<F>(mut certifies: F) -> Result<Option<f64>, SynthError>
+where
+    F: FnMut(f64) -> Result<bool, SynthError>,
+{
+    let lo = 1.0 / 1024.0;
+    if !certifies(lo)? {
+        return Ok(None);
+    }
+    bisect(lo, 1.0, certifies).map(Some)
+}
+
+/// As [`longest_scale`], but searching down from s = 1/2 by halving (at most
+/// 10 solves) before the bisection: the shortest intervals, where the SDP is
+/// worst conditioned, are solved only when needed.
+pub(super) fn longest_scale_from_above<F>(mut certifies: F) -> Result<Option<f64>, SynthError>
+where
+    F: FnMut(f64) -> Result<bool, SynthError>,
+{
+    let mut s = 0.5;
+    while !certifies(s)? {
+        s *= 0.5;
+        if s < 1.0 / 1024.0 {
+            return Ok(None);
+        }
+    }
+    bisect(s, 2.0 * s, certifies).map(Some)
+}
+
+/// Bisection on [lo, hi] (lo certified, hi not) to [`PERIOD_REL_TOL`]: the
+/// largest scaling found certified.
+fn bisect<F>(mut lo: f64, mut hi: f64, mut certifies: F) -> Result<f64, SynthError>
+where
+    F: FnMut(f64) -> Result<bool, SynthError>,
+{
+    while hi - lo > PERIOD_REL_TOL * hi {
+        let mid = 0.5 * (lo + hi);
+        if certifies(mid)? {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(lo)
+}
+
+/// The trigger text that asks for `sampling` scaled to the longest interval
+/// `advice` (`trigger periodic { every = ..; }` or `sampling = .. ..;`).
+pub(super) fn write_sampling(sampling: (f64, f64), advice: f64) -> String {
+    if sampling.0 == sampling.1 {
+        format!("`trigger periodic {{ every = {advice}; }}`")
+    } else {
+        format!(
+            "`sampling = {} .. {advice};`",
+            round_down(sampling.0 * advice / sampling.1)
+        )
+    }
+}
+
 impl Runner<'_> {
     /// One sampled-loop SDP: the design, or None when not solved.
     fn sampled_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<SampledDesign>, SynthError> {
@@ -145,21 +206,12 @@ impl Runner<'_> {
         } else {
             format!("sampling intervals in [{}, {}] s", sampling.0, sampling.1)
         };
-        let (mut lo, mut hi) = (1.0 / 1024.0, 1.0);
-        if self.sampled_attempt(&at(lo))?.is_none() {
+        let Some(lo) = longest_scale(|s| Ok(self.sampled_attempt(&at(s))?.is_some()))? else {
             return Err(SynthError::Infeasible {
                 message: format!("the gains of the {} design are not certified for {what}, nor for intervals 1024 times shorter", if super::objectives::discrete::period(self.model).is_some() { "discrete-time" } else { "continuous" }),
                 achievable: vec!["weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger".into()],
             });
-        }
-        while hi - lo > PERIOD_REL_TOL * hi {
-            let mid = 0.5 * (lo + hi);
-            if self.sampled_attempt(&at(mid))?.is_some() {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
+        };
         if let Some(h) = super::objectives::discrete::period(self.model) {
             return Err(self.discrete_refusal(h, h * lo));
         }
@@ -172,14 +224,7 @@ impl Runner<'_> {
             }
             advice = round_down(advice * 0.95);
         }
-        let write = if sampling.0 == sampling.1 {
-            format!("`trigger periodic {{ every = {advice}; }}`")
-        } else {
-            format!(
-                "`sampling = {} .. {advice};`",
-                round_down(sampling.0 * advice / sampling.1)
-            )
-        };
+        let write = write_sampling(sampling, advice);
         Err(SynthError::Infeasible {
             message: format!("the sampled loop is not certified: the gains of the continuous design are not certified for {what}"),
             achievable: vec![format!(
@@ -236,5 +281,32 @@ impl Runner<'_> {
         let sampled = runner.sampled_attempt(&plan_for(&model, &design, (h, h)));
         self.log.solves += runner.log.solves;
         matches!(sampled, Ok(Some(_)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{longest_scale, longest_scale_from_above, PERIOD_REL_TOL};
+
+    #[test]
+    fn both_searches_find_a_threshold_from_below_within_the_tolerance() {
+        for edge in [0.9, 0.3, 0.0891, 0.002] {
+            let ok = |s: f64| Ok(s <= edge);
+            for found in [longest_scale(ok), longest_scale_from_above(ok)] {
+                let s = found.expect("no error").expect("found");
+                assert!(
+                    s <= edge && s >= edge * (1.0 - 2.0 * PERIOD_REL_TOL),
+                    "{edge}: {s}"
+                );
+            }
+        }
+        // Nothing certifies: None, and the descending search stops at 1/1024.
+        let mut calls = 0;
+        let none = longest_scale_from_above(|_| {
+            calls += 1;
+            Ok(false)
+        });
+        assert!(none.expect("no error").is_none());
+        assert_eq!(calls, 10);
     }
 }

@@ -225,7 +225,7 @@ pub fn tables(
                     None => spec.relaxation.node.to_string(),
                 },
             },
-            sampling: design.sampled.as_ref().map(|s| s.plan.sampling),
+            sampling: design.sampling(),
         },
         n: model.n,
         m: model.m,

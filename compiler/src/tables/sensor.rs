@@ -59,6 +59,11 @@ pub(super) fn sensor_tables(
     else {
         return Ok(None);
     };
+    // With modes the aperiodic trigger has no threshold (the checker refuses
+    // one): every sample is transmitted and no sensor module is generated.
+    if model.spec.modes.is_some() {
+        return Ok(None);
+    }
     let n = model.n;
     let (u, weight_source, certified) = match weight {
         Weight::Given(mat) => (

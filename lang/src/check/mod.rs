@@ -253,6 +253,19 @@ impl<'a> Checker<'a> {
         let objectives = self.objectives(&draft.objective_items, dims.n, &draft.outputs);
         let relaxation =
             self.settle_relaxation(draft.relaxation.take(), &rules, draft.rule_items.len());
+        // With modes, a threshold-free aperiodic trigger is the sampled loop
+        // of `synth/markov/sampled.rs`: no trigger weight is synthesized.
+        if items.iter().any(|it| matches!(it.kind, ItemKind::Modes(_)))
+            && matches!(
+                draft.trigger.as_ref().map(|t| &t.node),
+                Some(Trigger::Aperiodic {
+                    threshold: None,
+                    ..
+                })
+            )
+        {
+            draft.weight_span = None;
+        }
         self.combinations(
             &objectives,
             &draft,

@@ -12,7 +12,9 @@ use crate::eval::Mat;
 use crate::modes::{Actuator, Mode, ModeDesign, Modes};
 use crate::num::Num;
 use crate::span::{Span, Spanned};
-use crate::spec::{Objective, Relaxation, RuleSpec, SpannedObjective, Trigger};
+use crate::spec::{
+    Objective, PeriodicDesign, Relaxation, RuleSpec, SpannedObjective, Trigger, Weight,
+};
 use std::collections::HashMap;
 
 /// Rows of the rate matrix must sum to 0 within this, relative to the sum of
@@ -352,10 +354,10 @@ impl<'a> Checker<'a> {
     /// than stability, decay rate, one hinf, or finite_time alone; relaxations
     /// other than basic, tanaka (not with hinf or finite_time) and
     /// membership_mismatch (every pair), given gains, saturation,
-    /// sampled or event-triggered loops.
+    /// event-triggered, mixed or discrete-time loops ([`Checker::modes_trigger`]).
     fn modes_supported(&mut self, modes: &Modes, draft: &Draft, around: &Around<'_>) -> bool {
         let before = self.diags.len();
-        let note = "with `modes`, tsfc supports stability, decay-rate, hinf and finite_time objectives, relaxations basic, tanaka (stability and decay only) and membership_mismatch, and a continuous loop (docs/limits.md)";
+        let note = "with `modes`, tsfc supports stability, decay-rate, hinf and finite_time objectives, relaxations basic, tanaka (stability and decay only) and membership_mismatch, and a continuous loop or a sampled one (`trigger periodic`, or `trigger aperiodic` without a threshold; stability and decay only) (docs/limits.md)";
         let unsupported = |span: Span, what: String| {
             Diagnostic::error(span, what)
                 .with_secondary(modes.span, "modes here")
@@ -446,17 +448,95 @@ impl<'a> Checker<'a> {
                 "`saturate` levels are not supported with `modes`".into(),
             ));
         }
-        if let Some(t) = draft
-            .trigger
-            .as_ref()
-            .filter(|t| t.node != Trigger::Continuous)
-        {
-            self.err(unsupported(
-                t.span,
-                "a sampled or event-triggered loop is not supported with `modes`".into(),
-            ));
+        if let Some(t) = &draft.trigger {
+            self.modes_trigger(t, draft, &performance, &unsupported);
         }
         self.diags.len() == before
+    }
+}
+
+impl Checker<'_> {
+    /// The loops supported with modes: continuous, and the sampled loop of
+    /// `trigger periodic` (emulation) or a threshold-free `trigger aperiodic`
+    /// with stability or decay-rate objectives (its certificate is
+    /// mean-square stability, `synth/markov/sampled.rs`). Event-triggered,
+    /// mixed and discrete-time designs stay refused.
+    fn modes_trigger(
+        &mut self,
+        t: &Spanned<Trigger>,
+        draft: &Draft,
+        performance: &[&SpannedObjective],
+        unsupported: &dyn Fn(Span, String) -> Diagnostic,
+    ) {
+        let sampled_help = "a sampled loop is supported with `modes`: write `trigger periodic { every = ..; }` or `trigger aperiodic { sampling = h_min .. h_max; }` (every sample transmitted)";
+        match &t.node {
+            Trigger::Continuous => return,
+            Trigger::Periodic { .. } => {
+                if let Some(d) = draft
+                    .periodic_design
+                    .as_ref()
+                    .filter(|d| d.node == PeriodicDesign::Discrete)
+                {
+                    self.err(
+                        unsupported(
+                            d.span,
+                            "the discrete-time design (`design = discrete`) is not supported with `modes`".into(),
+                        )
+                        .with_help("leave `design` out: the continuous mode design is then certified for the sampled loop"),
+                    );
+                    return;
+                }
+            }
+            Trigger::Aperiodic {
+                threshold: Some(_), ..
+            } => {
+                self.err(
+                    unsupported(
+                        t.span,
+                        "an event-triggered loop (`threshold`) is not supported with `modes`"
+                            .into(),
+                    )
+                    .with_help(sampled_help),
+                );
+                return;
+            }
+            Trigger::Aperiodic { weight, .. }
+                if matches!(weight, Weight::Given(_)) || draft.trigger_synthesis.is_some() =>
+            {
+                self.err(
+                    unsupported(
+                        t.span,
+                        "a trigger `weight` is not used without a threshold; with `modes` it is refused".into(),
+                    )
+                    .with_help("remove `weight = ..;` (every sample is transmitted)"),
+                );
+                return;
+            }
+            Trigger::Aperiodic { .. } => {}
+            Trigger::Mixed { .. } => {
+                self.err(
+                    unsupported(
+                        t.span,
+                        "a mixed trigger is not supported with `modes`".into(),
+                    )
+                    .with_help(sampled_help),
+                );
+                return;
+            }
+        }
+        if let Some(o) = performance.first() {
+            self.err(
+                unsupported(
+                    o.span,
+                    format!(
+                        "objective `{}` with a sampled loop is not supported with `modes`: the sampled-loop certificate covers mean-square stability",
+                        o.node.kind()
+                    ),
+                )
+                .with_secondary(t.span, "sampled loop here")
+                .with_help("use `objective stability;` or `objective decay_rate ..;` (certified for the continuous loop; the sampled loop is certified stable)"),
+            );
+        }
     }
 }
 
@@ -579,6 +659,42 @@ mod tests {
         assert_eq!(m, "mode `ok` is defined twice");
         let (m, _) = only_error(&TWO.replace("rates = [-1, 1; 2, -2];", ""));
         assert_eq!(m, "`modes` needs `rates = [...];`");
+    }
+
+    #[test]
+    fn a_sampled_loop_is_accepted_and_event_triggers_are_refused_with_help() {
+        // Periodic and threshold-free aperiodic: the sampled mode loop (no
+        // trigger weight is asked for).
+        spec_with(&format!("{TWO}\ntrigger periodic {{ every = 0.01; }}"));
+        let s = spec_with(&format!(
+            "{TWO}\ntrigger aperiodic {{ sampling = 0.001 .. 0.05; }}\nobjective decay_rate >= 0.1;"
+        ));
+        assert!(s.modes.is_some() && s.trigger.is_some());
+        let e = errors(&format!(
+            "{BASE}{TWO}\ntrigger aperiodic {{ sampling = 0.001 .. 0.05; threshold nu = 0.1; weight = 1; }}"
+        ));
+        let d = e
+            .iter()
+            .find(|(d, _)| d.message.starts_with("an event-triggered loop"))
+            .unwrap_or_else(|| panic!("{e:#?}"));
+        assert!(d.1.starts_with("trigger aperiodic"), "{}", d.1);
+        assert!(d
+            .0
+            .help
+            .iter()
+            .any(|h| h.contains("a sampled loop is supported")));
+        let (m, _) = only_error(&format!(
+            "{TWO}\ntrigger periodic {{ every = 0.1; design = discrete; }}"
+        ));
+        assert_eq!(
+            m,
+            "the discrete-time design (`design = discrete`) is not supported with `modes`"
+        );
+        let (m, at) = only_error(&format!(
+            "{TWO}\noutput z = x1;\ndisturbance d;\nD = 1;\nobjective hinf(d -> z) minimize;\ntrigger periodic {{ every = 0.1; }}"
+        ));
+        assert_eq!(m, "objective `hinf` with a sampled loop is not supported with `modes`: the sampled-loop certificate covers mean-square stability");
+        assert!(at.starts_with("objective hinf"), "{at}");
     }
 
     #[test]

@@ -62,6 +62,7 @@
 pub mod pairs;
 pub mod problem;
 pub mod report;
+pub mod sampled;
 
 use super::achieved::{Achieved, Quantity};
 use super::design::{Design, SolverLog, SynthError};
@@ -98,6 +99,9 @@ pub struct ModesDesign {
     pub gains: Vec<Vec<DMatrix<f64>>>,
     /// The relaxation's slack in P variables, P_a Y_a P_a, per mode (tanaka).
     pub slack: Vec<Option<DMatrix<f64>>>,
+    /// The certified sampled loop (periodic or threshold-free aperiodic
+    /// trigger), for these gains.
+    pub sampled: Option<sampled::ModesSampled>,
 }
 
 /// The finite-time numbers of a design, from its P_a: lambda1, lambda2 the
@@ -310,6 +314,7 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             p: Vec::new(),
             gains: Vec::new(),
             slack: Vec::new(),
+            sampled: None,
         };
         for v in &built.modes {
             let x = value(v.x)?;
@@ -429,6 +434,13 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             }
         }
     };
+    let mut solved = solved;
+    let mut loop_note = None;
+    if let Some(h) = sampled::wanted(&model.spec) {
+        let (s, note) = sampled::certify_loop(runner, modes, &solved.modes, h)?;
+        solved.modes.sampled = Some(s);
+        loop_note = Some(note);
+    }
     let (plan, _) = initial_plan(&model.spec, settings.default_phi);
     let mut achieved = Achieved::default();
     achieved.set(Quantity::DecayRate, solved.modes.alpha);
@@ -454,6 +466,7 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             ""
         }
     )];
+    notes.extend(loop_note);
     if solved.almost {
         notes.push("the solver reached only reduced accuracy on the chosen SDP; the certificate re-checks every condition".into());
     }

@@ -3,7 +3,7 @@
 
 use crate::certify::Certificate;
 use crate::model::TsModel;
-use crate::report::{rows, Gain};
+use crate::report::{rows, Gain, SampledReport};
 use crate::synth::markov::ModesDesign;
 use crate::synth::Design;
 use serde::Serialize;
@@ -116,4 +116,45 @@ pub fn finite_time(model: &TsModel, md: &ModesDesign) -> Option<serde_json::Valu
         v["c2_bound"] = serde_json::json!(bound);
     }
     Some(v)
+}
+
+/// One mode's matrices of the sampled loop's functional.
+#[derive(Debug, Serialize)]
+pub struct ModeSampledReport {
+    /// The mode's name.
+    pub name: String,
+    /// P_a (n x n rows).
+    #[serde(rename = "P")]
+    pub p: Vec<Vec<f64>>,
+    /// The free matrix L1_a.
+    #[serde(rename = "L1")]
+    pub l1: Vec<Vec<f64>>,
+    /// The free matrix L2_a.
+    #[serde(rename = "L2")]
+    pub l2: Vec<Vec<f64>>,
+}
+
+/// The `sampled_loop` section of a mode design with a sampled loop.
+pub fn sampled_loop(model: &TsModel, design: &Design) -> Option<SampledReport> {
+    let s = design.modes.as_ref()?.sampled.as_ref()?;
+    let modes = model.spec.modes.as_ref()?;
+    Some(SampledReport {
+        sampling: [s.sampling.0, s.sampling.1],
+        covers: super::sampled::covers(s.sampling),
+        p: rows(s.p.first()?),
+        y: Some(rows(&s.y)),
+        modes: Some(
+            modes
+                .modes
+                .iter()
+                .enumerate()
+                .map(|(a, m)| ModeSampledReport {
+                    name: m.name.clone(),
+                    p: rows(&s.p[a]),
+                    l1: rows(&s.l1[a]),
+                    l2: rows(&s.l2[a]),
+                })
+                .collect(),
+        ),
+    })
 }

@@ -1,0 +1,317 @@
+//! The sampled loop of a design with Markov modes (`trigger periodic` or a
+//! threshold-free `trigger aperiodic` with a `modes` block).
+//!
+//! Semantics: the state is sampled at s_l with s_{l+1} - s_l in [h_min,
+//! h_max]; the mode r(t) is known continuously (fault detection), so the
+//! command is u(t) = sum_j h_j(x(s_l)) F_{r(t) j} x(s_l): between samples the
+//! held state x(s_l) is blended with the gains of the current mode, and a
+//! mode jump changes the command at the jump.
+//!
+//! Certificate (input-delay Lyapunov-Krasovskii functional, with the mode in
+//! the quadratic part only): with tau = t - s_l, h = s_{l+1} - s_l,
+//!
+//!   V = x' P_r x + (h - tau) int_{s_l}^t x'(a)' Y x'(a) da.
+//!
+//! The integral term does not depend on the mode, so a mode jump leaves V
+//! continuous; it vanishes as t -> s_{l+1}, so a sample does too. With
+//! psi = [x; x(s_l)], x' = Phi_aij psi in mode a (plant rule i at x(t),
+//! controller rule j at x(s_l)), Phi_aij = A_i E_x + B_ai F_aj E_s, and the
+//! bound -int x'' Y x' <= He(psi' N (x - x(s_l))) + tau psi' N Y^{-1} N' psi
+//! (any N = E_x' L1_a + E_s' L2_a, Y > 0), the weak infinitesimal generator
+//! (including sum_b pi_ab x' P_b x from the jumps of r) is at most
+//! psi' [Xi_aij + (h - tau) Phi' Y Phi + tau N Y^{-1} N'] psi with
+//!
+//!   Xi_aij = He(E_x' P_a Phi_aij) + E_x' (sum_b pi_ab P_b) E_x + He(N (E_x - E_s)).
+//!
+//! That is affine in tau in [0, h] and, by convexity of Phi' Y Phi in the
+//! memberships, holds for every blend if, for every mode a and every rule
+//! pair (i, j) (plant and controller memberships differ):
+//!
+//!   r = 1: Xi_aij + h Phi_aij' Y Phi_aij < 0,
+//!   r = 2: [[Xi_aij, sqrt(h) N], [*, -Y]] < 0.
+//!
+//! Both are Xi + h Pi with Pi >= 0, so h = h_max implies every h <= h_max:
+//! the certificate covers every sampling sequence with intervals in (0,
+//! h_max] (h_min is not used) and every mode path, provided the sampling
+//! instants do not anticipate the mode process (deterministic, or chosen
+//! independently of it). Dynkin's formula then gives E V(t) + eps E int |x|^2
+//! <= V(0): mean-square (stochastic) stability of the sampled loop. The gains
+//! are the continuous mode design's (fixed), so every term is linear in the
+//! unknowns P_a, Y, L1_a, L2_a. The decay rate, H-inf or finite-time bounds
+//! are not claimed for the sampled loop.
+
+use super::problem::input_matrices;
+use super::ModesDesign;
+use crate::model::TsModel;
+use crate::synth::advice::round_down;
+use crate::synth::design::SynthError;
+use crate::synth::sampling::{longest_scale_from_above, write_sampling};
+use crate::synth::search::Runner;
+use nalgebra::DMatrix;
+use tsf_lang::modes::Modes;
+use tsf_lang::spec::Trigger;
+use tsf_lmi::{Expr, LmiError, Problem, SolveStatus};
+
+/// The certified sampled loop of a mode design.
+#[derive(Debug, Clone)]
+pub struct ModesSampled {
+    /// [h_min, h_max] the certificate was asked for (it covers (0, h_max]).
+    pub sampling: (f64, f64),
+    /// P_a of the functional, per mode.
+    pub p: Vec<DMatrix<f64>>,
+    /// Y of the functional's integral term (mode-independent).
+    pub y: DMatrix<f64>,
+    /// The free matrices L1_a, per mode.
+    pub l1: Vec<DMatrix<f64>>,
+    /// The free matrices L2_a, per mode.
+    pub l2: Vec<DMatrix<f64>>,
+    /// Values of every variable of the solved problem (by name).
+    pub values: Vec<(String, DMatrix<f64>)>,
+}
+
+/// The sampling intervals [h_min, h_max] of a spec with modes whose loop is
+/// sampled (`trigger periodic`, or `trigger aperiodic` without a threshold;
+/// the checker refuses the other triggers with modes).
+pub fn wanted(spec: &tsf_lang::Spec) -> Option<(f64, f64)> {
+    match spec.trigger.as_ref().map(|t| &t.node)? {
+        Trigger::Periodic { every } => Some((*every, *every)),
+        Trigger::Aperiodic {
+            sampling,
+            threshold: None,
+            ..
+        } => Some(*sampling),
+        _ => None,
+    }
+}
+
+/// Variable names of the sampled-loop problem.
+pub mod names {
+    /// P_a of mode `mode`.
+    pub fn p(mode: &str) -> String {
+        format!("Ps_{mode}")
+    }
+    /// L1_a of mode `mode`.
+    pub fn l1(mode: &str) -> String {
+        format!("L1s_{mode}")
+    }
+    /// L2_a of mode `mode`.
+    pub fn l2(mode: &str) -> String {
+        format!("L2s_{mode}")
+    }
+    /// The mode-independent Y.
+    pub const Y: &str = "Ys";
+}
+
+/// The name of the condition r of mode `mode` for rule pair (i, j) at h.
+pub fn condition_name(mode: &str, r: u8, i: usize, j: usize, h: f64) -> String {
+    format!("mode {mode} sampled r={r} h={h} Q[{},{}]", i + 1, j + 1)
+}
+
+/// The sampled-loop LMIs for `gains` (per mode, per rule) and intervals
+/// `sampling`: P_a > 0, Y > 0, and r = 1, 2 for every mode and rule pair at
+/// h_max and (unless `reduce`, or h_min = h_max) at h_min, which h_max implies.
+pub fn build(
+    model: &TsModel,
+    modes: &Modes,
+    gains: &[Vec<DMatrix<f64>>],
+    sampling: (f64, f64),
+    eps: f64,
+    reduce: bool,
+) -> Result<Problem, LmiError> {
+    let n = model.n;
+    let k = 2 * n;
+    let mut problem = Problem::new();
+    let mut p = Vec::new();
+    let mut l = Vec::new();
+    for mode in &modes.modes {
+        p.push(problem.symmetric(&names::p(&mode.name), n)?);
+        l.push([
+            problem.full(&names::l1(&mode.name), n, n)?,
+            problem.full(&names::l2(&mode.name), n, n)?,
+        ]);
+    }
+    let y = problem.symmetric(names::Y, n)?;
+    for (a, mode) in modes.modes.iter().enumerate() {
+        problem.psd(
+            &format!("sampled P_{} > 0", mode.name),
+            Expr::var(p[a]),
+            eps,
+        )?;
+    }
+    problem.psd("sampled Y > 0", Expr::var(y), eps)?;
+    let ex = DMatrix::identity(n, k);
+    let es = DMatrix::from_fn(n, k, |row, col| if col == n + row { 1.0 } else { 0.0 });
+    let exs = &ex - &es;
+    let id = DMatrix::identity(n, n);
+    let (h_min, h_max) = sampling;
+    let hs: &[f64] = if reduce || h_min >= h_max {
+        &[h_max]
+    } else {
+        &[h_min, h_max]
+    };
+    for (a, mode) in modes.modes.iter().enumerate() {
+        let b = input_matrices(model, modes, a);
+        // The part of Xi that does not depend on (i, j): coupling and N terms.
+        let mut common = Expr::product(&ex.transpose(), l[a][0], &exs)?
+            .add(Expr::product(&es.transpose(), l[a][1], &exs)?)?
+            .he()?;
+        for (c, pc) in p.iter().enumerate() {
+            let pi = modes.rates[(a, c)];
+            if pi != 0.0 {
+                common = common.add(Expr::product(&ex.transpose(), *pc, &ex)?.scale(pi)?)?;
+            }
+        }
+        let col = Expr::product(&ex.transpose(), l[a][0], &id)?.add(Expr::product(
+            &es.transpose(),
+            l[a][1],
+            &id,
+        )?)?;
+        for (i, (rule, bi)) in model.rules.iter().zip(&b).enumerate() {
+            for (j, fj) in gains[a].iter().enumerate() {
+                let phi = &rule.a * &ex + bi * fj * &es;
+                let xi = Expr::product(&ex.transpose(), p[a], &phi)?
+                    .he()?
+                    .add(common.clone())?;
+                for &h in hs {
+                    let r1 = xi
+                        .clone()
+                        .add(Expr::product(&phi.transpose(), y, &phi)?.scale(h)?)?;
+                    problem.nsd(&condition_name(&mode.name, 1, i, j, h), r1, eps)?;
+                    let r2 = Expr::sym_blocks(vec![
+                        vec![Some(xi.clone()), Some(col.clone().scale(h.sqrt())?)],
+                        vec![None, Some(Expr::var(y).scale(-1.0)?)],
+                    ])?;
+                    problem.nsd(&condition_name(&mode.name, 2, i, j, h), r2, eps)?;
+                }
+            }
+        }
+    }
+    Ok(problem)
+}
+
+/// What the certificate covers, in words (report and notes).
+pub fn covers(sampling: (f64, f64)) -> String {
+    let (lo, hi) = sampling;
+    let asked = if lo == hi {
+        format!("sampled every {hi} s")
+    } else {
+        format!("sampled at any intervals in [{lo}, {hi}] s")
+    };
+    format!(
+        "the loop {asked} (zero-order hold of the state; the command re-blended with the current mode's gains at each mode jump) is mean-square stable under the Markov chain, for every sampling sequence with intervals in (0, {hi}] s chosen independently of the mode process; decay, H-inf and finite-time bounds are certified for the continuous loop only"
+    )
+}
+
+/// What solver messages call this problem.
+const SOLVE_WHAT: &str = "sampled mode-loop problem";
+
+/// One solve at `sampling` for the gains of `md`: the certificate's data,
+/// or None when not solved.
+fn attempt(
+    runner: &mut Runner<'_>,
+    modes: &Modes,
+    md: &ModesDesign,
+    sampling: (f64, f64),
+) -> Result<Option<ModesSampled>, SynthError> {
+    let internal = |e: LmiError| SynthError::Internal(format!("internal error: {e}"));
+    let problem = build(
+        runner.model,
+        modes,
+        &md.gains,
+        sampling,
+        runner.settings.eps,
+        true,
+    )
+    .map_err(internal)?;
+    let sol = runner.solve(&problem, SOLVE_WHAT)?;
+    if sol.status != SolveStatus::Solved {
+        return Ok(None);
+    }
+    let iterate = sol.assignment().map_err(internal)?;
+    let values = problem
+        .vars()
+        .map(|(name, v)| {
+            iterate
+                .value(v)
+                .cloned()
+                .map(|m| (name.to_string(), m))
+                .map_err(internal)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let get = |name: &str| {
+        values
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.clone())
+            .ok_or_else(|| SynthError::Internal(format!("internal error: `{name}` has no value")))
+    };
+    let per_mode = |f: fn(&str) -> String| {
+        modes
+            .modes
+            .iter()
+            .map(|m| get(&f(&m.name)))
+            .collect::<Result<Vec<_>, _>>()
+    };
+    Ok(Some(ModesSampled {
+        sampling,
+        p: per_mode(names::p)?,
+        l1: per_mode(names::l1)?,
+        l2: per_mode(names::l2)?,
+        y: get(names::Y)?,
+        values,
+    }))
+}
+
+/// The sampled-loop certificate of the mode design `md` at `sampling`, or
+/// the refusal with the longest certified interval (halving, then bisection
+/// on h_max; the advised value re-solved before it is advised).
+pub(in crate::synth) fn certify_loop(
+    runner: &mut Runner<'_>,
+    modes: &Modes,
+    md: &ModesDesign,
+    sampling: (f64, f64),
+) -> Result<(ModesSampled, String), SynthError> {
+    if let Some(s) = attempt(runner, modes, md, sampling)? {
+        return Ok((s, format!("sampled loop certified: {}", covers(sampling))));
+    }
+    // The certificate does not depend on h_min: only h_max is scaled.
+    let at = |s: f64| (sampling.0.min(sampling.1 * s), sampling.1 * s);
+    let what = if sampling.0 == sampling.1 {
+        format!("sampling every {} s", sampling.1)
+    } else {
+        format!("sampling intervals in [{}, {}] s", sampling.0, sampling.1)
+    };
+    let reach = longest_scale_from_above(|s| Ok(attempt(runner, modes, md, at(s))?.is_some()))?;
+    let Some(reach) = reach else {
+        return Err(SynthError::Infeasible {
+            message: format!("the sampled loop is not certified: the gains of the continuous mode design are not certified for {what}, nor for any interval down to 1/1024 of it (halved from 1/2)"),
+            achievable: vec!["weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger".into()],
+        });
+    };
+    let mut advice = round_down(sampling.1 * reach);
+    let mut verified = false;
+    for _ in 0..4 {
+        if attempt(runner, modes, md, at(advice / sampling.1))?.is_some() {
+            verified = true;
+            break;
+        }
+        advice = round_down(advice * 0.95);
+    }
+    let write = if verified && sampling.0 == sampling.1 {
+        format!("write {} (certified)", write_sampling(sampling, advice))
+    } else if verified {
+        format!(
+            "write `sampling = {} .. {advice};` (certified)",
+            sampling.0.min(advice)
+        )
+    } else {
+        "no short value re-solved as certified: shorten the sampling further".into()
+    };
+    Err(SynthError::Infeasible {
+        message: format!("the sampled loop is not certified: the gains of the continuous mode design are not certified for {what} under the Markov chain"),
+        achievable: vec![format!(
+            "the longest certified sampling interval is about {:.4} s: {write}, or weaken the objectives that set the gains",
+            sampling.1 * reach
+        )],
+    })
+}
