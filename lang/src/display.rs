@@ -160,6 +160,7 @@ impl Display for TriggerSynthesis {
                 }
                 write!(f, ", reading = {reading})")
             }
+            TriggerSynthesis::Codesign { rounds } => write!(f, "codesign(rounds = {rounds})"),
         }
     }
 }
