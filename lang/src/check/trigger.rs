@@ -565,6 +565,24 @@ mod tests {
             synthesis("weight = synthesize codesign(rounds = 4);"),
             Some(TriggerSynthesis::Codesign { rounds: 4 })
         );
+        let rounds = |w: &str| {
+            only_error_of(&format!(
+                "{}disturbance d; D = 1; output z = x1;\n\
+                 objective linf(d -> z) minimize with phi = 0.1;\nobjective saturation region;\n\
+                 trigger aperiodic {{ sampling = 0.01 .. 0.1; {w} }}",
+                base_with("input u;", "input u saturate 1;")
+            ))
+        };
+        for (w, at) in [
+            ("weight = synthesize codesign(rounds = 0);", "0"),
+            ("weight = synthesize codesign(rounds = 2.5);", "2.5"),
+            ("weight = synthesize codesign(rounds = 31);", "31"),
+        ] {
+            assert_eq!(
+                rounds(w),
+                ("`rounds` is a whole number in 1 ..= 30".to_string(), at.to_string())
+            );
+        }
         assert_eq!(
             synthesis("weight = synthesize theorem2(eps2 = 2, xi = 0.08, reading = 3);"),
             Some(TriggerSynthesis::Theorem2 {
