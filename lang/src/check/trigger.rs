@@ -580,7 +580,10 @@ mod tests {
         ] {
             assert_eq!(
                 rounds(w),
-                ("`rounds` is a whole number in 1 ..= 30".to_string(), at.to_string())
+                (
+                    "`rounds` is a whole number in 1 ..= 30".to_string(),
+                    at.to_string()
+                )
             );
         }
         assert_eq!(
