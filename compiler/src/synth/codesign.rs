@@ -13,6 +13,11 @@
 //! - a trigger step: the existing problem of [`super::trigger::build`] for the
 //!   new gains at the threshold the gain step reached, minimizing gamma.
 //!
+//! Under every plant/controller pair (the held memberships of an event-
+//! triggered loop) the gain step's optimum needs only one F and one G (see
+//! [`gain_step_problem`]), so the co-designed controller has the same gain in
+//! every rule: fuzzy scheduling buys nothing under these conditions.
+//!
 //! Each step's solution is feasible for the next (with the same threshold),
 //! so gamma does not increase once the threshold is reached. Only a trigger
 //! step's design is ever kept: it is certified by the unchanged trigger
@@ -87,14 +92,14 @@ fn gain_step_problem(
         .transpose()?;
     let w_known = named(&last.values, "Upsilon")?;
     let mut problem = Problem::new();
-    let f: Vec<Var> = (0..r)
-        .map(|j| problem.full(&format!("Fcd{}", j + 1), m, n))
-        .collect::<Result<_, _>>()
-        .map_err(internal)?;
-    let g: Vec<Var> = (0..r)
-        .map(|j| problem.full(&format!("Gcd{}", j + 1), m, n))
-        .collect::<Result<_, _>>()
-        .map_err(internal)?;
+    // One F and one G for every controller rule, without loss: every pair
+    // (i, j) is imposed, so the conditions on (F_j, G_j) are the same for
+    // each j and the shared unknowns (L, Upsilon, xi, nu) enter them alike;
+    // they are convex, so the average of feasible (F_j, G_j) is feasible for
+    // every j. The solved problem keeps one controller rule.
+    let f1 = problem.full("Fcd", m, n).map_err(internal)?;
+    let g1 = problem.full("Gcd", m, n).map_err(internal)?;
+    let (f, g) = (vec![f1; r], vec![g1; r]);
     let l = [
         problem.full("L1", n, n).map_err(internal)?,
         problem.full("L2", n, n).map_err(internal)?,

@@ -111,13 +111,19 @@ fn chain(
 /// `Val` factors are fixed by the other step of the co-design.
 #[derive(Debug, Clone)]
 pub(super) struct LoopVars<'a> {
+    /// P of V1 = x' P x.
     pub p: Factor<'a>,
+    /// Y of the looped term.
     pub y: Factor<'a>,
+    /// The free matrices L1, L2 (always unknown).
     pub l: [Var; 2],
+    /// The trigger weight Upsilon (event triggers).
     pub w: Option<Factor<'a>>,
     /// The threshold as an unknown (else `plan.nu`; needs a known weight).
     pub nu: Option<Var>,
+    /// The diagonal sector multiplier T (with saturation).
     pub t: Option<Factor<'a>>,
+    /// xi of the L-inf channel (declared by [`impose`]).
     pub xi: Option<Var>,
     /// F_j per controller rule.
     pub gains: Vec<Factor<'a>>,
@@ -279,19 +285,16 @@ fn distinct_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
         .collect()
 }
 
-/// Representatives of the controller rules whose gains (F_j, G_j) differ (known gains only).
+/// Representatives of the controller rules whose gains (F_j, G_j) differ:
+/// known gains equal bit for bit, or the same unknown.
 fn distinct_controller_rules(v: &LoopVars<'_>) -> Vec<usize> {
-    fn val(f: Factor<'_>) -> Option<&DMatrix<f64>> {
-        match f {
-            Factor::Val(m) => Some(m),
-            Factor::Var(_) => None,
-        }
-    }
-    let same = |a: usize, b: usize| {
-        let (fa, fb) = (val(v.gains[a]), val(v.gains[b]));
-        let (ga, gb) = (val(v.sector[a]), val(v.sector[b]));
-        fa.is_some() && fa == fb && ga.is_some() && ga == gb
+    let equal = |a: Factor<'_>, b: Factor<'_>| match (a, b) {
+        (Factor::Val(x), Factor::Val(y)) => x == y,
+        (Factor::Var(x), Factor::Var(y)) => x == y,
+        _ => false,
     };
+    let same =
+        |a: usize, b: usize| equal(v.gains[a], v.gains[b]) && equal(v.sector[a], v.sector[b]);
     (0..v.gains.len())
         .filter(|&j| (0..j).all(|e| !same(e, j)))
         .collect()
