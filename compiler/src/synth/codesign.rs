@@ -74,6 +74,19 @@ struct GainStep {
     xi: f64,
 }
 
+/// A built gain step: the problem and the unknowns read back.
+struct GainStepProblem {
+    problem: Problem,
+    /// The one F of every controller rule.
+    f: Var,
+    /// The one G of every controller rule.
+    g: Var,
+    /// The threshold, when unknown.
+    nu: Option<Var>,
+    /// xi.
+    xi: Var,
+}
+
 /// Builds the gain step for the plan's data with P, Y, T and (for
 /// [`GainGoal::RaiseNu`]) Upsilon known from `last`.
 fn gain_step_problem(
@@ -82,7 +95,7 @@ fn gain_step_problem(
     last: &TriggerDesign,
     goal: GainGoal,
     eps: f64,
-) -> Result<(Problem, Vec<Var>, Vec<Var>, Option<Var>), SynthError> {
+) -> Result<GainStepProblem, SynthError> {
     let internal = |e: LmiError| SynthError::Internal(format!("co-design gain step: {e}"));
     let (n, m, r) = (model.n, model.m, model.r());
     let p = named(&last.values, "Ptr")?;
@@ -99,7 +112,7 @@ fn gain_step_problem(
     // every j. The solved problem keeps one controller rule.
     let f1 = problem.full("Fcd", m, n).map_err(internal)?;
     let g1 = problem.full("Gcd", m, n).map_err(internal)?;
-    let (f, g) = (vec![f1; r], vec![g1; r]);
+
     let l = [
         problem.full("L1", n, n).map_err(internal)?,
         problem.full("L2", n, n).map_err(internal)?,
@@ -122,8 +135,8 @@ fn gain_step_problem(
         nu,
         t: t.as_ref().map(Factor::Val),
         xi: None,
-        gains: f.iter().map(|v| Factor::Var(*v)).collect(),
-        sector: g.iter().map(|v| Factor::Var(*v)).collect(),
+        gains: vec![Factor::Var(f1); r],
+        sector: vec![Factor::Var(g1); r],
     };
     let built = trigger::impose(problem, model, plan, vars, eps, true).map_err(internal)?;
     let mut problem = built.problem;
@@ -160,7 +173,13 @@ fn gain_step_problem(
                 .map_err(internal)?;
         }
     }
-    Ok((problem, f, g, nu))
+    Ok(GainStepProblem {
+        problem,
+        f: f1,
+        g: g1,
+        nu,
+        xi,
+    })
 }
 
 impl Runner<'_> {
@@ -172,10 +191,9 @@ impl Runner<'_> {
         goal: GainGoal,
     ) -> Result<Option<GainStep>, SynthError> {
         let t0 = Instant::now();
-        let (problem, f, g, nu) =
-            gain_step_problem(self.model, plan, last, goal, self.settings.eps)?;
+        let built = gain_step_problem(self.model, plan, last, goal, self.settings.eps)?;
         self.log.build_time += t0.elapsed();
-        let sol = self.solve(&problem, "co-design gain step")?;
+        let sol = self.solve(&built.problem, "co-design gain step")?;
         // A gain step only proposes gains: the trigger step that follows
         // re-solves with them fixed, and only its design is certified. So an
         // iterate of reduced accuracy is good enough here.
@@ -184,24 +202,16 @@ impl Runner<'_> {
         }
         let internal = |e: LmiError| SynthError::Internal(format!("co-design gain step: {e}"));
         let a = sol.assignment_any_status();
-        let read = |vs: &[Var]| -> Result<Vec<DMatrix<f64>>, SynthError> {
-            vs.iter()
-                .map(|v| a.value(*v).cloned().map_err(internal))
-                .collect()
-        };
-        let xi_var = problem
-            .vars()
-            .find(|(name, _)| *name == "xi_tr")
-            .map(|(_, v)| v)
-            .ok_or_else(|| SynthError::Internal("co-design gain step: no xi".into()))?;
+        let read = |v: Var| a.value(v).cloned().map_err(internal);
+        let r = self.model.r();
         Ok(Some(GainStep {
-            gains: read(&f)?,
-            sector: read(&g)?,
-            nu: match nu {
-                Some(v) => a.value(v).map_err(internal)?[(0, 0)],
+            gains: vec![read(built.f)?; r],
+            sector: vec![read(built.g)?; r],
+            nu: match built.nu {
+                Some(v) => read(v)?[(0, 0)],
                 None => plan.nu,
             },
-            xi: a.value(xi_var).map_err(internal)?[(0, 0)],
+            xi: read(built.xi)?[(0, 0)],
         }))
     }
 
