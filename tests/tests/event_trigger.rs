@@ -416,8 +416,13 @@ fn codesign_is_certified_for_the_emitted_gains() {
     // Every pair (i, j) imposed: one gain serves every controller rule.
     assert!(t.plan.gains.iter().all(|f| *f == t.plan.gains[0]));
     assert!(t.plan.sector.iter().all(|g| *g == t.plan.sector[0]));
+    let continuous = design
+        .achieved
+        .get(tsfc::synth::Quantity::LinfGamma)
+        .expect("continuous gamma of the co-designed gains");
+    assert!(continuous <= t.gamma, "{continuous} vs {}", t.gamma);
     eprintln!(
-        "co-design: nu = {}, event-triggered gamma = {:.4} (paper 0.1616), rounds {:?}",
+        "co-design: nu = {}, event-triggered gamma = {:.4} (continuous {continuous:.4}, paper 0.1616), rounds {:?}",
         t.plan.nu, t.gamma, t.rounds
     );
 }
