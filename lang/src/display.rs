@@ -172,6 +172,7 @@ impl Display for TriggerSynthesis {
                 }
                 write!(f, ", reading = {reading})")
             }
+            TriggerSynthesis::Codesign { rounds } => write!(f, "codesign(rounds = {rounds})"),
         }
     }
 }
@@ -319,6 +320,10 @@ mod tests {
             "theorem2(eps1 = 1, eps2 = 2, eps3 = 1, xi = 0.08, reading = 2)"
         );
         assert_eq!(TriggerSynthesis::TwoStep.to_string(), "two_step");
+        assert_eq!(
+            TriggerSynthesis::Codesign { rounds: 4 }.to_string(),
+            "codesign(rounds = 4)"
+        );
         let shapes =
             "a = tri(-1, 0, 1); b = trap(-2, -1, 1, 2); c = gauss(0, 0.5); d = sigmoid(4, 0.25);";
         let src = base_with(

@@ -59,6 +59,13 @@ pub const MAX_POLYA_LMIS: usize = 5_000;
 /// LMIs declare 2 r^2 slack matrices per objective family (512 at r = 16).
 pub const MAX_MISMATCH_RULES: usize = 16;
 
+/// Most rounds of `weight = synthesize codesign(rounds = ..)`: each round
+/// solves two trigger-sized SDPs (a gain step and a trigger step).
+pub const MAX_CODESIGN_ROUNDS: u32 = 30;
+
+/// Rounds of `weight = synthesize codesign;` without `rounds`.
+pub const DEFAULT_CODESIGN_ROUNDS: u32 = 10;
+
 /// (r + d + 1 choose d + 2): the coefficients of Polya's relaxation of degree
 /// d for r rules (saturating; `None` past `usize`).
 pub fn polya_lmis(r: usize, d: usize) -> Option<usize> {

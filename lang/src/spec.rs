@@ -410,6 +410,13 @@ pub enum TriggerSynthesis {
         /// OCR reading (1, 2 or 3; docs/event_trigger.md).
         reading: u8,
     },
+    /// Gains and weight co-designed by alternating a trigger step (gains
+    /// fixed) and a gain step (Lyapunov matrices fixed), starting from the
+    /// two-step design (docs/event_trigger.md).
+    Codesign {
+        /// Largest number of (gain step, trigger step) rounds, 1 ..= 30.
+        rounds: u32,
+    },
 }
 
 /// A triggering law.

@@ -15,9 +15,14 @@ fn zhang2013_checks_clean() {
 
 #[test]
 fn xu2020_checks_clean() {
-    let m = check("xu2020_event_triggered.tsf");
-    assert_eq!((m.n, m.m, m.r()), (6, 3, 7));
-    assert!(m.coverage.covered);
+    for name in [
+        "xu2020_event_triggered.tsf",
+        "xu2020_event_triggered_codesign.tsf",
+    ] {
+        let m = check(name);
+        assert_eq!((m.n, m.m, m.r()), (6, 3, 7), "{name}");
+        assert!(m.coverage.covered, "{name}");
+    }
 }
 
 #[test]

@@ -164,6 +164,9 @@ pub struct TriggerDesign {
     pub values: Vec<(String, DMatrix<f64>)>,
     /// Reductions applied to the solved trigger problem.
     pub reductions: Vec<Reduction>,
+    /// The co-design's rounds (round 0: the two-step start); empty for the
+    /// two-step method.
+    pub rounds: Vec<super::codesign::Round>,
 }
 
 /// Why synthesis produced no design.

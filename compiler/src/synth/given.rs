@@ -79,12 +79,13 @@ pub fn analysis(model: &TsModel) -> bool {
 /// Why the given gains cannot be analyzed as the spec asks, if so (the
 /// checker reports it with spans first; this is the last line of defence).
 pub(super) fn unsupported(model: &TsModel) -> Option<String> {
-    let theorem2 = matches!(
-        model.spec.trigger_synthesis,
-        Some(TriggerSynthesis::Theorem2 { .. })
-    );
-    (analysis(model) && theorem2).then(|| {
-        "given gains cannot be analyzed with Theorem 2 weight synthesis (it designs the gains together with the trigger weight): write `weight = synthesize;`".into()
+    let method = match model.spec.trigger_synthesis {
+        Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2",
+        Some(TriggerSynthesis::Codesign { .. }) => "co-design",
+        _ => return None,
+    };
+    analysis(model).then(|| {
+        format!("given gains cannot be analyzed with {method} weight synthesis (it designs the gains together with the trigger weight): write `weight = synthesize;`")
     })
 }
 

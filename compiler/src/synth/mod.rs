@@ -14,6 +14,7 @@ pub mod achieved;
 mod advice;
 mod blocks;
 pub mod build;
+pub mod codesign;
 mod design;
 mod diagnose;
 pub mod experimental;
@@ -115,7 +116,22 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
             if analysis {
                 d.verdicts = given::together(&d);
             }
-            if trigger::wanted(model) {
+            if let Some(rounds) = trigger::codesign_rounds(model) {
+                // The gains change: the continuous loop is re-analyzed for
+                // the co-designed ones, so every certificate speaks of them.
+                let (t, notes) = runner.codesign(&d, rounds)?;
+                let mut again = runner.reanalyze(&plan, goal, &t.plan.gains)?;
+                again.notes.splice(0..0, d.notes.drain(..));
+                again.notes.push(format!(
+                    "continuous design before co-design: {}",
+                    d.achieved
+                        .get(Quantity::LinfGamma)
+                        .map_or("-".into(), |g| format!("L-inf gamma = {g:.6}"))
+                ));
+                again.notes.extend(notes);
+                d = again;
+                d.trigger = Some(t);
+            } else if trigger::wanted(model) {
                 let out = runner.trigger(&d);
                 let (t, notes) = given::looped(model, &mut d, given::EVENT_LOOP, out)?;
                 d.notes.extend(notes);

@@ -26,8 +26,6 @@ use super::design::{Design, SynthError, TriggerDesign};
 use super::objective::BuildError;
 use super::objectives::{Linf, Saturation};
 use super::reduction::Reduction;
-use super::relaxation::Family;
-use super::relaxations::Relaxer;
 use super::search::Runner;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -38,8 +36,8 @@ use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
 /// The variables of the sampled-loop problem (`None`: the part is absent).
 #[derive(Debug, Clone)]
 pub struct TriggerVars {
-    /// P of V1 = x' P x.
-    pub p: Var,
+    /// P of V1 = x' P x (`None` when known: the gain step).
+    pub p: Option<Var>,
     /// Trigger weight Upsilon (event triggers).
     pub w: Option<Var>,
     /// L-inf gain gamma (with the L-inf channel).
@@ -64,15 +62,83 @@ pub struct TriggerBuilt {
 /// A solved looped-functional problem: the problem and every variable's value.
 pub(super) type Solved = (TriggerBuilt, Vec<(String, DMatrix<f64>)>);
 
-/// The unknowns entering Lambda_{ij r}(h).
+/// A factor of an LMI term: an unknown of the problem, or a known matrix
+/// (the trigger step knows the gains, the gain step the Lyapunov matrices).
 #[derive(Debug, Clone, Copy)]
-struct LoopVars {
-    p: Var,
-    y: Var,
-    l: [Var; 2],
-    w: Option<Var>,
-    t: Option<Var>,
-    xi: Option<Var>,
+pub(super) enum Factor<'a> {
+    /// An unknown.
+    Var(Var),
+    /// A known value.
+    Val(&'a DMatrix<f64>),
+}
+
+impl Factor<'_> {
+    /// `left * self * right`.
+    fn between(self, left: &DMatrix<f64>, right: &DMatrix<f64>) -> Result<Expr, LmiError> {
+        match self {
+            Factor::Var(v) => Expr::product(left, v, right),
+            Factor::Val(m) => Expr::constant(&(left * m * right)),
+        }
+    }
+
+    /// `self` as an expression.
+    fn expr(self) -> Result<Expr, LmiError> {
+        match self {
+            Factor::Var(v) => Ok(Expr::var(v)),
+            Factor::Val(m) => Expr::constant(m),
+        }
+    }
+}
+
+/// `left * a * mid * b * right`: linear when at most one of `a`, `b` is unknown.
+fn chain(
+    left: &DMatrix<f64>,
+    a: Factor<'_>,
+    mid: &DMatrix<f64>,
+    b: Factor<'_>,
+    right: &DMatrix<f64>,
+) -> Result<Expr, LmiError> {
+    match (a, b) {
+        (Factor::Val(a), b) => b.between(&(left * a * mid), right),
+        (a, Factor::Val(b)) => a.between(left, &(mid * b * right)),
+        _ => Err(LmiError::Variable {
+            what: "a product of two unknowns is not linear (co-design fixes one side)".into(),
+        }),
+    }
+}
+
+/// The unknowns entering Lambda_{ij r}(h) and the conditions around it;
+/// `Val` factors are fixed by the other step of the co-design.
+#[derive(Debug, Clone)]
+pub(super) struct LoopVars<'a> {
+    /// P of V1 = x' P x.
+    pub p: Factor<'a>,
+    /// Y of the looped term.
+    pub y: Factor<'a>,
+    /// The free matrices L1, L2 (always unknown).
+    pub l: [Var; 2],
+    /// The trigger weight Upsilon (event triggers).
+    pub w: Option<Factor<'a>>,
+    /// The threshold as an unknown (else `plan.nu`; needs a known weight).
+    pub nu: Option<Var>,
+    /// The diagonal sector multiplier T (with saturation).
+    pub t: Option<Factor<'a>>,
+    /// xi of the L-inf channel (declared by [`impose`]).
+    pub xi: Option<Var>,
+    /// F_j per controller rule.
+    pub gains: Vec<Factor<'a>>,
+    /// G_j per controller rule.
+    pub sector: Vec<Factor<'a>>,
+}
+
+impl<'a> LoopVars<'a> {
+    /// The gains of the trigger step: those of the plan.
+    pub fn plan_gains(plan: &'a TriggerPlan) -> (Vec<Factor<'a>>, Vec<Factor<'a>>) {
+        (
+            plan.gains.iter().map(Factor::Val).collect(),
+            plan.sector.iter().map(Factor::Val).collect(),
+        )
+    }
 }
 
 /// Selector of rows `at .. at + len` of a vector of length `k`, as a `len x k` matrix.
@@ -104,14 +170,15 @@ impl Layout {
     }
 }
 
-/// Lambda_{ij r}(h) with the derivative eliminated (gains fixed, so
-/// x' = Phi_ij psi with a constant Phi_ij and every term is linear in the
-/// unknowns). psi = [x; x(s); e; dz; tau] (the parts the plan has):
+/// Lambda_{ij r}(h) with the derivative eliminated (x' = Phi_ij psi, every
+/// term linear in the unknowns because either the gains or P, Y, T are
+/// known). psi = [x; x(s); e; dz; tau] (the parts the plan has):
 ///
 ///   Xi = He(E_x' P Phi) + phi E_x' P E_x + He([E_x; E_s]' L (E_x - E_s))
 ///        + nu (E_s - E_e)' W (E_s - E_e) - E_e' W E_e
 ///        + He(E_dz' T G_j (E_s - E_e)) - 2 E_dz' T E_dz - xi E_tau' E_tau,
-///   r = 1: Xi + h Phi' Y Phi,
+///   r = 1: Xi + h Phi' Y Phi (gains known), or its Schur complement
+///          [Xi, sqrt(h) Phi' Y; *, -Y] (Y known, gains unknown),
 ///   r = 2: [Xi, sqrt(h) (E_x' L1 + E_s' L2); *, -e^{-phi h_max} Y].
 ///
 /// Plant rule i and controller rule j differ (membership mismatch), so the
@@ -120,7 +187,7 @@ impl Layout {
 fn lambda(
     model: &TsModel,
     plan: &TriggerPlan,
-    v: &LoopVars,
+    v: &LoopVars<'_>,
     (i, j): (usize, usize),
     h: f64,
     r: u8,
@@ -130,63 +197,113 @@ fn lambda(
     let k = lay.k;
     let (ex, es) = (pick(n, 0, k), pick(n, n, k));
     let b = &model.rules[i].b;
+    let id_n = DMatrix::identity(n, n);
     // x(t_k) = x(s) - e: the state the controller holds.
     let xk = match lay.e {
         Some(at) => &es - pick(n, at, k),
         None => es.clone(),
     };
-    let mut phi_m = &model.rules[i].a * &ex + b * &plan.gains[j] * &xk;
+    // Phi = phi_c + B F_j x(t_k): the part without the gain is known.
+    let mut phi_c = &model.rules[i].a * &ex;
     if let Some(at) = lay.dz {
-        phi_m -= b * pick(m, at, k);
+        phi_c -= b * pick(m, at, k);
     }
     if let Some((at, q)) = lay.tau {
-        phi_m += &plan.d[i] * pick(q, at, k);
+        phi_c += &plan.d[i] * pick(q, at, k);
     }
+    let f = v.gains[j];
     let exs = &ex - &es;
-    let mut xi_block = Expr::product(&ex.transpose(), v.p, &phi_m)?
-        .he()?
-        .add(Expr::product(&ex.transpose(), v.p, &ex)?.scale(plan.phi)?)?
-        .add(
-            Expr::product(&ex.transpose(), v.l[0], &exs)?
-                .add(Expr::product(&es.transpose(), v.l[1], &exs)?)?
-                .he()?,
-        )?;
+    let mut xi_block =
+        v.p.between(&ex.transpose(), &phi_c)?
+            .add(chain(&ex.transpose(), v.p, b, f, &xk)?)?
+            .he()?
+            .add(v.p.between(&ex.transpose(), &ex)?.scale(plan.phi)?)?
+            .add(
+                Expr::product(&ex.transpose(), v.l[0], &exs)?
+                    .add(Expr::product(&es.transpose(), v.l[1], &exs)?)?
+                    .he()?,
+            )?;
     if let (Some(at), Some(w)) = (lay.e, v.w) {
         let ee = pick(n, at, k);
-        xi_block = xi_block
-            .add(Expr::product(&xk.transpose(), w, &xk)?.scale(plan.nu)?)?
-            .sub(Expr::product(&ee.transpose(), w, &ee)?)?;
+        let held = match (v.nu, w) {
+            (Some(nu), Factor::Val(w)) => Expr::scaled(nu, &(xk.transpose() * w * &xk))?,
+            (Some(_), Factor::Var(_)) => {
+                return Err(LmiError::Variable {
+                    what: "the threshold nu and the weight cannot both be unknown".into(),
+                })
+            }
+            (None, w) => w.between(&xk.transpose(), &xk)?.scale(plan.nu)?,
+        };
+        xi_block = xi_block.add(held)?.sub(w.between(&ee.transpose(), &ee)?)?;
     }
     if let (Some(at), Some(t)) = (lay.dz, v.t) {
         let edz = pick(m, at, k);
+        let g = v.sector[j];
         xi_block = xi_block
-            .add(Expr::product(&edz.transpose(), t, &(&plan.sector[j] * &xk))?.he()?)?
-            .sub(Expr::product(&edz.transpose(), t, &edz)?.scale(2.0)?)?;
+            .add(chain(&edz.transpose(), t, &DMatrix::identity(m, m), g, &xk)?.he()?)?
+            .sub(t.between(&edz.transpose(), &edz)?.scale(2.0)?)?;
     }
     if let (Some((at, q)), Some(xi)) = (lay.tau, v.xi) {
         let etau = pick(q, at, k);
         xi_block = xi_block.sub(Expr::scaled(xi, &(etau.transpose() * &etau))?)?;
     }
     if r == 1 {
-        return xi_block.add(Expr::product(&phi_m.transpose(), v.y, &phi_m)?.scale(h)?);
+        if let Factor::Val(f) = f {
+            let phi_m = &phi_c + b * f * &xk;
+            return xi_block.add(v.y.between(&phi_m.transpose(), &phi_m)?.scale(h)?);
+        }
+        // Gains unknown, Y known: Schur complement of h Phi' Y Y^-1 Y Phi.
+        let y_phi =
+            v.y.between(&id_n, &phi_c)?
+                .add(chain(&id_n, v.y, b, f, &xk)?)?
+                .scale(h.sqrt())?;
+        return Expr::sym_blocks(vec![
+            vec![Some(xi_block), Some(y_phi.transpose())],
+            vec![None, Some(v.y.expr()?.scale(-1.0)?)],
+        ]);
     }
-    let id = DMatrix::identity(n, n);
-    let col = Expr::product(&ex.transpose(), v.l[0], &id)?
-        .add(Expr::product(&es.transpose(), v.l[1], &id)?)?
+    let col = Expr::product(&ex.transpose(), v.l[0], &id_n)?
+        .add(Expr::product(&es.transpose(), v.l[1], &id_n)?)?
         .scale(h.sqrt())?;
     let (_, h_max) = plan.sampling;
     Expr::sym_blocks(vec![
         vec![Some(xi_block), Some(col)],
-        vec![
-            None,
-            Some(Expr::var(v.y).scale(-(-plan.phi * h_max).exp())?),
-        ],
+        vec![None, Some(v.y.expr()?.scale(-(-plan.phi * h_max).exp())?)],
     ])
 }
 
+/// Representatives of the plant rules whose Lambda_{ij r}(h) differ: rule i
+/// enters only through (A_i, B_i, D_i), so a rule with the same three as an
+/// earlier one repeats that rule's conditions exactly.
+fn distinct_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
+    let same = |a: usize, b: usize| {
+        let (ra, rb) = (&model.rules[a], &model.rules[b]);
+        ra.a == rb.a && ra.b == rb.b && plan.d.get(a) == plan.d.get(b)
+    };
+    (0..model.r())
+        .filter(|&i| (0..i).all(|e| !same(e, i)))
+        .collect()
+}
+
+/// Representatives of the controller rules whose gains (F_j, G_j) differ:
+/// known gains equal bit for bit, or the same unknown.
+fn distinct_controller_rules(v: &LoopVars<'_>) -> Vec<usize> {
+    let equal = |a: Factor<'_>, b: Factor<'_>| match (a, b) {
+        (Factor::Val(x), Factor::Val(y)) => x == y,
+        (Factor::Var(x), Factor::Var(y)) => x == y,
+        _ => false,
+    };
+    let same =
+        |a: usize, b: usize| equal(v.gains[a], v.gains[b]) && equal(v.sector[a], v.sector[b]);
+    (0..v.gains.len())
+        .filter(|&j| (0..j).all(|e| !same(e, j)))
+        .collect()
+}
+
 /// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are
-/// left out: every Lambda_r(h) is Xi + h Pi_r with Pi_r >= 0, so h_max
-/// implies them.
+/// left out (every Lambda_r(h) is Xi + h Pi_r with Pi_r >= 0, so h_max
+/// implies them), and so are the pairs of repeated plant rules and of
+/// repeated (known) controller gains, which equal conditions kept.
 pub fn build(
     model: &TsModel,
     plan: &TriggerPlan,
@@ -196,28 +313,64 @@ pub fn build(
     Ok(build_inner(model, plan, eps, reduce)?)
 }
 
+/// The unknowns the trigger step declares (gains known).
+fn declare_trigger_step<'a>(
+    problem: &mut Problem,
+    model: &TsModel,
+    plan: &'a TriggerPlan,
+) -> Result<LoopVars<'a>, LmiError> {
+    let n = model.n;
+    let p = problem.symmetric("Ptr", n)?;
+    let y = problem.symmetric("Ytr", n)?;
+    let w = if plan.event {
+        Some(Factor::Var(problem.symmetric("Upsilon", n)?))
+    } else {
+        None
+    };
+    let l = [problem.full("L1", n, n)?, problem.full("L2", n, n)?];
+    let t = if plan.levels.is_empty() {
+        None
+    } else {
+        Some(Factor::Var(problem.diagonal("T", model.m)?))
+    };
+    let (gains, sector) = LoopVars::plan_gains(plan);
+    Ok(LoopVars {
+        p: Factor::Var(p),
+        y: Factor::Var(y),
+        l,
+        w,
+        nu: None,
+        t,
+        xi: None,
+        gains,
+        sector,
+    })
+}
+
 fn build_inner(
     model: &TsModel,
     plan: &TriggerPlan,
     eps: f64,
     reduce: bool,
 ) -> Result<TriggerBuilt, LmiError> {
-    let (n, m, r) = (model.n, model.m, model.r());
-    let sector = !plan.levels.is_empty();
     let mut problem = Problem::new();
-    let p = problem.symmetric("Ptr", n)?;
-    let y = problem.symmetric("Ytr", n)?;
-    let w = if plan.event {
-        Some(problem.symmetric("Upsilon", n)?)
-    } else {
-        None
-    };
-    let l = [problem.full("L1", n, n)?, problem.full("L2", n, n)?];
-    let t = if sector {
-        Some(problem.diagonal("T", m)?)
-    } else {
-        None
-    };
+    let vars = declare_trigger_step(&mut problem, model, plan)?;
+    impose(problem, model, plan, vars, eps, reduce)
+}
+
+/// Imposes every condition of the sampled loop on `problem` for `vars`
+/// (positivity of the unknown P, Y, Upsilon, T; Lambda_{ij r}(h); the linear
+/// region; initial sets; the L-inf peak, minimizing gamma).
+pub(super) fn impose(
+    mut problem: Problem,
+    model: &TsModel,
+    plan: &TriggerPlan,
+    mut vars: LoopVars<'_>,
+    eps: f64,
+    reduce: bool,
+) -> Result<TriggerBuilt, LmiError> {
+    let (n, r) = (model.n, model.r());
+    let sector = !plan.levels.is_empty();
     let (gamma, xi) = if plan.linf {
         (
             Some(problem.scalar("gamma_tr")?),
@@ -226,16 +379,19 @@ fn build_inner(
     } else {
         (None, None)
     };
-    let mut relaxer = Relaxer::every_pair(model, eps);
-    problem.psd("trigger P > 0", Expr::var(p), eps)?;
-    problem.psd("trigger Y > 0", Expr::var(y), eps)?;
-    if let Some(w) = w {
-        problem.psd("trigger Upsilon > 0", Expr::var(w), eps)?;
+    vars.xi = xi;
+    let mut reductions = Vec::new();
+    let mut nonstrict = Vec::new();
+    for (name, f) in [
+        ("trigger P > 0", Some(vars.p)),
+        ("trigger Y > 0", Some(vars.y)),
+        ("trigger Upsilon > 0", vars.w),
+        ("trigger T > 0", vars.t),
+    ] {
+        if let Some(Factor::Var(v)) = f {
+            problem.psd(name, Expr::var(v), eps)?;
+        }
     }
-    if let Some(t) = t {
-        problem.psd("trigger T > 0", Expr::var(t), eps)?;
-    }
-    let vars = LoopVars { p, y, l, w, t, xi };
     let (h_min, h_max) = plan.sampling;
     let hs: &[f64] = if reduce || h_min == h_max {
         &[h_max]
@@ -243,15 +399,33 @@ fn build_inner(
         &[h_min, h_max]
     };
     if reduce && h_min < h_max {
-        relaxer.reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r)));
+        reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r)));
+    }
+    let (plant, ctrl) = if reduce {
+        (
+            distinct_plant_rules(model, plan),
+            distinct_controller_rules(&vars),
+        )
+    } else {
+        ((0..r).collect(), (0..r).collect())
+    };
+    if plant.len() * ctrl.len() < r * r {
+        reductions.push(Reduction::Implied(format!(
+            "trigger: {} of the {} rule pairs per condition repeat kept ones (plant rules with the same A_i, B_i, D_i: {} distinct; controller rules with the same F_j, G_j: {} distinct) and are left out of the solved problem; the certificate checks them",
+            r * r - plant.len() * ctrl.len(),
+            r * r,
+            plant.len(),
+            ctrl.len()
+        )));
     }
     for &h in hs {
         for rr in [1u8, 2] {
-            let fam = Family {
-                name: format!("trigger r={rr} h={h}"),
-                q: Box::new(move |i, j| lambda(model, plan, &vars, (i, j), h, rr)),
-            };
-            relaxer.impose(&mut problem, &fam)?;
+            for &i in &plant {
+                for &j in &ctrl {
+                    let name = format!("trigger r={rr} h={h} Q[{},{}]", i + 1, j + 1);
+                    problem.nsd(&name, lambda(model, plan, &vars, (i, j), h, rr)?, eps)?;
+                }
+            }
         }
     }
     // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi.
@@ -261,14 +435,16 @@ fn build_inner(
         1.0
     };
     for j in (0..r).filter(|_| sector) {
-        let fg = &plan.gains[j] - &plan.sector[j];
         for (s, ub) in plan.levels.iter().enumerate() {
-            let row = Expr::constant(&DMatrix::from_iterator(1, n, fg.row(s).iter().copied()))?;
+            let pick_s = pick(1, s, model.m);
+            let row = vars.gains[j]
+                .between(&pick_s, &DMatrix::identity(n, n))?
+                .sub(vars.sector[j].between(&pick_s, &DMatrix::identity(n, n))?)?;
             let rhs = Expr::constant(&DMatrix::from_element(1, 1, ub * ub / level))?;
-            let e = region_block(Expr::var(p), row, rhs)?;
+            let e = region_block(vars.p.expr()?, row, rhs)?;
             nonstrict_psd(
                 &mut problem,
-                &mut relaxer.nonstrict,
+                &mut nonstrict,
                 &format!("trigger linear region [{},{}]", j + 1, s + 1),
                 e,
                 eps,
@@ -278,33 +454,41 @@ fn build_inner(
     for (name, e) in &plan.contain {
         nonstrict_psd(
             &mut problem,
-            &mut relaxer.nonstrict,
+            &mut nonstrict,
             &format!("sampled region of attraction: {name}"),
-            contain_block(p, e)?,
+            contain_block(vars.p, e)?,
             eps,
         )?;
     }
     if let (Some(gamma), Some(xi)) = (gamma, xi) {
-        peak(&mut problem, plan, p, gamma, xi, eps)?;
+        peak(&mut problem, plan, vars.p, gamma, xi, eps)?;
         problem.minimize(Expr::var(gamma))?;
     }
+    let p = match vars.p {
+        Factor::Var(p) => Some(p),
+        Factor::Val(_) => None,
+    };
+    let w = match vars.w {
+        Some(Factor::Var(w)) => Some(w),
+        _ => None,
+    };
     Ok(TriggerBuilt {
         problem,
         vars: TriggerVars { p, w, gamma, xi },
-        reductions: relaxer.reductions,
-        nonstrict: relaxer.nonstrict,
+        reductions,
+        nonstrict,
     })
 }
 
 /// `E(P, 1)` contains the initial set: `1 - x0' P x0 >= 0` for a point,
 /// `R - P >= 0` for the ellipsoid `x' R x <= 1`.
-fn contain_block(p: Var, set: &InitialSet) -> Result<Expr, LmiError> {
+fn contain_block(p: Factor<'_>, set: &InitialSet) -> Result<Expr, LmiError> {
     match set {
         InitialSet::Point(x0) => {
             let x = DMatrix::from_column_slice(x0.len(), 1, x0);
-            Expr::constant(&DMatrix::identity(1, 1))?.sub(Expr::product(&x.transpose(), p, &x)?)
+            Expr::constant(&DMatrix::identity(1, 1))?.sub(p.between(&x.transpose(), &x)?)
         }
-        InitialSet::Ellipsoid(r) => Expr::constant(r)?.sub(Expr::var(p)),
+        InitialSet::Ellipsoid(r) => Expr::constant(r)?.sub(p.expr()?),
     }
 }
 
@@ -313,7 +497,7 @@ fn contain_block(p: Var, set: &InitialSet) -> Result<Expr, LmiError> {
 fn peak(
     problem: &mut Problem,
     plan: &TriggerPlan,
-    p: Var,
+    p: Factor<'_>,
     gamma: Var,
     xi: Var,
     eps: f64,
@@ -322,7 +506,7 @@ fn peak(
     let pdim = plan.c.nrows();
     let block = Expr::sym_blocks(vec![
         vec![
-            Some(Expr::var(p).scale(plan.phi)?),
+            Some(p.expr()?.scale(plan.phi)?),
             None,
             Some(Expr::constant(&plan.c.transpose())?),
         ],
@@ -352,7 +536,8 @@ fn peak(
 }
 
 /// Whether the spec asks for a synthesized trigger weight with the two-step
-/// method (`weight = synthesize;`, the default, or `weight = synthesize two_step;`).
+/// method (`weight = synthesize;`, the default, or `weight = synthesize two_step;`)
+/// or by co-design (`weight = synthesize codesign;`, which starts from it).
 pub fn wanted(model: &TsModel) -> bool {
     matches!(
         model.spec.trigger.as_ref().map(|t| &t.node),
@@ -362,8 +547,16 @@ pub fn wanted(model: &TsModel) -> bool {
         })
     ) && matches!(
         model.spec.trigger_synthesis,
-        None | Some(TriggerSynthesis::TwoStep)
+        None | Some(TriggerSynthesis::TwoStep) | Some(TriggerSynthesis::Codesign { .. })
     )
+}
+
+/// The rounds of `weight = synthesize codesign(rounds = ..);`, if the spec asks for co-design.
+pub fn codesign_rounds(model: &TsModel) -> Option<u32> {
+    match model.spec.trigger_synthesis {
+        Some(TriggerSynthesis::Codesign { rounds }) if wanted(model) => Some(rounds),
+        _ => None,
+    }
 }
 
 /// The trigger problem for the gains of `design` (threshold 0: the caller sets nu).
@@ -455,7 +648,10 @@ impl Runner<'_> {
     }
 
     /// One trigger SDP at threshold `nu`: the design, or None when not solved.
-    fn trigger_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<TriggerDesign>, SynthError> {
+    pub(super) fn trigger_attempt(
+        &mut self,
+        plan: &TriggerPlan,
+    ) -> Result<Option<TriggerDesign>, SynthError> {
         let Some((built, all)) = self.solve_looped(plan, "trigger problem")? else {
             return Ok(None);
         };
@@ -468,6 +664,7 @@ impl Runner<'_> {
             xi: named(&all, "xi_tr")?[(0, 0)],
             values: all,
             reductions: built.reductions,
+            rounds: Vec::new(),
         }))
     }
 

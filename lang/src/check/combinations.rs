@@ -68,10 +68,10 @@ impl Checker<'_> {
             Some(TriggerSynthesis::Theorem2 { xi, .. }) => Some(*xi),
             _ => None,
         };
-        let method = if theorem2_xi.is_some() {
-            "Theorem 2 (`theorem2`)"
-        } else {
-            "the two-step method"
+        let method = match &draft.trigger_synthesis {
+            Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2 (`theorem2`)",
+            Some(TriggerSynthesis::Codesign { .. }) => "the co-design (`codesign`)",
+            _ => "the two-step method",
         };
         let (Some(linf), Some(_)) = (found.linf, found.saturation) else {
             if found.complete {

@@ -114,12 +114,15 @@ impl Checker<'_> {
         let Some(given) = rule_items.iter().find_map(|it| gain_arg(it)) else {
             return;
         };
-        if let (Some(TriggerSynthesis::Theorem2 { .. }), Some(at)) =
-            (&draft.trigger_synthesis, draft.weight_span)
-        {
+        let method = match &draft.trigger_synthesis {
+            Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2",
+            Some(TriggerSynthesis::Codesign { .. }) => "co-design",
+            _ => return,
+        };
+        if let Some(at) = draft.weight_span {
             self.err(
-                Diagnostic::error(at, "given gains cannot be analyzed with Theorem 2 weight synthesis")
-                    .with_label("Theorem 2 designs the gains together with the trigger weight")
+                Diagnostic::error(at, format!("given gains cannot be analyzed with {method} weight synthesis"))
+                    .with_label(format!("{method} designs the gains together with the trigger weight"))
                     .with_secondary(gain_span(given), "gain given here")
                     .with_help("write `weight = synthesize;` (the two-step method keeps the given gains and designs the weight for them), or remove the gains"),
             );

@@ -5,6 +5,7 @@
 use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Expr, ExprKind, Ident, Item, Setting, Value};
 use crate::diag::Diagnostic;
+use crate::limits::{DEFAULT_CODESIGN_ROUNDS, MAX_CODESIGN_ROUNDS};
 use crate::span::Spanned;
 use crate::spec::{Monitor, PeriodicDesign, Threshold, Trigger, TriggerSynthesis, Weight};
 use std::collections::HashMap;
@@ -381,7 +382,8 @@ impl Checker<'_> {
     /// The design method of a synthesized trigger weight: `weight = synthesize;`
     /// (none yet: the weight is left to later stages), `weight = synthesize two_step;`
     /// (gains first, then the weight) or `weight = synthesize theorem2(eps1 = .., eps2 = .., eps3 = ..,
-    /// xi = .., reading = ..);` (Xu & Huang Theorem 2; every argument optional).
+    /// xi = .., reading = ..);` (Xu & Huang Theorem 2; every argument optional) or
+    /// `weight = synthesize codesign(rounds = ..);` (alternating gain and trigger steps).
     fn trigger_synthesis(&mut self, settings: &[Setting]) -> Option<TriggerSynthesis> {
         let s = settings.iter().find(|s| s.key.node == "weight")?;
         let mut out = None;
@@ -391,13 +393,38 @@ impl Checker<'_> {
                 out = Some(TriggerSynthesis::TwoStep);
                 continue;
             }
+            if m.name.node == "codesign" {
+                let p = self.named(&m.args, &["rounds"], "`codesign`")?;
+                let rounds = p
+                    .get("rounds")
+                    .copied()
+                    .unwrap_or(f64::from(DEFAULT_CODESIGN_ROUNDS));
+                if rounds.fract() != 0.0
+                    || !(1.0..=f64::from(MAX_CODESIGN_ROUNDS)).contains(&rounds)
+                {
+                    let at = m
+                        .args
+                        .iter()
+                        .find(|a| a.name.node == "rounds")
+                        .map_or(m.name.span, |a| a.value.span);
+                    self.err(
+                        Diagnostic::error(at, format!("`rounds` is a whole number in 1 ..= {MAX_CODESIGN_ROUNDS}"))
+                            .with_help("each round solves two trigger-sized SDPs (about 20 s each on the Xu & Huang spec)"),
+                    );
+                    return None;
+                }
+                out = Some(TriggerSynthesis::Codesign {
+                    rounds: rounds as u32,
+                });
+                continue;
+            }
             if m.name.node != "theorem2" {
                 self.err(
                     Diagnostic::error(
                         m.name.span,
                         format!("unknown weight design method `{}`", m.name.node),
                     )
-                    .with_help("write `weight = synthesize two_step;` or `weight = synthesize theorem2(eps1 = 1, eps2 = 1, eps3 = 1);`"),
+                    .with_help("write `weight = synthesize two_step;`, `weight = synthesize codesign;` or `weight = synthesize theorem2(eps1 = 1, eps2 = 1, eps3 = 1);`"),
                 );
                 return None;
             }
@@ -530,6 +557,35 @@ mod tests {
             synthesis("weight = synthesize two_step;"),
             Some(TriggerSynthesis::TwoStep)
         );
+        assert_eq!(
+            synthesis("weight = synthesize codesign;"),
+            Some(TriggerSynthesis::Codesign { rounds: 10 })
+        );
+        assert_eq!(
+            synthesis("weight = synthesize codesign(rounds = 4);"),
+            Some(TriggerSynthesis::Codesign { rounds: 4 })
+        );
+        let rounds = |w: &str| {
+            only_error_of(&format!(
+                "{}disturbance d; D = 1; output z = x1;\n\
+                 objective linf(d -> z) minimize with phi = 0.1;\nobjective saturation region;\n\
+                 trigger aperiodic {{ sampling = 0.01 .. 0.1; {w} }}",
+                base_with("input u;", "input u saturate 1;")
+            ))
+        };
+        for (w, at) in [
+            ("weight = synthesize codesign(rounds = 0);", "0"),
+            ("weight = synthesize codesign(rounds = 2.5);", "2.5"),
+            ("weight = synthesize codesign(rounds = 31);", "31"),
+        ] {
+            assert_eq!(
+                rounds(w),
+                (
+                    "`rounds` is a whole number in 1 ..= 30".to_string(),
+                    at.to_string()
+                )
+            );
+        }
         assert_eq!(
             synthesis("weight = synthesize theorem2(eps2 = 2, xi = 0.08, reading = 3);"),
             Some(TriggerSynthesis::Theorem2 {
