@@ -8,6 +8,7 @@
 //! about 3.44 s), so T = 4 and 4.5 s are what-if runs of the same design.
 
 use crate::common;
+use common::Rng;
 
 use common::{model_of, spec_path};
 use std::sync::OnceLock;
@@ -87,25 +88,14 @@ fn sigma(p: &[f64; 3], w: &[f64; 3]) -> [f64; 3] {
     std::array::from_fn(|i| w[i] + ALPHA * p[i] + ALPHA * pp * p[i])
 }
 
-/// A small deterministic generator (xorshift64*), uniform in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 #[test]
 fn the_given_gain_pdc_is_minus_k_sigma_on_random_states() {
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     for _ in 0..100 {
         // p uniform in the cube [-0.57, 0.57]^3 (p'p <= 0.98 < 1: inside the
         // premise range), w in [-0.1, 0.1]^3 rad/s.
-        let p: [f64; 3] = std::array::from_fn(|_| 1.14 * rng.next() - 0.57);
-        let w: [f64; 3] = std::array::from_fn(|_| 0.2 * rng.next() - 0.1);
+        let p: [f64; 3] = std::array::from_fn(|_| 1.14 * rng.unit() - 0.57);
+        let w: [f64; 3] = std::array::from_fn(|_| 0.2 * rng.unit() - 0.1);
         let x0: Vec<f64> = p.iter().chain(&w).copied().collect();
         let (_, header, rows) = run(&Options {
             x0: Some(x0),

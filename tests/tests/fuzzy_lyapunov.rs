@@ -7,6 +7,7 @@
 //! measures the rates and flags samples above phi_k.
 
 use crate::common;
+use common::Rng;
 use nalgebra::DMatrix;
 use tsfc::compile::{compile, Compiled, Status};
 use tsfc::report::SpecInfo;
@@ -107,17 +108,6 @@ fn certified() -> Certified {
     }
 }
 
-/// A small deterministic generator (xorshift), uniform in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// A_cl(h) = sum_ij h_i h_j (A_i + B_i F_j).
 fn closed_loop(gains: &[DMatrix<f64>], h: &[f64]) -> DMatrix<f64> {
     let mut acl = DMatrix::zeros(2, 2);
@@ -154,7 +144,7 @@ fn dv_dt_is_negative_at_random_memberships_and_rates_within_phi() {
     let mut worst = f64::NEG_INFINITY;
     for s in 0..5000 {
         // h on the simplex (a vertex or an edge every few samples).
-        let mut h: [f64; 3] = std::array::from_fn(|_| -rng.next().max(1e-300).ln());
+        let mut h: [f64; 3] = std::array::from_fn(|_| -rng.unit().max(1e-300).ln());
         if s % 5 == 0 {
             h[s / 5 % 3] = 0.0;
         }
@@ -165,11 +155,11 @@ fn dv_dt_is_negative_at_random_memberships_and_rates_within_phi() {
         let h = h.map(|v| v / sum);
         // hdot with sum 0 (sum h = 1) and |hdot_k| <= phi: a random direction
         // of the plane sum = 0 scaled to touch the bound.
-        let v: [f64; 3] = std::array::from_fn(|_| rng.next() - 0.5);
+        let v: [f64; 3] = std::array::from_fn(|_| rng.unit() - 0.5);
         let mean = v.iter().sum::<f64>() / 3.0;
         let d = v.map(|x| x - mean);
         let top = d.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let scale = if s % 2 == 0 { 1.0 } else { rng.next() };
+        let scale = if s % 2 == 0 { 1.0 } else { rng.unit() };
         let hdot = d.map(|x| x / top * PHI * scale);
         assert!(hdot.iter().all(|x| x.abs() <= PHI * (1.0 + 1e-12)));
         assert!(hdot.iter().sum::<f64>().abs() < 1e-12);

@@ -7,6 +7,7 @@
 //! here), closed-loop runs under it, and the shipped Xue et al. (2024) spec.
 
 use crate::common;
+use common::Rng;
 
 use nalgebra::DMatrix;
 use std::fmt::Write as _;
@@ -126,21 +127,6 @@ fn generated_rust_stores_every_mode_gain_bit_for_bit() {
     // The step passes the mode to the runtime's ModalController.
     assert!(rust.contains("TABLE.step_with_premises(mode, x, &premises(x))"));
     assert!(rust.contains("pub static TABLE: ModalController<'static, f64, N, M, P, R, D, K>"));
-}
-
-/// SplitMix64.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next() >> 11) as f64 / (1u64 << 53) as f64)
-    }
 }
 
 /// The C driver: reads `mode x1 x2` (x as hex bit patterns), prints the bits

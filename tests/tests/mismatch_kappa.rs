@@ -8,6 +8,7 @@
 //! simulator measures the mismatch and counts the samples above kappa.
 
 use crate::common;
+use common::{kim_lee_rules, Rng};
 
 use nalgebra::DMatrix;
 use tsf_lmi::{Expr, Problem, SolveSettings, SolveStatus};
@@ -26,17 +27,6 @@ fn compiled(name: &str, text: &str) -> Compiled {
 
 fn certified(name: &str, text: &str) -> bool {
     compiled(name, text).status == Status::Certified
-}
-
-/// The three-rule Kim & Lee benchmark (see relaxation_map.rs), Gaussian sets.
-fn kim_lee_rules(a: f64, b: f64) -> [(DMatrix<f64>, DMatrix<f64>); 3] {
-    let m = |r: &[f64]| DMatrix::from_row_slice(2, 2, r);
-    let v = |r: &[f64]| DMatrix::from_row_slice(2, 1, r);
-    [
-        (m(&[1.59, -7.29, 0.01, 0.0]), v(&[1.0, 0.0])),
-        (m(&[0.02, -4.64, 0.35, 0.21]), v(&[8.0, 0.0])),
-        (m(&[-a, -4.33, 0.0, 0.05]), v(&[-b + 6.0, -1.0])),
-    ]
 }
 
 fn kim_lee(a: f64, b: f64, relaxation: &str) -> String {
@@ -167,17 +157,6 @@ fn opposite_memberships(z: f64) -> [f64; 3] {
     [(-z).max(0.0), 1.0 - z.abs(), z.max(0.0)]
 }
 
-/// A small deterministic generator (xorshift), uniform in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 fn matrix(rows: &serde_json::Value) -> DMatrix<f64> {
     let rows: Vec<Vec<f64>> = serde_json::from_value(rows.clone()).expect("rows");
     let (r, c) = (rows.len(), rows[0].len());
@@ -206,21 +185,21 @@ fn the_report_certificate_holds_at_random_memberships_within_kappa() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let mut worst = f64::NEG_INFINITY;
     for s in 0..4000 {
-        let h = opposite_memberships(-1.0 + 2.0 * rng.next());
+        let h = opposite_memberships(-1.0 + 2.0 * rng.unit());
         // k = (1 - t) h + t w, w on the simplex (a vertex every fourth sample):
         // |k_j - h_j| = t |w_j - h_j| <= t <= kappa.
         let w: [f64; 3] = if s % 4 == 0 {
-            let v = (rng.next() * 3.0) as usize % 3;
+            let v = (rng.unit() * 3.0) as usize % 3;
             std::array::from_fn(|j| f64::from(u8::from(j == v)))
         } else {
-            let e: [f64; 3] = std::array::from_fn(|_| -rng.next().max(1e-300).ln());
+            let e: [f64; 3] = std::array::from_fn(|_| -rng.unit().max(1e-300).ln());
             let sum: f64 = e.iter().sum();
             e.map(|v| v / sum)
         };
         let t = if s % 2 == 0 {
             kappa
         } else {
-            kappa * rng.next()
+            kappa * rng.unit()
         };
         let k: [f64; 3] = std::array::from_fn(|j| (1.0 - t) * h[j] + t * w[j]);
         assert!(h

@@ -8,6 +8,7 @@
 //! degree 2 certifies strictly more points than Tuan's.
 
 use crate::common;
+use common::kim_lee_rules;
 
 use nalgebra::DMatrix;
 use tsf_lmi::{Expr, Problem, SolveSettings, SolveStatus};
@@ -52,17 +53,6 @@ fn grid() -> Vec<(f64, f64)> {
     (0..=10)
         .flat_map(|a| (0..=15).map(move |k| (a as f64, -10.0 + 2.0 * k as f64)))
         .collect()
-}
-
-/// The benchmark's local models (a, b as in [`spec`]).
-fn kim_lee_rules(a: f64, b: f64) -> [(DMatrix<f64>, DMatrix<f64>); 3] {
-    let m = |r: &[f64]| DMatrix::from_row_slice(2, 2, r);
-    let v = |r: &[f64]| DMatrix::from_row_slice(2, 1, r);
-    [
-        (m(&[1.59, -7.29, 0.01, 0.0]), v(&[1.0, 0.0])),
-        (m(&[0.02, -4.64, 0.35, 0.21]), v(&[8.0, 0.0])),
-        (m(&[-a, -4.33, 0.0, 0.05]), v(&[-b + 6.0, -1.0])),
-    ]
 }
 
 /// Tuan's relaxation of the fuzzy Lyapunov conditions for the *non-PDC* law
