@@ -14,13 +14,13 @@ use tsf_lang::spec::{Threshold, Trigger, Weight};
 use tsfc::compile::{compile, Compiled, Status};
 use tsfc::model::TsModel;
 use tsfc::report::SpecInfo;
-use tsfc::sim::{prepare, simulate, Options, Outcome, Prepared};
+use tsfc::sim::{simulate, Options, Outcome, Prepared};
 use tsfc::synth::{Settings, TriggerDesign};
 
 const SPEC: &str = "xu2020_event_triggered.tsf";
 
 /// The spec compiled once per test binary (the trigger SDP takes ~25 s).
-fn compiled() -> &'static (TsModel, Compiled) {
+pub(crate) fn compiled() -> &'static (TsModel, Compiled) {
     static CELL: OnceLock<(TsModel, Compiled)> = OnceLock::new();
     CELL.get_or_init(|| {
         let model = common::shipped(SPEC);
@@ -33,7 +33,7 @@ fn compiled() -> &'static (TsModel, Compiled) {
     })
 }
 
-fn trigger() -> &'static TriggerDesign {
+pub(crate) fn trigger() -> &'static TriggerDesign {
     let (_, c) = compiled();
     assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
     let (design, _) = c.outcome.as_ref().expect("certified");
@@ -252,9 +252,24 @@ fn certificate_and_report_cover_the_trigger() {
     );
 }
 
-fn prepared() -> &'static Prepared {
+/// The simulator's view of the design of [`compiled`] (no second compile).
+pub(crate) fn prepared() -> &'static Prepared {
     static CELL: OnceLock<Prepared> = OnceLock::new();
-    CELL.get_or_init(|| prepare(&common::spec_path(SPEC)).unwrap_or_else(|e| panic!("{e}")))
+    CELL.get_or_init(|| {
+        let (model, c) = compiled();
+        let (design, cert) = c.outcome.as_ref().expect("certified");
+        let text = std::fs::read_to_string(common::spec_path(SPEC)).expect("spec");
+        Prepared {
+            model: model.clone(),
+            tables: tsfc::tables::tables(model, design, cert, SPEC, "").expect("tables"),
+            p: design.p.clone(),
+            trigger_weight: design.trigger.as_ref().map(|t| t.weight.clone()),
+            source: tsfc::sim::source::SpecSource {
+                name: SPEC.into(),
+                text,
+            },
+        }
+    })
 }
 
 fn run(p: &Prepared, opts: &Options) -> Outcome {
@@ -278,33 +293,14 @@ fn summary(label: &str, o: &Outcome) -> String {
 
 /// The paper's Appendix A design (gains read block-wise, Upsilon, nu_ = 0.2
 /// with the printed, unbounded adaptive law) in the spec's scenario.
-fn paper_design(base: &Prepared) -> (Prepared, Options) {
-    let text = std::fs::read_to_string(common::spec_path("reference/xu2020_appendix_a.json"))
-        .expect("reference file");
-    let json: serde_json::Value = serde_json::from_str(&text).expect("json");
-    let mat = |v: &serde_json::Value| -> Vec<Vec<f64>> {
-        v.as_array()
-            .expect("rows")
-            .iter()
-            .map(|row| {
-                row.as_array()
-                    .expect("row")
-                    .iter()
-                    .map(|x| x.as_f64().expect("number"))
-                    .collect()
-            })
-            .collect()
-    };
+pub(crate) fn paper_design(base: &Prepared) -> (Prepared, Options) {
+    let (gains, ups) = crate::xu_paper_evidence::appendix_a();
     let mut p = base.clone();
-    p.tables.gains = json["F"]
-        .as_array()
-        .expect("gains")
+    p.tables.gains = gains
         .iter()
-        .map(mat)
+        .map(|f| f.row_iter().map(|r| r.iter().copied().collect()).collect())
         .collect();
-    let ups = mat(&json["Upsilon"]);
-    let n = ups.len();
-    p.trigger_weight = Some(DMatrix::from_fn(n, n, |a, b| ups[a][b]));
+    p.trigger_weight = Some(ups);
     let opts = Options {
         trigger: Some(Trigger::Aperiodic {
             sampling: (0.001, 0.1),
