@@ -605,10 +605,19 @@ fn tsfc_design_true_gain_lies_below_its_certificates() {
         continuous / ev.lb.l1_upper,
         event_triggered / bang
     );
-    // Sound, and conservative: every measured ratio lies below the certified
-    // bounds (a measured ratio above one would refute the certificate).
-    assert!(ev.lb.l1_upper < continuous / 10.0);
-    assert!(bang.max(ev.constant.peak / TAU_BAR) < event_triggered / 10.0);
+    // Consistent with the certificates: every measured ratio lies below the
+    // certified bounds (one above would refute them; today they are 37 and 124
+    // times larger, docs/event_trigger.md).
+    assert!(
+        ev.lb.l1_lower < continuous,
+        "{} vs {continuous}",
+        ev.lb.l1_lower
+    );
+    let measured = bang.max(ev.constant.peak / TAU_BAR);
+    assert!(
+        measured < event_triggered,
+        "{measured} vs {event_triggered}"
+    );
     // Transmissions against threshold and gains (paper's tau from x(0) = 0,
     // 300 s): each design at both thresholds (0.2 is not certified for tsfc's
     // gains; the paper's gains are not certified by tsfc at any threshold).
@@ -623,7 +632,11 @@ fn tsfc_design_true_gain_lies_below_its_certificates() {
     }
     // tsfc's gains give a 5 times smaller true gain than the paper's.
     let paper_bound = linear_bounds(&linearize(&model, &paper().gains)).l1_lower;
-    assert!(ev.lb.l1_upper < paper_bound / 4.0);
+    assert!(
+        ev.lb.l1_upper < paper_bound / 4.0,
+        "tsfc's LTI gain {} vs the paper's {paper_bound}: the shipped gains changed; update docs/event_trigger.md",
+        ev.lb.l1_upper
+    );
 }
 
 /// tsfc's trigger certificate applied to the paper's gains (the given-gains
@@ -692,4 +705,46 @@ fn paper_tau(t: f64) -> Vector3<f64> {
         2.0 + 1.5 * (0.06 * t).sin() - (0.2 * t).cos(),
         -1.5 + 2.0 * (0.06 * t).sin() - 1.5 * (0.2 * t).sin(),
     )
+}
+
+/// Why tsfc's certificate cannot take the paper's gains: it imposes every
+/// (plant rule i, controller rule j) pair (memberships at x(t_k) against those
+/// at t), so A_i + B F_j must at least be Hurwitz for every pair.
+#[test]
+fn papers_gains_cross_pairs() {
+    let model = common::shipped(SPEC);
+    let gains = paper().gains;
+    let worst: Vec<Vec<f64>> = model
+        .rules
+        .iter()
+        .map(|r| {
+            gains
+                .iter()
+                .map(|f| {
+                    (&r.a + &r.b * f)
+                        .complex_eigenvalues()
+                        .iter()
+                        .map(|c| c.re)
+                        .fold(f64::NEG_INFINITY, f64::max)
+                })
+                .collect()
+        })
+        .collect();
+    for (i, row) in worst.iter().enumerate() {
+        eprintln!(
+            "plant R{}: max Re eig(A_i + B F_j), j = 1..7: {row:.4?}",
+            i + 1
+        );
+    }
+    // The paper's own pairs are stable (spec comment: max -0.0147, at R6) ...
+    assert!((0..7).all(|i| worst[i][i] < -0.014));
+    // ... but four cross pairs are not: (R4, F7), (R5, F6), (R6, F7), (R7, F6)
+    // (plant and controller rules at opposite rates, which a bound kappa on
+    // the mismatch rules out and an every-pair condition cannot).
+    let unstable: Vec<(usize, usize)> = (0..7)
+        .flat_map(|i| (0..7).map(move |j| (i, j)))
+        .filter(|&(i, j)| worst[i][j] > 0.0)
+        .collect();
+    assert_eq!(unstable, vec![(3, 6), (4, 5), (5, 6), (6, 5)]);
+    assert!((worst[4][5] - 0.0199).abs() < 5e-4, "{}", worst[4][5]);
 }
