@@ -15,8 +15,14 @@
 //! 2. The nonlinear, sampled, event-triggered closed loop (quaternion truth
 //!    plant (2)-(3), saturation, trigger (10), memberships at x(t_k)) simulated
 //!    here, independently of `tsfc::sim`, under disturbances with
-//!    max_t |tau(t)| = tau_bar: a constant along the worst DC direction, and the
-//!    bang-bang input above.
+//!    max_t |tau(t)| = tau_bar: a constant along the worst DC direction, the
+//!    bang-bang input above, and the paper's tau(t); with nu fixed and with the
+//!    printed adaptive law (cross-checked by `tsfc::sim`).
+//! 3. tsfc's trigger certificate on the paper's gains (ignored by default: one
+//!    compile) and why it fails: unstable cross pairs A_i + B F_j.
+//!
+//! Numbers and findings: docs/event_trigger.md, "Is the paper's gamma 0.1616
+//! attainable?".
 
 use crate::common;
 
