@@ -32,3 +32,4 @@ mod simulation;
 mod stored_precision;
 mod sweep;
 mod synthesis;
+mod xu_paper_evidence;
