@@ -235,12 +235,47 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
     };
     let settings = runner.settings;
     let (perf, ftb_alpha) = performance(&model.spec);
+    let codesign = sampled::wanted(&model.spec).filter(|_| modes.design == ModeDesign::Independent);
     let mut attempt = |alpha: f64, perf: &Performance| -> Result<Option<Solved>, SynthError> {
         let t0 = Instant::now();
         let shift = diagonal_shift(alpha, perf);
-        let built = problem::build(model, modes, &conds, slack, shift, perf, settings.eps)?;
-        runner.log.build_time += t0.elapsed();
-        let sol = runner.solve(&built.problem, "mode gain problem")?;
+        // Fault-blind gains of a sampled loop are co-designed with it (one
+        // SDP per descriptor ratio delta until one is solved); other designs
+        // solve the continuous conditions once.
+        let deltas: Vec<Option<f64>> = match codesign {
+            Some(_) => sampled::CODESIGN_DELTAS.iter().copied().map(Some).collect(),
+            None => vec![None],
+        };
+        let mut t0 = t0;
+        let mut tried = None;
+        for delta in deltas {
+            let mut built = problem::build(model, modes, &conds, slack, shift, perf, settings.eps)?;
+            if let (Some((_, h)), Some(delta), Some(v)) = (codesign, delta, built.modes.first()) {
+                let (x, m) = (v.x, v.m.clone());
+                sampled::add_codesign(
+                    &mut built.problem,
+                    model,
+                    modes,
+                    x,
+                    &m,
+                    h,
+                    delta,
+                    settings.eps,
+                )
+                .map_err(|e| SynthError::Internal(format!("internal error: {e}")))?;
+            }
+            runner.log.build_time += t0.elapsed();
+            let sol = runner.solve(&built.problem, "mode gain problem")?;
+            let done = matches!(sol.status, SolveStatus::Solved | SolveStatus::AlmostSolved);
+            tried = Some((built, sol));
+            if done {
+                break;
+            }
+            t0 = Instant::now();
+        }
+        let Some((built, sol)) = tried else {
+            return Ok(None);
+        };
         match sol.status {
             // A reduced-accuracy iterate is kept: the certificate re-checks
             // every condition and decides.
