@@ -309,6 +309,45 @@ pub fn add_codesign(
     Ok(())
 }
 
+/// How often the fault-blind co-design's refusal halves h_max looking for
+/// an interval it solves (down to h_max / 2^6).
+pub const CODESIGN_HALVINGS: u32 = 6;
+
+/// The refusal of a fault-blind sampled design whose co-design was not
+/// solved at `sampling` (the search's `message`), with advice: the halved
+/// h_max at which it was (`found`), checked by the analysis of [`build`].
+pub(super) fn codesign_refusal(
+    runner: &mut Runner<'_>,
+    modes: &Modes,
+    sampling: (f64, f64),
+    message: &str,
+    found: Option<(f64, super::Solved)>,
+) -> SynthError {
+    let deltas = CODESIGN_DELTAS.map(|d| d.to_string()).join(", ");
+    let message = format!(
+        "no fault-blind gains were found for the sampled loop at h_max = {} s: the continuous conditions with the sampled-loop conditions in descriptor form (one X, delta in [{deltas}]) were infeasible or the solver stopped ({message})",
+        sampling.1
+    );
+    let advice = match found {
+        None => format!(
+            "no co-design solved down to h_max = {} s either: use `design = mode_dependent;`, weaken the objectives, or shorten the sampling further",
+            sampling.1 / f64::from(1u32 << CODESIGN_HALVINGS)
+        ),
+        Some((h, s)) => {
+            let at = (sampling.0.min(h), h);
+            let write = write_sampling(sampling, h);
+            match certify_loop(runner, modes, &s.modes, at) {
+                Ok(_) => format!("the co-design is solved and certified at h_max = {h} s: write {write} (certified)"),
+                Err(_) => format!("the co-design is solved at h_max = {h} s but its analysis did not certify: shorten the sampling below {h} s"),
+            }
+        }
+    };
+    SynthError::Infeasible {
+        message,
+        achievable: vec![advice],
+    }
+}
+
 /// What the certificate covers, in words (report and notes).
 pub fn covers(sampling: (f64, f64)) -> String {
     let (lo, hi) = sampling;
