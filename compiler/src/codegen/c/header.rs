@@ -90,15 +90,26 @@ extern "C" {{
             np = t.p,
             r = t.r,
         );
-        match t.header.sampling {
-            Some((lo, hi)) if lo == hi => {
+        let note = crate::codegen::header::modal_sampling_note(t);
+        match (t.header.sampling, note) {
+            (Some((lo, hi)), Some(_)) if lo == hi => {
+                let _ = writeln!(s, "#define {u}SAMPLE_PERIOD {} /* s: the certified sampling period; sample the state and call step once per period */", super::lit(hi));
+            }
+            (Some((lo, hi)), Some(_)) => {
+                let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MIN {} /* s: shortest interval between two samples of the state */", super::lit(lo));
+                let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MAX {} /* s: longest certified interval between two samples of the state */", super::lit(hi));
+            }
+            (Some((lo, hi)), None) if lo == hi => {
                 let _ = writeln!(s, "#define {u}SAMPLE_PERIOD {} /* s: the certified sampling period; call step once per period and hold the command (the certificate covers this period only) */", super::lit(hi));
             }
-            Some((lo, hi)) => {
+            (Some((lo, hi)), None) => {
                 let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MIN {} /* s: shortest certified interval between two steps */", super::lit(lo));
                 let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MAX {} /* s: longest certified interval between two steps */", super::lit(hi));
             }
-            None => {}
+            (None, _) => {}
+        }
+        if let Some(note) = note {
+            let _ = writeln!(s, "/* {note} */");
         }
         for (name, bit, doc) in FLAGS {
             let _ = writeln!(s, "#define {u}FLAG_{name} {bit}u /* {doc} */");
@@ -124,7 +135,14 @@ extern "C" {{
         let (mode_param, mode_doc) = match t.modes {
             Some(_) => (
                 "uint8_t mode, ",
-                format!(" in mode `mode` (0 .. {u}K - 1, from fault detection; a mode >= {u}K uses mode 0's gains and sets {u}FLAG_MODE_OUT_OF_RANGE)"),
+                format!(
+                    " in mode `mode` (0 .. {u}K - 1, from fault detection; a mode >= {u}K uses mode 0's gains and sets {u}FLAG_MODE_OUT_OF_RANGE){}",
+                    if note.is_some() {
+                        "; sampled: call it at each sample and at each mode change with the last sample"
+                    } else {
+                        ""
+                    }
+                ),
             ),
             None => ("", String::new()),
         };

@@ -240,6 +240,8 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
     // (a cell: the refusal's advice re-solves at shorter intervals).
     let codesign = sampled::wanted(&model.spec).filter(|_| modes.design == ModeDesign::Independent);
     let codesign_h = Cell::new(codesign.map(|s| s.1));
+    // The descriptor ratio of the last solved co-design (for the note).
+    let codesign_delta = Cell::new(None);
     let mut attempt = |alpha: f64, perf: &Performance| -> Result<Option<Solved>, SynthError> {
         let t0 = Instant::now();
         let shift = diagonal_shift(alpha, perf);
@@ -272,6 +274,9 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             runner.log.build_time += t0.elapsed();
             let sol = runner.solve(&built.problem, "mode gain problem")?;
             let done = matches!(sol.status, SolveStatus::Solved | SolveStatus::AlmostSolved);
+            if done {
+                codesign_delta.set(delta);
+            }
             tried = Some((built, sol));
             if done {
                 break;
@@ -455,6 +460,11 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             ""
         }
     )];
+    if let (Some((_, h)), Some(delta)) = (codesign, codesign_delta.get()) {
+        notes.push(format!(
+            "fault-blind gains co-designed with the sampled loop at h_max = {h} s: the continuous conditions and the sampled-loop conditions in descriptor form (one X = P2^-1 for every mode, descriptor ratio delta = {delta}) in one SDP; the sampled loop then re-certified by the analysis below"
+        ));
+    }
     notes.extend(loop_note);
     if solved.almost {
         notes.push("the solver reached only reduced accuracy on the chosen SDP; the certificate re-checks every condition".into());
