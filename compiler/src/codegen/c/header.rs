@@ -135,16 +135,14 @@ extern "C" {{
         let (mode_param, mode_doc) = match t.modes {
             Some(_) => (
                 "uint8_t mode, ",
-                format!(
-                    " in mode `mode` (0 .. {u}K - 1, from fault detection; a mode >= {u}K uses mode 0's gains and sets {u}FLAG_MODE_OUT_OF_RANGE){}",
-                    if note.is_some() {
-                        "; sampled: call it at each sample and at each mode change with the last sample"
-                    } else {
-                        ""
-                    }
-                ),
+                format!(" in mode `mode` (0 .. {u}K - 1, from fault detection; a mode >= {u}K uses mode 0's gains and sets {u}FLAG_MODE_OUT_OF_RANGE)"),
             ),
             None => ("", String::new()),
+        };
+        let sampled_doc = if note.is_some() {
+            " Sampled: call it at each sample and at each mode change, with the last sample."
+        } else {
+            ""
         };
         let _ = write!(
             s,
@@ -159,7 +157,7 @@ typedef struct {p}t {{
 void {p}init({p}t *s);
 /* Premise vector z of state x ({u}P components). */
 void {p}premises(const {real} x[{u}N], {real} z[]);
-/* One control step{mode_doc}: z from x, then {p}step_with_premises. */
+/* One control step{mode_doc}: z from x, then {p}step_with_premises.{sampled_doc} */
 void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]);
 /* One control step with premises z computed by the caller. */
 void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]);

@@ -36,9 +36,15 @@
 //! instants do not anticipate the mode process (deterministic, or chosen
 //! independently of it). Dynkin's formula then gives E V(t) + eps E int |x|^2
 //! <= V(0): mean-square (stochastic) stability of the sampled loop. The gains
-//! are the continuous mode design's (fixed), so every term is linear in the
-//! unknowns P_a, Y, L1_a, L2_a. The decay rate, H-inf or finite-time bounds
-//! are not claimed for the sampled loop.
+//! are fixed here, so every term is linear in the unknowns P_a, Y, L1_a,
+//! L2_a. The decay rate, H-inf or finite-time bounds are not claimed for the
+//! sampled loop.
+//!
+//! Which gains: a mode-dependent design keeps its continuous gains (a
+//! co-design would need one X_a per mode, and the coupling X_a' P_b X_a is
+//! not linear). A fault-blind design co-designs its one gain set with the
+//! sampled loop ([`add_codesign`]: descriptor form with a common X, in the
+//! SDP of the continuous conditions); the analysis then certifies it.
 
 use super::problem::input_matrices;
 use super::ModesDesign;
