@@ -114,7 +114,8 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         quote!(Flags),
     ];
     imports.extend(premise_imports(t));
-    let sampling = sampling_consts(t.header.sampling, modal_sampling_note(t));
+    let sampling_note = modal_sampling_note(t).map(|n| format!(" {n}"));
+    let sampling = sampling_consts(t.header.sampling, sampling_note.as_deref());
     let (table_ty, table_ctor, mode_consts, step_sig, step_doc, mode_accessor) = match &modal {
         Some(md) => (
             quote!(ModalController<'static, #ty, N, M, P, R, D, K>),
@@ -122,7 +123,10 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
             md.consts.clone(),
             quote!(pub fn step(&mut self, mode: u8, x: &[#ty; N]) -> [#ty; M]),
             {
-                let note = modal_sampling_note(t).map(|n| quote!(#[doc = ""] #[doc = #n]));
+                let note = modal_sampling_note(t).map(|n| {
+                    let n = format!(" {n}");
+                    quote!(#[doc = ""] #[doc = #n])
+                });
                 quote! {
                     /// One control update in mode `mode` (an index of `MODE_NAMES`, from
                     /// fault detection): the saturated command for state `x` with that
@@ -433,6 +437,8 @@ fn header(t: &Tables) -> String {
 
 /// The certified sampling as constants: `SAMPLE_PERIOD` for a periodic
 /// trigger, `SAMPLE_INTERVAL_MIN` / `_MAX` for aperiodic sampling.
+/// With modes, `modal` is the doc line (with its leading space) of what the
+/// caller must do at mode changes.
 fn sampling_consts(sampling: Option<(f64, f64)>, modal: Option<&str>) -> TokenStream {
     match (sampling, modal) {
         (None, _) => TokenStream::new(),
