@@ -446,10 +446,14 @@ pub(in crate::synth) fn certify_loop(
     } else {
         format!("sampling intervals in [{}, {}] s", sampling.0, sampling.1)
     };
+    let gains = match md.design {
+        tsf_lang::modes::ModeDesign::Dependent => "the gains of the continuous mode design",
+        tsf_lang::modes::ModeDesign::Independent => "the co-designed fault-blind gains",
+    };
     let reach = longest_scale_from_above(|s| Ok(attempt(runner, modes, md, at(s))?.is_some()))?;
     let Some(reach) = reach else {
         return Err(SynthError::Infeasible {
-            message: format!("the sampled loop is not certified: the gains of the continuous mode design are not certified for {what}, nor for any interval down to 1/1024 of it (halved from 1/2)"),
+            message: format!("the sampled loop is not certified: {gains} are not certified for {what}, nor for any interval down to 1/1024 of it (halved from 1/2)"),
             achievable: vec!["weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger".into()],
         });
     };
@@ -473,7 +477,7 @@ pub(in crate::synth) fn certify_loop(
         "no short value re-solved as certified: shorten the sampling further".into()
     };
     Err(SynthError::Infeasible {
-        message: format!("the sampled loop is not certified: the gains of the continuous mode design are not certified for {what} under the Markov chain"),
+        message: format!("the sampled loop is not certified: {gains} are not certified for {what} under the Markov chain"),
         achievable: vec![format!(
             "the longest certified sampling interval is about {:.4} s: {write}, or weaken the objectives that set the gains",
             sampling.1 * reach
