@@ -45,22 +45,59 @@ fn two_modes(design: &str) -> String {
 /// The tables of the mode-dependent two-mode design.
 fn tables() -> &'static Tables {
     static T: OnceLock<Tables> = OnceLock::new();
-    T.get_or_init(|| {
-        let text = two_modes("mode_dependent");
-        let model = common::model_of("twomode.tsf", &text);
-        let c = compile(
-            &model,
-            SpecInfo {
-                path: "twomode.tsf".into(),
-                sha256: tsfc::report::sha256_hex(text.as_bytes()),
-            },
-            &Settings::default(),
-            Default::default(),
-        );
-        assert_eq!(c.status, Status::Certified);
-        let (design, cert) = c.outcome.expect("design");
-        tsfc::tables::tables(&model, &design, &cert, "twomode.tsf", "0").expect("tables")
-    })
+    T.get_or_init(|| tables_of(&two_modes("mode_dependent")))
+}
+
+/// The certified tables of the spec `text` (named `twomode.tsf`).
+fn tables_of(text: &str) -> Tables {
+    let model = common::model_of("twomode.tsf", text);
+    let c = compile(
+        &model,
+        SpecInfo {
+            path: "twomode.tsf".into(),
+            sha256: tsfc::report::sha256_hex(text.as_bytes()),
+        },
+        &Settings::default(),
+        Default::default(),
+    );
+    assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
+    let (design, cert) = c.outcome.expect("design");
+    tsfc::tables::tables(&model, &design, &cert, "twomode.tsf", "0").expect("tables")
+}
+
+/// The sampled mode design's generated code tells the caller to step at each
+/// sample and at each mode change (with the last sample), and what the
+/// sampling constants mean; the fault-blind build takes no mode and says
+/// nothing of mode changes.
+#[test]
+fn generated_sampled_modal_code_says_when_to_step() {
+    let sampled = |design: &str| {
+        two_modes(design).replace(
+            "emit rust, c;",
+            "trigger aperiodic { sampling = 0.01 .. 0.05; }\nemit rust, c;",
+        )
+    };
+    let t = tables_of(&sampled("mode_dependent"));
+    assert_eq!(t.header.sampling, Some((0.01, 0.05)));
+    let rust = emit_rust(&t).expect("generates");
+    syn::parse_file(&rust).expect("generated Rust parses");
+    let note = "call `step` at each sample of the state AND at each mode change between samples, with the new mode and the last sample";
+    // In the header comment, on SAMPLE_INTERVAL_MAX and on `step`.
+    assert_eq!(rust.matches(note).count(), 3, "{rust}");
+    assert!(rust.contains("/// Shortest interval in seconds between two samples of the state."));
+    let c = emit_c(&t);
+    assert_eq!(c.header.matches(note).count(), 1, "{}", c.header);
+    assert!(c.header.contains(
+        "Sampled: call it at each sample and at each mode change, with the last sample."
+    ));
+    insta::assert_snapshot!("twomode_sampled.h", c.header);
+    // Fault-blind: one gain set, no mode argument, no mode-change calls.
+    let t = tables_of(&sampled("mode_independent"));
+    assert!(t.modes.is_none());
+    let rust = emit_rust(&t).expect("generates");
+    assert!(!rust.contains("mode change"), "{rust}");
+    assert!(rust.contains("pub fn step(&mut self, x: &[f64; N]) -> [f64; M]"));
+    assert!(rust.contains("pub const SAMPLE_INTERVAL_MAX: f64 = 0.05;"));
 }
 
 #[test]

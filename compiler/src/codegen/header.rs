@@ -25,6 +25,15 @@ pub fn marker(h: &Header) -> String {
     )
 }
 
+/// What a mode-dependent design with a sampled loop asks of the caller,
+/// `None` without modes or sampling (every backend writes it by the
+/// sampling constants, the step and the header).
+pub fn modal_sampling_note(t: &Tables) -> Option<&'static str> {
+    (t.modes.is_some() && t.header.sampling.is_some()).then_some(
+        "With modes, call `step` at each sample of the state AND at each mode change between samples, with the new mode and the last sample: the mode is known continuously, the sampled state is held. A mode-change call is not a sample: the sampling intervals are between samples only, and the certificate covers every interval up to the longest.",
+    )
+}
+
 /// The `@generated` line with the spec's hash and the do-not-edit line.
 pub fn generated_lines(h: &Header) -> String {
     format!(

@@ -90,15 +90,26 @@ extern "C" {{
             np = t.p,
             r = t.r,
         );
-        match t.header.sampling {
-            Some((lo, hi)) if lo == hi => {
+        let note = crate::codegen::header::modal_sampling_note(t);
+        match (t.header.sampling, note) {
+            (Some((lo, hi)), Some(_)) if lo == hi => {
+                let _ = writeln!(s, "#define {u}SAMPLE_PERIOD {} /* s: the certified sampling period; sample the state and call step once per period */", super::lit(hi));
+            }
+            (Some((lo, hi)), Some(_)) => {
+                let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MIN {} /* s: shortest interval between two samples of the state */", super::lit(lo));
+                let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MAX {} /* s: longest certified interval between two samples of the state */", super::lit(hi));
+            }
+            (Some((lo, hi)), None) if lo == hi => {
                 let _ = writeln!(s, "#define {u}SAMPLE_PERIOD {} /* s: the certified sampling period; call step once per period and hold the command (the certificate covers this period only) */", super::lit(hi));
             }
-            Some((lo, hi)) => {
+            (Some((lo, hi)), None) => {
                 let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MIN {} /* s: shortest certified interval between two steps */", super::lit(lo));
                 let _ = writeln!(s, "#define {u}SAMPLE_INTERVAL_MAX {} /* s: longest certified interval between two steps */", super::lit(hi));
             }
-            None => {}
+            (None, _) => {}
+        }
+        if let Some(note) = note {
+            let _ = writeln!(s, "/* {note} */");
         }
         for (name, bit, doc) in FLAGS {
             let _ = writeln!(s, "#define {u}FLAG_{name} {bit}u /* {doc} */");
@@ -128,6 +139,11 @@ extern "C" {{
             ),
             None => ("", String::new()),
         };
+        let sampled_doc = if note.is_some() {
+            " Sampled: call it at each sample and at each mode change, with the last sample."
+        } else {
+            ""
+        };
         let _ = write!(
             s,
             r#"
@@ -141,7 +157,7 @@ typedef struct {p}t {{
 void {p}init({p}t *s);
 /* Premise vector z of state x ({u}P components). */
 void {p}premises(const {real} x[{u}N], {real} z[]);
-/* One control step{mode_doc}: z from x, then {p}step_with_premises. */
+/* One control step{mode_doc}: z from x, then {p}step_with_premises.{sampled_doc} */
 void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]);
 /* One control step with premises z computed by the caller. */
 void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]);

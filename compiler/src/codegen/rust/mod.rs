@@ -15,7 +15,7 @@ pub use adaptive::emit_rust_adaptive;
 pub use sensor::emit_rust_sensor;
 pub use signal_sensor::emit_rust_signal_sensor;
 
-use super::header::{marker, sensor_name};
+use super::header::{marker, modal_sampling_note, sensor_name};
 use super::{Backend, CodegenError, GeneratedFile};
 use crate::model::TermSpec;
 use crate::tables::{PremiseCode, Tables};
@@ -114,19 +114,27 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         quote!(Flags),
     ];
     imports.extend(premise_imports(t));
-    let sampling = sampling_consts(t.header.sampling);
+    let sampling_note = modal_sampling_note(t).map(|n| format!(" {n}"));
+    let sampling = sampling_consts(t.header.sampling, sampling_note.as_deref());
     let (table_ty, table_ctor, mode_consts, step_sig, step_doc, mode_accessor) = match &modal {
         Some(md) => (
             quote!(ModalController<'static, #ty, N, M, P, R, D, K>),
             quote!(ModalController),
             md.consts.clone(),
             quote!(pub fn step(&mut self, mode: u8, x: &[#ty; N]) -> [#ty; M]),
-            quote! {
-                /// One control update in mode `mode` (an index of `MODE_NAMES`, from
-                /// fault detection): the saturated command for state `x` with that
-                /// mode's gains. Never panics; NaN or infinite states give a zero
-                /// command and a fault flag; a mode `>= K` uses mode 0's gains and
-                /// raises `Flags::MODE_OUT_OF_RANGE`.
+            {
+                let note = modal_sampling_note(t).map(|n| {
+                    let n = format!(" {n}");
+                    quote!(#[doc = ""] #[doc = #n])
+                });
+                quote! {
+                    /// One control update in mode `mode` (an index of `MODE_NAMES`, from
+                    /// fault detection): the saturated command for state `x` with that
+                    /// mode's gains. Never panics; NaN or infinite states give a zero
+                    /// command and a fault flag; a mode `>= K` uses mode 0's gains and
+                    /// raises `Flags::MODE_OUT_OF_RANGE`.
+                    #note
+                }
             },
             quote! {
                 /// Whether the last step was given a mode `>= K` (mode 0's gains used).
@@ -407,6 +415,9 @@ fn header(t: &Tables) -> String {
             mt.names.len(),
             mt.names.join(", ")
         ));
+        if let Some(note) = modal_sampling_note(t) {
+            s.push_str(&format!("// {note}\n"));
+        }
     }
     if t.trigger.is_some() {
         s.push_str(&format!(
@@ -426,10 +437,31 @@ fn header(t: &Tables) -> String {
 
 /// The certified sampling as constants: `SAMPLE_PERIOD` for a periodic
 /// trigger, `SAMPLE_INTERVAL_MIN` / `_MAX` for aperiodic sampling.
-fn sampling_consts(sampling: Option<(f64, f64)>) -> TokenStream {
-    match sampling {
-        None => TokenStream::new(),
-        Some((lo, hi)) if lo == hi => {
+/// With modes, `modal` is the doc line (with its leading space) of what the
+/// caller must do at mode changes.
+fn sampling_consts(sampling: Option<(f64, f64)>, modal: Option<&str>) -> TokenStream {
+    match (sampling, modal) {
+        (None, _) => TokenStream::new(),
+        (Some((lo, hi)), Some(note)) if lo == hi => {
+            let h = Literal::f64_unsuffixed(hi);
+            quote! {
+                /// The certified sampling period in seconds: sample the state and call
+                /// `step` once every `SAMPLE_PERIOD`.
+                #[doc = #note]
+                pub const SAMPLE_PERIOD: f64 = #h;
+            }
+        }
+        (Some((lo, hi)), Some(note)) => {
+            let (lo, hi) = (Literal::f64_unsuffixed(lo), Literal::f64_unsuffixed(hi));
+            quote! {
+                /// Shortest interval in seconds between two samples of the state.
+                pub const SAMPLE_INTERVAL_MIN: f64 = #lo;
+                /// Longest certified interval in seconds between two samples of the state.
+                #[doc = #note]
+                pub const SAMPLE_INTERVAL_MAX: f64 = #hi;
+            }
+        }
+        (Some((lo, hi)), None) if lo == hi => {
             let h = Literal::f64_unsuffixed(hi);
             quote! {
                 /// The certified sampling period in seconds: call `step` once every
@@ -438,7 +470,7 @@ fn sampling_consts(sampling: Option<(f64, f64)>) -> TokenStream {
                 pub const SAMPLE_PERIOD: f64 = #h;
             }
         }
-        Some((lo, hi)) => {
+        (Some((lo, hi)), None) => {
             let (lo, hi) = (Literal::f64_unsuffixed(lo), Literal::f64_unsuffixed(hi));
             quote! {
                 /// Shortest certified interval in seconds between two calls of `step`

@@ -70,6 +70,7 @@ use super::plan::initial_plan;
 use super::search::Runner;
 use nalgebra::DMatrix;
 use problem::{diagonal_shift, names, FtbParams, Performance};
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 use tsf_lang::modes::{ModeDesign, Modes};
 use tsf_lang::spec::{Objective, Spec, Target};
@@ -235,17 +236,64 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
     };
     let settings = runner.settings;
     let (perf, ftb_alpha) = performance(&model.spec);
+    // Fault-blind gains of a sampled loop: co-designed with it at h_max
+    // (a cell: the refusal's advice re-solves at shorter intervals).
+    let codesign = sampled::wanted(&model.spec).filter(|_| modes.design == ModeDesign::Independent);
+    let codesign_h = Cell::new(codesign.map(|s| s.1));
+    // The descriptor ratio of the last solved co-design (for the note).
+    let codesign_delta = Cell::new(None);
     let mut attempt = |alpha: f64, perf: &Performance| -> Result<Option<Solved>, SynthError> {
         let t0 = Instant::now();
         let shift = diagonal_shift(alpha, perf);
-        let built = problem::build(model, modes, &conds, slack, shift, perf, settings.eps)?;
-        runner.log.build_time += t0.elapsed();
-        let sol = runner.solve(&built.problem, "mode gain problem")?;
+        // Fault-blind gains of a sampled loop are co-designed with it (one
+        // SDP per descriptor ratio delta until one is solved); other designs
+        // solve the continuous conditions once.
+        let deltas: Vec<Option<f64>> = match codesign_h.get() {
+            Some(_) => sampled::CODESIGN_DELTAS.iter().copied().map(Some).collect(),
+            None => vec![None],
+        };
+        let mut t0 = t0;
+        let mut tried = None;
+        for delta in deltas {
+            let mut built = problem::build(model, modes, &conds, slack, shift, perf, settings.eps)?;
+            if let (Some(h), Some(delta), Some(v)) = (codesign_h.get(), delta, built.modes.first())
+            {
+                let (x, m) = (v.x, v.m.clone());
+                sampled::add_codesign(
+                    &mut built.problem,
+                    model,
+                    modes,
+                    x,
+                    &m,
+                    h,
+                    delta,
+                    settings.eps,
+                )
+                .map_err(|e| SynthError::Internal(format!("internal error: {e}")))?;
+            }
+            runner.log.build_time += t0.elapsed();
+            let sol = runner.solve(&built.problem, "mode gain problem")?;
+            let done = matches!(sol.status, SolveStatus::Solved | SolveStatus::AlmostSolved);
+            if done {
+                codesign_delta.set(delta);
+            }
+            tried = Some((built, sol));
+            if done {
+                break;
+            }
+            t0 = Instant::now();
+        }
+        let Some((built, sol)) = tried else {
+            return Ok(None);
+        };
         match sol.status {
             // A reduced-accuracy iterate is kept: the certificate re-checks
             // every condition and decides.
             SolveStatus::Solved | SolveStatus::AlmostSolved => {}
             s if s.is_primal_infeasible() => return Ok(None),
+            // The co-design at a long interval may end in a numerical
+            // failure rather than an infeasibility certificate: not found.
+            _ if codesign.is_some() => return Ok(None),
             s => {
                 return Err(SynthError::Solver {
                     status: s,
@@ -348,91 +396,37 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             almost: sol.status == SolveStatus::AlmostSolved,
         }))
     };
-    let infeasible = |what: String| SynthError::Infeasible {
-        message: format!("the mode conditions are infeasible {what}"),
-        achievable: Vec::new(),
-    };
-    let (solved, bracket) = if let Performance::FiniteTime(f) = &perf {
-        let alphas: Vec<f64> = match ftb_alpha {
-            Some(a) => vec![a],
-            None => FTB_ALPHA_T.iter().map(|k| k / f.horizon).collect(),
-        };
-        let s = finite_time_search(&mut attempt, &perf, &alphas, ftb_alpha.is_none())?
-            .ok_or_else(|| {
-                infeasible(match (ftb_alpha, f.c2) {
-                    (Some(a), Some(c2)) => format!("(finite time: c2 = {c2} at alpha = {a})"),
-                    (Some(a), None) => format!("(finite time at alpha = {a})"),
-                    (None, Some(c2)) => format!(
-                        "(finite time: c2 = {c2} at every alpha of the grid alpha T in {FTB_ALPHA_T:?})"
-                    ),
-                    (None, None) => format!(
-                        "(finite time at every alpha of the grid alpha T in {FTB_ALPHA_T:?})"
-                    ),
-                })
-            })?;
-        (s, None)
-    } else {
-        match decay_target(&model.spec.objectives) {
-            Target::Fixed(alpha) if matches!(perf, Performance::Hinf { gamma: None, .. }) => {
-                let s = hinf_minimum(&mut attempt, &perf, alpha, settings.bisection_rel_tol)?
-                    .ok_or_else(|| {
-                        infeasible(format!(
-                            "(no gains found{}{})",
-                            if alpha > 0.0 {
-                                format!(" at decay rate {alpha}")
-                            } else {
-                                String::new()
-                            },
-                            perf_note(&perf)
-                        ))
-                    })?;
-                (s, None)
-            }
-            Target::Fixed(alpha) => {
-                let s = attempt(alpha, &perf)?.ok_or_else(|| {
-                    infeasible(if alpha > 0.0 {
-                        format!("at decay rate {alpha}{}", perf_note(&perf))
-                    } else {
-                        format!(
-                            "(no mean-square stabilizing gains found{})",
-                            perf_note(&perf)
-                        )
-                    })
-                })?;
-                (s, None)
-            }
-            Target::Optimize => {
-                let mut best = attempt(0.0, &perf)?.ok_or_else(|| {
-                    infeasible(format!(
-                        "(no mean-square stabilizing gains found{})",
-                        perf_note(&perf)
-                    ))
-                })?;
-                let (mut lo, mut hi) = (0.0, 0.5);
-                // Grow the bracket until infeasible (or the solver stalls).
-                while let Ok(Some(s)) = attempt(hi, &perf) {
-                    best = s;
-                    lo = hi;
-                    hi *= 2.0;
-                    if hi > 1e6 {
-                        hi = f64::INFINITY;
-                        break;
-                    }
+    let searched = search(
+        &mut attempt,
+        &perf,
+        ftb_alpha,
+        settings.bisection_rel_tol,
+        &model.spec.objectives,
+    );
+    let (solved, bracket) = match (searched, codesign) {
+        (Ok(s), _) => s,
+        (Err(SynthError::Infeasible { message, .. }), Some(sampling)) => {
+            // Advice: halve h_max until the co-design is solved, then check
+            // that the analysis certifies the gains it found.
+            let alpha = match decay_target(&model.spec.objectives) {
+                Target::Fixed(a) => a,
+                Target::Optimize => 0.0,
+            };
+            let fixed = at_alpha(&perf, ftb_alpha.unwrap_or(0.0));
+            let mut found = None;
+            for k in 1..=sampled::CODESIGN_HALVINGS {
+                let h = sampling.1 / f64::from(1u32 << k);
+                codesign_h.set(Some(h));
+                if let Ok(Some(s)) = attempt(alpha, &fixed) {
+                    found = Some((h, s));
+                    break;
                 }
-                while hi.is_finite() && hi - lo > settings.bisection_rel_tol * hi.max(1e-9) {
-                    let mid = 0.5 * (lo + hi);
-                    match attempt(mid, &perf) {
-                        Ok(Some(s)) => {
-                            best = s;
-                            lo = mid;
-                        }
-                        // Near the supremum the solver may stall: not achieved.
-                        _ => hi = mid,
-                    }
-                }
-                (best, Some((lo, hi)))
             }
+            return Err(sampled::codesign_refusal(
+                runner, modes, sampling, &message, found,
+            ));
         }
+        (Err(e), _) => return Err(e),
     };
     let mut solved = solved;
     let mut loop_note = None;
@@ -466,6 +460,11 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             ""
         }
     )];
+    if let (Some((_, h)), Some(delta)) = (codesign, codesign_delta.get()) {
+        notes.push(format!(
+            "fault-blind gains co-designed with the sampled loop at h_max = {h} s: the continuous conditions and the sampled-loop conditions in descriptor form (one X = P2^-1 for every mode, descriptor ratio delta = {delta}) in one SDP; the sampled loop then re-certified by the analysis below"
+        ));
+    }
     notes.extend(loop_note);
     if solved.almost {
         notes.push("the solver reached only reduced accuracy on the chosen SDP; the certificate re-checks every condition".into());
@@ -509,6 +508,106 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         fuzzy: None,
         modes: Some(solved.modes),
     })
+}
+
+/// The search the spec's objectives ask for (fixed or maximized decay rate,
+/// least gamma, least c2): the chosen solve and the decay bracket, if any.
+fn search<F>(
+    attempt: &mut F,
+    perf: &Performance,
+    ftb_alpha: Option<f64>,
+    tol: f64,
+    objectives: &[tsf_lang::spec::SpannedObjective],
+) -> Result<(Solved, Option<(f64, f64)>), SynthError>
+where
+    F: FnMut(f64, &Performance) -> Result<Option<Solved>, SynthError>,
+{
+    let infeasible = |what: String| SynthError::Infeasible {
+        message: format!("the mode conditions are infeasible {what}"),
+        achievable: Vec::new(),
+    };
+    let searched = if let Performance::FiniteTime(f) = &perf {
+        let alphas: Vec<f64> = match ftb_alpha {
+            Some(a) => vec![a],
+            None => FTB_ALPHA_T.iter().map(|k| k / f.horizon).collect(),
+        };
+        let s = finite_time_search(attempt, perf, &alphas, ftb_alpha.is_none())?
+            .ok_or_else(|| {
+                infeasible(match (ftb_alpha, f.c2) {
+                    (Some(a), Some(c2)) => format!("(finite time: c2 = {c2} at alpha = {a})"),
+                    (Some(a), None) => format!("(finite time at alpha = {a})"),
+                    (None, Some(c2)) => format!(
+                        "(finite time: c2 = {c2} at every alpha of the grid alpha T in {FTB_ALPHA_T:?})"
+                    ),
+                    (None, None) => format!(
+                        "(finite time at every alpha of the grid alpha T in {FTB_ALPHA_T:?})"
+                    ),
+                })
+            })?;
+        (s, None)
+    } else {
+        match decay_target(objectives) {
+            Target::Fixed(alpha) if matches!(perf, Performance::Hinf { gamma: None, .. }) => {
+                let s = hinf_minimum(attempt, perf, alpha, tol)?.ok_or_else(|| {
+                    infeasible(format!(
+                        "(no gains found{}{})",
+                        if alpha > 0.0 {
+                            format!(" at decay rate {alpha}")
+                        } else {
+                            String::new()
+                        },
+                        perf_note(perf)
+                    ))
+                })?;
+                (s, None)
+            }
+            Target::Fixed(alpha) => {
+                let s = attempt(alpha, perf)?.ok_or_else(|| {
+                    infeasible(if alpha > 0.0 {
+                        format!("at decay rate {alpha}{}", perf_note(perf))
+                    } else {
+                        format!(
+                            "(no mean-square stabilizing gains found{})",
+                            perf_note(perf)
+                        )
+                    })
+                })?;
+                (s, None)
+            }
+            Target::Optimize => {
+                let mut best = attempt(0.0, perf)?.ok_or_else(|| {
+                    infeasible(format!(
+                        "(no mean-square stabilizing gains found{})",
+                        perf_note(perf)
+                    ))
+                })?;
+                let (mut lo, mut hi) = (0.0, 0.5);
+                // Grow the bracket until infeasible (or the solver stalls).
+                while let Ok(Some(s)) = attempt(hi, perf) {
+                    best = s;
+                    lo = hi;
+                    hi *= 2.0;
+                    if hi > 1e6 {
+                        hi = f64::INFINITY;
+                        break;
+                    }
+                }
+                while hi.is_finite() && hi - lo > tol * hi.max(1e-9) {
+                    let mid = 0.5 * (lo + hi);
+                    match attempt(mid, perf) {
+                        Ok(Some(s)) => {
+                            best = s;
+                            lo = mid;
+                        }
+                        // Near the supremum the solver may stall: not achieved.
+                        _ => hi = mid,
+                    }
+                }
+                (best, Some((lo, hi)))
+            }
+        }
+    };
+    Ok(searched)
 }
 
 /// The least H-inf bound: the SDP that minimizes gamma^2; when the solver

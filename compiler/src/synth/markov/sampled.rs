@@ -36,9 +36,15 @@
 //! instants do not anticipate the mode process (deterministic, or chosen
 //! independently of it). Dynkin's formula then gives E V(t) + eps E int |x|^2
 //! <= V(0): mean-square (stochastic) stability of the sampled loop. The gains
-//! are the continuous mode design's (fixed), so every term is linear in the
-//! unknowns P_a, Y, L1_a, L2_a. The decay rate, H-inf or finite-time bounds
-//! are not claimed for the sampled loop.
+//! are fixed here, so every term is linear in the unknowns P_a, Y, L1_a,
+//! L2_a. The decay rate, H-inf or finite-time bounds are not claimed for the
+//! sampled loop.
+//!
+//! Which gains: a mode-dependent design keeps its continuous gains (a
+//! co-design would need one X_a per mode, and the coupling X_a' P_b X_a is
+//! not linear). A fault-blind design co-designs its one gain set with the
+//! sampled loop ([`add_codesign`]: descriptor form with a common X, in the
+//! SDP of the continuous conditions); the analysis then certifies it.
 
 use super::problem::input_matrices;
 use super::ModesDesign;
@@ -189,6 +195,165 @@ pub fn build(
     Ok(problem)
 }
 
+/// The descriptor multiplier ratios delta (P3 = delta P2) the fault-blind
+/// co-design tries, in order, until its SDP is solved.
+pub const CODESIGN_DELTAS: [f64; 3] = [1.0, 0.1, 10.0];
+
+/// Variable names of the fault-blind co-design's sampled-loop part.
+pub mod codesign_names {
+    /// X' P_a X of mode `mode`.
+    pub fn p(mode: &str) -> String {
+        format!("Pc_{mode}")
+    }
+    /// X' L1_a X of mode `mode`.
+    pub fn n1(mode: &str) -> String {
+        format!("N1c_{mode}")
+    }
+    /// X' L2_a X of mode `mode`.
+    pub fn n3(mode: &str) -> String {
+        format!("N3c_{mode}")
+    }
+    /// X' Y X.
+    pub const Y: &str = "Yc";
+}
+
+/// The name of the co-design condition r of mode `mode` for rule pair (i, j).
+pub fn codesign_condition_name(mode: &str, r: u8, i: usize, j: usize) -> String {
+    format!("mode {mode} sampled co-design r={r} Q[{},{}]", i + 1, j + 1)
+}
+
+/// Adds to `problem` (the continuous fault-blind design, with the common X
+/// and gain variables M_j = F_j X) the sampled-loop conditions at h_max in
+/// descriptor form, so that the gains are designed for the sampled loop.
+///
+/// With zeta = [x; x'; x(s_l)] and the descriptor identity 0 = 2 (x' P2' +
+/// x'' delta P2') (-x' + A_i x + B_ai F_j x(s_l)), the generator bound of the
+/// module's functional (free matrix N_a = E_x' L1_a + E_s' L2_a, no x'
+/// component) is zeta' [Xi + (h - tau) E_d' Y E_d + tau N_a Y^{-1} N_a'] zeta.
+/// Congruence with diag(X, X, X), X = P2^{-1} common to every mode (the
+/// gains are), makes every term linear: X' P_a X, X' Y X, X' L_a X, M_j =
+/// F_j X, and the coupling X' (sum_b pi_ab P_b) X = sum_b pi_ab X' P_b X.
+/// Substituting x' = Phi_aij psi (the descriptor term vanishes) gives back
+/// the analysis conditions of [`build`] with P_a, Y, L1_a, L2_a: the
+/// co-design is feasible only if the analysis is, which then certifies.
+#[allow(clippy::too_many_arguments)]
+pub fn add_codesign(
+    problem: &mut Problem,
+    model: &TsModel,
+    modes: &Modes,
+    x: tsf_lmi::Var,
+    m: &[tsf_lmi::Var],
+    h: f64,
+    delta: f64,
+    eps: f64,
+) -> Result<(), LmiError> {
+    let n = model.n;
+    let k = 3 * n;
+    let sel =
+        |block: usize| DMatrix::from_fn(n, k, |r, c| if c == block * n + r { 1.0 } else { 0.0 });
+    let (ex, ed, es) = (sel(0), sel(1), sel(2));
+    let exs = &ex - &es;
+    let id = DMatrix::identity(n, n);
+    let mut p = Vec::new();
+    let mut l = Vec::new();
+    for mode in &modes.modes {
+        p.push(problem.symmetric(&codesign_names::p(&mode.name), n)?);
+        l.push([
+            problem.full(&codesign_names::n1(&mode.name), n, n)?,
+            problem.full(&codesign_names::n3(&mode.name), n, n)?,
+        ]);
+    }
+    let y = problem.symmetric(codesign_names::Y, n)?;
+    for (a, mode) in modes.modes.iter().enumerate() {
+        problem.psd(
+            &format!("sampled co-design X'P_{}X > 0", mode.name),
+            Expr::var(p[a]),
+            eps,
+        )?;
+    }
+    problem.psd("sampled co-design X'YX > 0", Expr::var(y), eps)?;
+    // (E_x' + delta E_d'): where the descriptor multiplier enters.
+    let mult = ex.transpose() + ed.transpose() * delta;
+    let dy = Expr::product(&ed.transpose(), y, &ed)?.scale(h)?;
+    for (a, mode) in modes.modes.iter().enumerate() {
+        let b = input_matrices(model, modes, a);
+        let mut common = Expr::product(&ex.transpose(), p[a], &ed)?
+            .he()?
+            .add(
+                Expr::product(&ex.transpose(), l[a][0], &exs)?
+                    .add(Expr::product(&es.transpose(), l[a][1], &exs)?)?
+                    .he()?,
+            )?
+            .add(Expr::product(&mult, x, &(-&ed))?.he()?)?;
+        for (c, pc) in p.iter().enumerate() {
+            let pi = modes.rates[(a, c)];
+            if pi != 0.0 {
+                common = common.add(Expr::product(&ex.transpose(), *pc, &ex)?.scale(pi)?)?;
+            }
+        }
+        let col = Expr::product(&ex.transpose(), l[a][0], &id)?
+            .add(Expr::product(&es.transpose(), l[a][1], &id)?)?
+            .scale(h.sqrt())?;
+        for (i, (rule, bi)) in model.rules.iter().zip(&b).enumerate() {
+            let ax = Expr::product(&(&mult * &rule.a), x, &ex)?;
+            for (j, mj) in m.iter().enumerate() {
+                let xi = ax
+                    .clone()
+                    .add(Expr::product(&(&mult * bi), *mj, &es)?)?
+                    .he()?
+                    .add(common.clone())?;
+                let r1 = xi.clone().add(dy.clone())?;
+                problem.nsd(&codesign_condition_name(&mode.name, 1, i, j), r1, eps)?;
+                let r2 = Expr::sym_blocks(vec![
+                    vec![Some(xi), Some(col.clone())],
+                    vec![None, Some(Expr::var(y).scale(-1.0)?)],
+                ])?;
+                problem.nsd(&codesign_condition_name(&mode.name, 2, i, j), r2, eps)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// How often the fault-blind co-design's refusal halves h_max looking for
+/// an interval it solves (down to h_max / 2^6).
+pub const CODESIGN_HALVINGS: u32 = 6;
+
+/// The refusal of a fault-blind sampled design whose co-design was not
+/// solved at `sampling` (the search's `message`), with advice: the halved
+/// h_max at which it was (`found`), checked by the analysis of [`build`].
+pub(super) fn codesign_refusal(
+    runner: &mut Runner<'_>,
+    modes: &Modes,
+    sampling: (f64, f64),
+    message: &str,
+    found: Option<(f64, super::Solved)>,
+) -> SynthError {
+    let deltas = CODESIGN_DELTAS.map(|d| d.to_string()).join(", ");
+    let message = format!(
+        "no fault-blind gains were found for the sampled loop at h_max = {} s: the continuous conditions with the sampled-loop conditions in descriptor form (one X, delta in [{deltas}]) were infeasible or the solver stopped ({message})",
+        sampling.1
+    );
+    let advice = match found {
+        None => format!(
+            "no co-design solved down to h_max = {} s either: use `design = mode_dependent;`, weaken the objectives, or shorten the sampling further",
+            sampling.1 / f64::from(1u32 << CODESIGN_HALVINGS)
+        ),
+        Some((h, s)) => {
+            let at = (sampling.0.min(h), h);
+            let write = write_sampling(sampling, h);
+            match certify_loop(runner, modes, &s.modes, at) {
+                Ok(_) => format!("the co-design is solved and certified at h_max = {h} s: write {write} (certified)"),
+                Err(_) => format!("the co-design is solved at h_max = {h} s but its analysis did not certify: shorten the sampling below {h} s"),
+            }
+        }
+    };
+    SynthError::Infeasible {
+        message,
+        achievable: vec![advice],
+    }
+}
+
 /// What the certificate covers, in words (report and notes).
 pub fn covers(sampling: (f64, f64)) -> String {
     let (lo, hi) = sampling;
@@ -281,10 +446,14 @@ pub(in crate::synth) fn certify_loop(
     } else {
         format!("sampling intervals in [{}, {}] s", sampling.0, sampling.1)
     };
+    let gains = match md.design {
+        tsf_lang::modes::ModeDesign::Dependent => "the gains of the continuous mode design",
+        tsf_lang::modes::ModeDesign::Independent => "the co-designed fault-blind gains",
+    };
     let reach = longest_scale_from_above(|s| Ok(attempt(runner, modes, md, at(s))?.is_some()))?;
     let Some(reach) = reach else {
         return Err(SynthError::Infeasible {
-            message: format!("the sampled loop is not certified: the gains of the continuous mode design are not certified for {what}, nor for any interval down to 1/1024 of it (halved from 1/2)"),
+            message: format!("the sampled loop is not certified: {gains} are not certified for {what}, nor for any interval down to 1/1024 of it (halved from 1/2)"),
             achievable: vec!["weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger".into()],
         });
     };
@@ -308,7 +477,7 @@ pub(in crate::synth) fn certify_loop(
         "no short value re-solved as certified: shorten the sampling further".into()
     };
     Err(SynthError::Infeasible {
-        message: format!("the sampled loop is not certified: the gains of the continuous mode design are not certified for {what} under the Markov chain"),
+        message: format!("the sampled loop is not certified: {gains} are not certified for {what} under the Markov chain"),
         achievable: vec![format!(
             "the longest certified sampling interval is about {:.4} s: {write}, or weaken the objectives that set the gains",
             sampling.1 * reach
