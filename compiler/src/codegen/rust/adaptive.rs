@@ -6,7 +6,7 @@
 //! only hands arrays to the runtime.
 
 use super::tokens::{array, float, matrix};
-use super::{premise_imports, unparse, Premises, Rules};
+use super::{dimension_consts, premise_imports, unparse, Premises, Rules};
 use crate::codegen::header::generated_lines;
 use crate::codegen::CodegenError;
 use crate::tables::AdaptiveTables;
@@ -30,13 +30,7 @@ pub fn emit_rust_adaptive(at: &AdaptiveTables) -> Result<String, CodegenError> {
     let t = &at.base;
     let ad = &at.design;
     let f = |v: &[f64]| array(v, Precision::F64);
-    let (n, m, p, r, d) = (
-        Literal::usize_unsuffixed(t.n),
-        Literal::usize_unsuffixed(t.m),
-        Literal::usize_unsuffixed(t.p),
-        Literal::usize_unsuffixed(t.r),
-        Literal::usize_unsuffixed(t.factored.terms.len()),
-    );
+    let dims = dimension_consts(t, " Number of inputs (= error-signal components).");
     let Rules {
         statics,
         terms,
@@ -75,16 +69,7 @@ pub fn emit_rust_adaptive(at: &AdaptiveTables) -> Result<String, CodegenError> {
     let tokens = quote! {
         use tsf_runtime::{#(#imports),*};
 
-        /// Number of states.
-        pub const N: usize = #n;
-        /// Number of inputs (= error-signal components).
-        pub const M: usize = #m;
-        /// Number of premise variables.
-        pub const P: usize = #p;
-        /// Number of rules.
-        pub const R: usize = #r;
-        /// Number of distinct premise terms (each evaluated once per step).
-        pub const D: usize = #d;
+        #dims
         /// The controller period in seconds: call `step` once every
         /// `SAMPLE_PERIOD` and hold its command in between; the update laws
         /// are integrated over this period (the spec's simulation step).

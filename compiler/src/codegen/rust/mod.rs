@@ -68,18 +68,12 @@ fn unparse(tokens: TokenStream) -> Result<String, CodegenError> {
 pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     let prec = t.precision;
     let ty = real_ty(prec);
-    let (n, m, p, r) = (
-        Literal::usize_unsuffixed(t.n),
-        Literal::usize_unsuffixed(t.m),
-        Literal::usize_unsuffixed(t.p),
-        Literal::usize_unsuffixed(t.r),
-    );
     let Rules {
         statics,
         terms: term_items,
         rules: rule_refs,
     } = Rules::of(t);
-    let d = Literal::usize_unsuffixed(t.factored.terms.len());
+    let dims = dimension_consts(t, " Number of inputs.");
     let modal = Modal::of(t);
     let mode_arg = modal.as_ref().map(|_| quote!(mode,));
     let Premises {
@@ -158,16 +152,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     let tokens = quote! {
         use tsf_runtime::{#(#imports),*};
 
-        /// Number of states.
-        pub const N: usize = #n;
-        /// Number of inputs.
-        pub const M: usize = #m;
-        /// Number of premise variables.
-        pub const P: usize = #p;
-        /// Number of rules.
-        pub const R: usize = #r;
-        /// Number of distinct premise terms (each evaluated once per step).
-        pub const D: usize = #d;
+        #dims
         #mode_consts
         #sampling
 
@@ -357,6 +342,26 @@ impl Premises {
                 }
             }
         }
+    }
+}
+
+/// The dimension constants `N, M, P, R, D` of a generated module; `m_doc` is
+/// `M`'s doc line (with its leading space, as `///` writes it).
+fn dimension_consts(t: &Tables, m_doc: &str) -> TokenStream {
+    let lit = Literal::usize_unsuffixed;
+    let (n, m, p) = (lit(t.n), lit(t.m), lit(t.p));
+    let (r, d) = (lit(t.r), lit(t.factored.terms.len()));
+    quote! {
+        /// Number of states.
+        pub const N: usize = #n;
+        #[doc = #m_doc]
+        pub const M: usize = #m;
+        /// Number of premise variables.
+        pub const P: usize = #p;
+        /// Number of rules.
+        pub const R: usize = #r;
+        /// Number of distinct premise terms (each evaluated once per step).
+        pub const D: usize = #d;
     }
 }
 
