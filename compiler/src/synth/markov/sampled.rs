@@ -56,7 +56,7 @@ use crate::synth::search::Runner;
 use nalgebra::DMatrix;
 use tsf_lang::modes::Modes;
 use tsf_lang::spec::Trigger;
-use tsf_lmi::{Expr, LmiError, Problem, SolveStatus};
+use tsf_lmi::{Expr, LmiError, Problem, SolveStatus, Var};
 
 /// The certified sampled loop of a mode design.
 #[derive(Debug, Clone)]
@@ -113,6 +113,44 @@ pub fn condition_name(mode: &str, r: u8, i: usize, j: usize, h: f64) -> String {
     format!("mode {mode} sampled r={r} h={h} Q[{},{}]", i + 1, j + 1)
 }
 
+/// Names of the looped functional's unknowns: P_a and the two free matrices
+/// per mode, the common Y, and the names of their positivity conditions.
+struct UnknownNames {
+    p: fn(&str) -> String,
+    l: [fn(&str) -> String; 2],
+    y: &'static str,
+    p_psd: fn(&str) -> String,
+    y_psd: &'static str,
+}
+
+/// P_a and [L1_a, L2_a] per mode, and the common Y.
+type ModeVars = (Vec<Var>, Vec<[Var; 2]>, Var);
+
+/// The unknowns P_a, [L1_a, L2_a] (one per mode) and Y, with P_a > 0 and Y > 0.
+fn mode_unknowns(
+    problem: &mut Problem,
+    modes: &Modes,
+    n: usize,
+    eps: f64,
+    names: &UnknownNames,
+) -> Result<ModeVars, LmiError> {
+    let mut p = Vec::new();
+    let mut l = Vec::new();
+    for mode in &modes.modes {
+        p.push(problem.symmetric(&(names.p)(&mode.name), n)?);
+        l.push([
+            problem.full(&(names.l[0])(&mode.name), n, n)?,
+            problem.full(&(names.l[1])(&mode.name), n, n)?,
+        ]);
+    }
+    let y = problem.symmetric(names.y, n)?;
+    for (a, mode) in modes.modes.iter().enumerate() {
+        problem.psd(&(names.p_psd)(&mode.name), Expr::var(p[a]), eps)?;
+    }
+    problem.psd(names.y_psd, Expr::var(y), eps)?;
+    Ok((p, l, y))
+}
+
 /// The sampled-loop LMIs for `gains` (per mode, per rule) and intervals
 /// `sampling`: P_a > 0, Y > 0, and r = 1, 2 for every mode and rule pair at
 /// h_max and (unless `reduce`, or h_min = h_max) at h_min, which h_max implies.
@@ -127,24 +165,19 @@ pub fn build(
     let n = model.n;
     let k = 2 * n;
     let mut problem = Problem::new();
-    let mut p = Vec::new();
-    let mut l = Vec::new();
-    for mode in &modes.modes {
-        p.push(problem.symmetric(&names::p(&mode.name), n)?);
-        l.push([
-            problem.full(&names::l1(&mode.name), n, n)?,
-            problem.full(&names::l2(&mode.name), n, n)?,
-        ]);
-    }
-    let y = problem.symmetric(names::Y, n)?;
-    for (a, mode) in modes.modes.iter().enumerate() {
-        problem.psd(
-            &format!("sampled P_{} > 0", mode.name),
-            Expr::var(p[a]),
-            eps,
-        )?;
-    }
-    problem.psd("sampled Y > 0", Expr::var(y), eps)?;
+    let (p, l, y) = mode_unknowns(
+        &mut problem,
+        modes,
+        n,
+        eps,
+        &UnknownNames {
+            p: names::p,
+            l: [names::l1, names::l2],
+            y: names::Y,
+            p_psd: |m| format!("sampled P_{m} > 0"),
+            y_psd: "sampled Y > 0",
+        },
+    )?;
     let ex = DMatrix::identity(n, k);
     let es = DMatrix::from_fn(n, k, |row, col| if col == n + row { 1.0 } else { 0.0 });
     let exs = &ex - &es;
@@ -254,24 +287,19 @@ pub fn add_codesign(
     let (ex, ed, es) = (sel(0), sel(1), sel(2));
     let exs = &ex - &es;
     let id = DMatrix::identity(n, n);
-    let mut p = Vec::new();
-    let mut l = Vec::new();
-    for mode in &modes.modes {
-        p.push(problem.symmetric(&codesign_names::p(&mode.name), n)?);
-        l.push([
-            problem.full(&codesign_names::n1(&mode.name), n, n)?,
-            problem.full(&codesign_names::n3(&mode.name), n, n)?,
-        ]);
-    }
-    let y = problem.symmetric(codesign_names::Y, n)?;
-    for (a, mode) in modes.modes.iter().enumerate() {
-        problem.psd(
-            &format!("sampled co-design X'P_{}X > 0", mode.name),
-            Expr::var(p[a]),
-            eps,
-        )?;
-    }
-    problem.psd("sampled co-design X'YX > 0", Expr::var(y), eps)?;
+    let (p, l, y) = mode_unknowns(
+        problem,
+        modes,
+        n,
+        eps,
+        &UnknownNames {
+            p: codesign_names::p,
+            l: [codesign_names::n1, codesign_names::n3],
+            y: codesign_names::Y,
+            p_psd: |m| format!("sampled co-design X'P_{m}X > 0"),
+            y_psd: "sampled co-design X'YX > 0",
+        },
+    )?;
     // (E_x' + delta E_d'): where the descriptor multiplier enters.
     let mult = ex.transpose() + ed.transpose() * delta;
     let dy = Expr::product(&ed.transpose(), y, &ed)?.scale(h)?;
