@@ -428,7 +428,9 @@ pub(super) fn impose(
             }
         }
     }
-    // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi.
+    // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi:
+    // [P, r'; r, u_bar_s^2 / c] >= 0, solved as [P, k r'; k r, 1] >= 0 with k = sqrt(c) / u_bar_s
+    // (the congruence diag(I, k); entries of one size when the gains are large).
     let level = if plan.linf {
         1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi
     } else {
@@ -439,8 +441,9 @@ pub(super) fn impose(
             let pick_s = pick(1, s, model.m);
             let row = vars.gains[j]
                 .between(&pick_s, &DMatrix::identity(n, n))?
-                .sub(vars.sector[j].between(&pick_s, &DMatrix::identity(n, n))?)?;
-            let rhs = Expr::constant(&DMatrix::from_element(1, 1, ub * ub / level))?;
+                .sub(vars.sector[j].between(&pick_s, &DMatrix::identity(n, n))?)?
+                .scale(level.sqrt() / ub)?;
+            let rhs = Expr::constant(&DMatrix::identity(1, 1))?;
             let e = region_block(vars.p.expr()?, row, rhs)?;
             nonstrict_psd(
                 &mut problem,
@@ -612,6 +615,71 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     })
 }
 
+/// Largest scale [`lyapunov_scale`] returns.
+const MAX_LYAPUNOV_SCALE: f64 = 1e12;
+
+/// The scale sigma >= 1 of the trigger step's Lyapunov unknowns: the linear
+/// region forces P >= (c / u_bar_s^2) r' r for every row r = (F_j - G_j)_s
+/// (c the region level), so with large gains P, Y, L1, L2, Upsilon, T are of
+/// that size while xi and gamma stay near 1; the SDP is then badly scaled and
+/// the solver crawls. 1 without a linear region or with initial sets.
+pub fn lyapunov_scale(plan: &TriggerPlan) -> f64 {
+    if !plan.contain.is_empty() {
+        return 1.0;
+    }
+    let level = if plan.linf {
+        1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi
+    } else {
+        1.0
+    };
+    let mut sigma = 1.0f64;
+    for (f, g) in plan.gains.iter().zip(&plan.sector) {
+        for (s, ub) in plan.levels.iter().enumerate() {
+            let row = (f - g).row(s).norm_squared();
+            sigma = sigma.max(level * row / (ub * ub));
+        }
+    }
+    if sigma.is_finite() {
+        sigma.min(MAX_LYAPUNOV_SCALE)
+    } else {
+        1.0
+    }
+}
+
+/// The trigger problem for P = sigma P~ (and Y, L1, L2, Upsilon, T alike; xi
+/// and gamma unchanged), exact: Lambda_{ij r}(h) of `plan` equals, by the
+/// congruence diag(sqrt(sigma) I, I_tau, sqrt(sigma) I), sigma times that of
+/// the returned plan with the disturbance columns D_i scaled by sqrt(sigma);
+/// the region LMI [P, r'; r, u_bar^2 / c] is [P~, r'; r, sigma u_bar^2 / c]
+/// by diag(sigma^-1/2, sigma^1/2), so u_bar is scaled by sqrt(sigma); the peak
+/// LMI [phi P, 0, C'; *, (gamma - xi) I, G'; *, *, gamma I] takes C / sqrt(sigma)
+/// by diag(sigma^-1/2 I, I, I). Each congruence maps a margin eps of the scaled
+/// problem to a margin of at least eps (sigma >= 1), and the certificate
+/// re-checks the unscaled values against `plan` anyway. Initial sets are not
+/// scaled ([`lyapunov_scale`] is 1 with them).
+pub fn scaled_plan(plan: &TriggerPlan, sigma: f64) -> TriggerPlan {
+    if sigma == 1.0 {
+        return plan.clone();
+    }
+    let root = sigma.sqrt();
+    TriggerPlan {
+        d: plan.d.iter().map(|d| d * root).collect(),
+        levels: plan.levels.iter().map(|u| u * root).collect(),
+        c: &plan.c / root,
+        ..plan.clone()
+    }
+}
+
+/// The values of a problem solved for [`scaled_plan`] in the units of the
+/// original plan: every unknown but gamma and xi times sigma.
+fn unscale_values(values: &mut [(String, DMatrix<f64>)], sigma: f64) {
+    for (name, v) in values.iter_mut() {
+        if name != "gamma_tr" && name != "xi_tr" {
+            *v *= sigma;
+        }
+    }
+}
+
 /// xi of the event-triggered loop may be up to this multiple of step 1's xi
 /// (the region level 1 + xi tau_bar^2 / phi is computed with the bound).
 pub const XI_FACTOR: f64 = 4.0;
@@ -648,13 +716,18 @@ impl Runner<'_> {
     }
 
     /// One trigger SDP at threshold `nu`: the design, or None when not solved.
+    /// The SDP is solved in scaled units ([`lyapunov_scale`], [`scaled_plan`]);
+    /// the design holds the values in the units of `plan`.
     pub(super) fn trigger_attempt(
         &mut self,
         plan: &TriggerPlan,
     ) -> Result<Option<TriggerDesign>, SynthError> {
-        let Some((built, all)) = self.solve_looped(plan, "trigger problem")? else {
+        let sigma = lyapunov_scale(plan);
+        let solved = scaled_plan(plan, sigma);
+        let Some((built, mut all)) = self.solve_looped(&solved, "trigger problem")? else {
             return Ok(None);
         };
+        unscale_values(&mut all, sigma);
         Ok(Some(TriggerDesign {
             plan: plan.clone(),
             method: "two_step",
