@@ -285,6 +285,59 @@ fn distinct_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
         .collect()
 }
 
+/// Relative tolerance of [`on_segment`] (rounding of the rule matrices).
+const SEGMENT_TOL: f64 = 1e-12;
+
+/// Whether `x` lies on the segment from `a` to `b` (to rounding).
+fn on_segment(x: &[f64], a: &[f64], b: &[f64]) -> bool {
+    let dot = |u: &mut dyn Iterator<Item = (f64, f64)>| u.map(|(p, q)| p * q).sum::<f64>();
+    let d: Vec<f64> = b.iter().zip(a).map(|(p, q)| p - q).collect();
+    let xa: Vec<f64> = x.iter().zip(a).map(|(p, q)| p - q).collect();
+    let dd = dot(&mut d.iter().copied().zip(d.iter().copied()));
+    if dd == 0.0 {
+        return false;
+    }
+    let t = dot(&mut xa.iter().copied().zip(d.iter().copied())) / dd;
+    let scale = [x, a, b]
+        .iter()
+        .flat_map(|v| v.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let off = xa
+        .iter()
+        .zip(&d)
+        .fold(0.0f64, |m, (p, q)| m.max((p - t * q).abs()));
+    (-SEGMENT_TOL..=1.0 + SEGMENT_TOL).contains(&t) && off <= SEGMENT_TOL * scale.max(1.0)
+}
+
+/// The plant rules the solved trigger problem keeps: the representatives of
+/// [`distinct_plant_rules`] less every rule whose (A_i, B_i, D_i) lies on the
+/// segment between two rules still kept. x' = Phi_ij psi is affine in
+/// (A_i, B_i, D_i), Xi is affine in Phi and h Phi' Y Phi is matrix-convex in Phi
+/// (Y > 0), so Lambda_{ij r}(h) at a convex combination is at most the same
+/// combination of the kept ones: the left-out conditions are implied, with at
+/// least their margin. Removing one at a time keeps the convex hull of the
+/// kept rules (Xu & Huang: R1 is the midpoint of R4, R5 and R2 of R6, R7).
+fn kept_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
+    let data = |i: usize| -> Vec<f64> {
+        let rule = &model.rules[i];
+        let d = plan.d.get(i).map_or(&[][..], |d| d.as_slice());
+        [rule.a.as_slice(), rule.b.as_slice(), d].concat()
+    };
+    let mut kept = distinct_plant_rules(model, plan);
+    let points: Vec<Vec<f64>> = (0..model.r()).map(data).collect();
+    while let Some(at) = kept.iter().position(|&i| {
+        let others: Vec<usize> = kept.iter().copied().filter(|&k| k != i).collect();
+        others.iter().enumerate().any(|(u, &k)| {
+            others[u + 1..]
+                .iter()
+                .any(|&l| on_segment(&points[i], &points[k], &points[l]))
+        })
+    }) {
+        kept.remove(at);
+    }
+    kept
+}
+
 /// Representatives of the controller rules whose gains (F_j, G_j) differ:
 /// known gains equal bit for bit, or the same unknown.
 fn distinct_controller_rules(v: &LoopVars<'_>) -> Vec<usize> {
@@ -403,18 +456,23 @@ pub(super) fn impose(
     }
     let (plant, ctrl) = if reduce {
         (
-            distinct_plant_rules(model, plan),
+            kept_plant_rules(model, plan),
             distinct_controller_rules(&vars),
         )
     } else {
         ((0..r).collect(), (0..r).collect())
     };
     if plant.len() * ctrl.len() < r * r {
+        let distinct = if reduce {
+            distinct_plant_rules(model, plan).len()
+        } else {
+            r
+        };
         reductions.push(Reduction::Implied(format!(
-            "trigger: {} of the {} rule pairs per condition repeat kept ones (plant rules with the same A_i, B_i, D_i: {} distinct; controller rules with the same F_j, G_j: {} distinct) and are left out of the solved problem; the certificate checks them",
+            "trigger: {} of the {} rule pairs per condition repeat kept ones or are implied by them (plant rules with the same A_i, B_i, D_i: {distinct} distinct, of which {} lie on a segment between two kept ones, where Lambda is convex in (A_i, B_i, D_i); controller rules with the same F_j, G_j: {} distinct) and are left out of the solved problem; the certificate checks them",
             r * r - plant.len() * ctrl.len(),
             r * r,
-            plant.len(),
+            distinct - plant.len(),
             ctrl.len()
         )));
     }
