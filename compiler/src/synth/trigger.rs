@@ -907,3 +907,23 @@ pub(super) fn named(
         .map(|(_, v)| v.clone())
         .ok_or_else(|| SynthError::Internal(format!("internal error: `{name}` has no value")))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::on_segment;
+
+    #[test]
+    fn on_segment_accepts_points_of_the_segment_only() {
+        let (a, b) = ([1.0, -2.0, 0.5], [3.0, 2.0, 0.5]);
+        assert!(on_segment(&[2.0, 0.0, 0.5], &a, &b));
+        assert!(on_segment(&a, &a, &b));
+        assert!(on_segment(&[2.5, 1.0, 0.5], &a, &b));
+        // on the line, outside the segment
+        assert!(!on_segment(&[4.0, 4.0, 0.5], &a, &b));
+        assert!(!on_segment(&[0.0, -4.0, 0.5], &a, &b));
+        // off the line by 1e-9 relative
+        assert!(!on_segment(&[2.0, 0.0, 0.5 + 1e-9], &a, &b));
+        // a degenerate segment
+        assert!(!on_segment(&a, &a, &a));
+    }
+}
