@@ -154,6 +154,17 @@ impl Runner<'_> {
 
     /// Solves one SDP within the memory budget and logs it.
     pub fn solve(&mut self, problem: &Problem, what: &str) -> Result<Solution, SynthError> {
+        let settings = self.settings.solver.clone();
+        self.solve_with(problem, what, &settings)
+    }
+
+    /// [`Runner::solve`] with other solver settings.
+    pub fn solve_with(
+        &mut self,
+        problem: &Problem,
+        what: &str,
+        settings: &tsf_lmi::SolveSettings,
+    ) -> Result<Solution, SynthError> {
         let estimate = problem.memory_estimate();
         if estimate > self.settings.memory_limit {
             return Err(SynthError::TooLarge {
@@ -166,7 +177,7 @@ impl Runner<'_> {
         }
         self.log.memory_estimate = self.log.memory_estimate.max(estimate);
         let sol = problem
-            .solve(&self.settings.solver)
+            .solve(settings)
             .map_err(|e| SynthError::Internal(format!("solver refused the {what}: {e}")))?;
         self.log.solves += 1;
         self.log.last_status = Some(sol.status);
