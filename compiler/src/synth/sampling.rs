@@ -173,7 +173,7 @@ pub(super) fn write_sampling(sampling: (f64, f64), advice: f64) -> String {
 impl Runner<'_> {
     /// One sampled-loop SDP: the design, or None when not solved.
     fn sampled_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<SampledDesign>, SynthError> {
-        let Some((built, all)) = self.solve_looped(plan, "sampled-loop problem")? else {
+        let Some((built, all)) = self.solve_looped(plan, "sampled-loop problem", None)? else {
             return Ok(None);
         };
         Ok(Some(SampledDesign {

@@ -18,6 +18,10 @@ const XI_CAP_REL: f64 = 1e-6;
 const XI_HINT_LEVEL_FACTOR: f64 = 1.1;
 /// After a feasible xi from the hint, xi times this is tried next.
 const XI_PROBE: f64 = 0.9;
+/// The design's fixed xi is the minimum of xi times 1 + this: at the minimum
+/// itself the gains leave no room for sampling (the Xu & Huang trigger step is
+/// infeasible for them) and fixed-xi solves within ~0.4 % of it stall.
+const XI_MARGIN_REL: f64 = 5e-3;
 
 /// (largest feasible, smallest infeasible) value found by a bisection.
 pub(super) type Bracket = (f64, f64);
@@ -150,6 +154,17 @@ impl Runner<'_> {
 
     /// Solves one SDP within the memory budget and logs it.
     pub fn solve(&mut self, problem: &Problem, what: &str) -> Result<Solution, SynthError> {
+        let settings = self.settings.solver.clone();
+        self.solve_with(problem, what, &settings)
+    }
+
+    /// [`Runner::solve`] with other solver settings.
+    pub fn solve_with(
+        &mut self,
+        problem: &Problem,
+        what: &str,
+        settings: &tsf_lmi::SolveSettings,
+    ) -> Result<Solution, SynthError> {
         let estimate = problem.memory_estimate();
         if estimate > self.settings.memory_limit {
             return Err(SynthError::TooLarge {
@@ -162,7 +177,7 @@ impl Runner<'_> {
         }
         self.log.memory_estimate = self.log.memory_estimate.max(estimate);
         let sol = problem
-            .solve(&self.settings.solver)
+            .solve(settings)
             .map_err(|e| SynthError::Internal(format!("solver refused the {what}: {e}")))?;
         self.log.solves += 1;
         self.log.last_status = Some(sol.status);
@@ -208,14 +223,18 @@ impl Runner<'_> {
         Ok(Some((best, (lo, hi))))
     }
 
-    /// Smallest fixed xi for which `plan` is feasible (L-inf with saturation and
-    /// a bounded disturbance, where xi enters the linear-region level), by
-    /// bisection. The bracket is placed by one SDP that minimizes xi with the
-    /// level computed at a bound (see [`Runner::xi_hint`]); a step of
-    /// [`XI_PROBE`] below the first feasible xi usually closes it from below.
-    /// Without a hint the bracket grows from 1e-3. Every design returned is
-    /// solved at a fixed xi. (design, (largest infeasible, smallest feasible)).
-    fn min_xi(&mut self, plan: &Plan, tau: f64) -> Result<Option<(Design, Bracket)>, SynthError> {
+    /// Smallest fixed xi for which `plan` is feasible, to a margin (L-inf with
+    /// saturation and a bounded disturbance, where xi enters the linear-region
+    /// level). Two SDPs minimize xi with xi an unknown and the level computed
+    /// at a bound ([`Runner::xi_hint`]): first at the loose bound of level factor
+    /// [`XI_HINT_LEVEL_FACTOR`], then at that minimum times 1 + tol; the design
+    /// is solved with xi fixed at the second minimum times 1 + [`XI_MARGIN_REL`]
+    /// (three SDPs instead of a bisection). When that does not solve, xi is
+    /// bisected with xi fixed: the bracket grows from 1e-3 (or from the first
+    /// minimum with a probe of [`XI_PROBE`] below it) and halves to
+    /// `bisection_rel_tol`. Every design returned is solved at a fixed xi.
+    /// (design, note).
+    fn min_xi(&mut self, plan: &Plan, tau: f64) -> Result<Option<(Design, String)>, SynthError> {
         let with = |xi: f64| {
             let mut p = plan.clone();
             if let Some(l) = p.get_mut::<Linf>() {
@@ -231,7 +250,21 @@ impl Runner<'_> {
             _ => 1e8,
         };
         let tol = self.settings.bisection_rel_tol;
-        let hint = self.xi_hint(plan, cap, tau)?;
+        let Some(linf) = plan.get::<Linf>() else {
+            return Ok(None);
+        };
+        let first_bound = ((XI_HINT_LEVEL_FACTOR - 1.0) * linf.phi / (tau * tau)).min(cap);
+        let hint = self.xi_hint(plan, first_bound, tau)?;
+        if let Some(h1) = hint {
+            let bound = (h1 * (1.0 + tol)).min(cap);
+            if let Some(h2) = self.xi_hint(plan, bound, tau)? {
+                let xi = (h2 * (1.0 + XI_MARGIN_REL)).min(cap);
+                if let Attempt::Solved(d) = self.attempt(&with(xi))? {
+                    let note = format!("xi minimized (the linear-region level depends on it): the smallest xi with the level computed at xi <= {bound:.6} is {h2:.6} (at xi <= {first_bound:.6}: {h1:.6}); designed with xi fixed at {xi:.6} (margin {XI_MARGIN_REL})");
+                    return Ok(Some((*d, note)));
+                }
+            }
+        }
         let mut candidates: Vec<f64> = hint
             .map(|h| (h * (1.0 + tol)).min(cap))
             .into_iter()
@@ -281,22 +314,20 @@ impl Runner<'_> {
                 Attempt::Infeasible | Attempt::Trouble(_) => lo = mid,
             }
         }
-        Ok(Some((best, (lo, hi))))
+        let note = format!("xi minimized by bisection (the linear-region level depends on it): feasible at {hi:.6}, not at {lo:.6}");
+        Ok(Some((best, note)))
     }
 
     /// One SDP that minimizes xi with the linear-region level computed at the
-    /// bound xi <= xi_bar (level factor [`XI_HINT_LEVEL_FACTOR`]); its xi only
-    /// places the bisection's bracket, so an `AlmostSolved` iterate is taken.
-    fn xi_hint(&mut self, plan: &Plan, cap: f64, tau: f64) -> Result<Option<f64>, SynthError> {
-        let Some(linf) = plan.get::<Linf>() else {
-            return Ok(None);
-        };
-        if tau <= 0.0 {
+    /// bound xi <= `bound`; its xi places the search, so an `AlmostSolved`
+    /// iterate is taken.
+    fn xi_hint(&mut self, plan: &Plan, bound: f64, tau: f64) -> Result<Option<f64>, SynthError> {
+        if plan.get::<Linf>().is_none() || tau <= 0.0 {
             return Ok(None);
         }
         let mut p = plan.clone();
         if let Some(l) = p.get_mut::<Linf>() {
-            l.xi_bound = Some(((XI_HINT_LEVEL_FACTOR - 1.0) * linf.phi / (tau * tau)).min(cap));
+            l.xi_bound = Some(bound);
             l.minimize_xi = true;
         }
         let keep = std::mem::replace(&mut self.accept_almost, true);
@@ -336,8 +367,8 @@ impl Runner<'_> {
                 .get::<super::objectives::Saturation>()
                 .and_then(|s| s.disturbance_bound)
                 .unwrap_or(0.0);
-            return Ok(self.min_xi(plan, tau)?.map(|(mut d, (lo, hi))| {
-                d.notes.push(format!("xi minimized by bisection (the linear-region level depends on it): feasible at {hi:.6}, not at {lo:.6}"));
+            return Ok(self.min_xi(plan, tau)?.map(|(mut d, note)| {
+                d.notes.push(note);
                 d
             }));
         }

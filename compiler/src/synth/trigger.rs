@@ -285,6 +285,59 @@ fn distinct_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
         .collect()
 }
 
+/// Relative tolerance of [`on_segment`] (rounding of the rule matrices).
+const SEGMENT_TOL: f64 = 1e-12;
+
+/// Whether `x` lies on the segment from `a` to `b` (to rounding).
+fn on_segment(x: &[f64], a: &[f64], b: &[f64]) -> bool {
+    let dot = |u: &mut dyn Iterator<Item = (f64, f64)>| u.map(|(p, q)| p * q).sum::<f64>();
+    let d: Vec<f64> = b.iter().zip(a).map(|(p, q)| p - q).collect();
+    let xa: Vec<f64> = x.iter().zip(a).map(|(p, q)| p - q).collect();
+    let dd = dot(&mut d.iter().copied().zip(d.iter().copied()));
+    if dd == 0.0 {
+        return false;
+    }
+    let t = dot(&mut xa.iter().copied().zip(d.iter().copied())) / dd;
+    let scale = [x, a, b]
+        .iter()
+        .flat_map(|v| v.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let off = xa
+        .iter()
+        .zip(&d)
+        .fold(0.0f64, |m, (p, q)| m.max((p - t * q).abs()));
+    (-SEGMENT_TOL..=1.0 + SEGMENT_TOL).contains(&t) && off <= SEGMENT_TOL * scale.max(1.0)
+}
+
+/// The plant rules the solved trigger problem keeps: the representatives of
+/// [`distinct_plant_rules`] less every rule whose (A_i, B_i, D_i) lies on the
+/// segment between two rules still kept. x' = Phi_ij psi is affine in
+/// (A_i, B_i, D_i), Xi is affine in Phi and h Phi' Y Phi is matrix-convex in Phi
+/// (Y > 0), so Lambda_{ij r}(h) at a convex combination is at most the same
+/// combination of the kept ones: the left-out conditions are implied, with at
+/// least their margin. Removing one at a time keeps the convex hull of the
+/// kept rules (Xu & Huang: R1 is the midpoint of R4, R5 and R2 of R6, R7).
+fn kept_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
+    let data = |i: usize| -> Vec<f64> {
+        let rule = &model.rules[i];
+        let d = plan.d.get(i).map_or(&[][..], |d| d.as_slice());
+        [rule.a.as_slice(), rule.b.as_slice(), d].concat()
+    };
+    let mut kept = distinct_plant_rules(model, plan);
+    let points: Vec<Vec<f64>> = (0..model.r()).map(data).collect();
+    while let Some(at) = kept.iter().position(|&i| {
+        let others: Vec<usize> = kept.iter().copied().filter(|&k| k != i).collect();
+        others.iter().enumerate().any(|(u, &k)| {
+            others[u + 1..]
+                .iter()
+                .any(|&l| on_segment(&points[i], &points[k], &points[l]))
+        })
+    }) {
+        kept.remove(at);
+    }
+    kept
+}
+
 /// Representatives of the controller rules whose gains (F_j, G_j) differ:
 /// known gains equal bit for bit, or the same unknown.
 fn distinct_controller_rules(v: &LoopVars<'_>) -> Vec<usize> {
@@ -403,18 +456,23 @@ pub(super) fn impose(
     }
     let (plant, ctrl) = if reduce {
         (
-            distinct_plant_rules(model, plan),
+            kept_plant_rules(model, plan),
             distinct_controller_rules(&vars),
         )
     } else {
         ((0..r).collect(), (0..r).collect())
     };
     if plant.len() * ctrl.len() < r * r {
+        let distinct = if reduce {
+            distinct_plant_rules(model, plan).len()
+        } else {
+            r
+        };
         reductions.push(Reduction::Implied(format!(
-            "trigger: {} of the {} rule pairs per condition repeat kept ones (plant rules with the same A_i, B_i, D_i: {} distinct; controller rules with the same F_j, G_j: {} distinct) and are left out of the solved problem; the certificate checks them",
+            "trigger: {} of the {} rule pairs per condition repeat kept ones or are implied by them (plant rules with the same A_i, B_i, D_i: {distinct} distinct, of which {} lie on a segment between two kept ones, where Lambda is convex in (A_i, B_i, D_i); controller rules with the same F_j, G_j: {} distinct) and are left out of the solved problem; the certificate checks them",
             r * r - plant.len() * ctrl.len(),
             r * r,
-            plant.len(),
+            distinct - plant.len(),
             ctrl.len()
         )));
     }
@@ -428,7 +486,9 @@ pub(super) fn impose(
             }
         }
     }
-    // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi.
+    // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi:
+    // [P, r'; r, u_bar_s^2 / c] >= 0, solved as [P, k r'; k r, 1] >= 0 with k = sqrt(c) / u_bar_s
+    // (the congruence diag(I, k); entries of one size when the gains are large).
     let level = if plan.linf {
         1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi
     } else {
@@ -439,8 +499,9 @@ pub(super) fn impose(
             let pick_s = pick(1, s, model.m);
             let row = vars.gains[j]
                 .between(&pick_s, &DMatrix::identity(n, n))?
-                .sub(vars.sector[j].between(&pick_s, &DMatrix::identity(n, n))?)?;
-            let rhs = Expr::constant(&DMatrix::from_element(1, 1, ub * ub / level))?;
+                .sub(vars.sector[j].between(&pick_s, &DMatrix::identity(n, n))?)?
+                .scale(level.sqrt() / ub)?;
+            let rhs = Expr::constant(&DMatrix::identity(1, 1))?;
             let e = region_block(vars.p.expr()?, row, rhs)?;
             nonstrict_psd(
                 &mut problem,
@@ -612,6 +673,77 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     })
 }
 
+/// Duality-gap tolerance (relative and absolute) of the trigger step's SDP:
+/// gamma is the objective, so the gap bounds its excess (1e-7 of ~0.6 on Xu
+/// & Huang, 3 of 30 iterations saved); feasibility keeps the solver's tolerance
+/// and the certificate re-checks every LMI with its margin.
+const TRIGGER_GAP_TOL: f64 = 1e-7;
+
+/// Largest scale [`lyapunov_scale`] returns.
+const MAX_LYAPUNOV_SCALE: f64 = 1e12;
+
+/// The scale sigma >= 1 of the trigger step's Lyapunov unknowns: the linear
+/// region forces P >= (c / u_bar_s^2) r' r for every row r = (F_j - G_j)_s
+/// (c the region level), so with large gains P, Y, L1, L2, Upsilon, T are of
+/// that size while xi and gamma stay near 1; the SDP is then badly scaled and
+/// the solver crawls. 1 without a linear region or with initial sets.
+pub fn lyapunov_scale(plan: &TriggerPlan) -> f64 {
+    if !plan.contain.is_empty() {
+        return 1.0;
+    }
+    let level = if plan.linf {
+        1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi
+    } else {
+        1.0
+    };
+    let mut sigma = 1.0f64;
+    for (f, g) in plan.gains.iter().zip(&plan.sector) {
+        for (s, ub) in plan.levels.iter().enumerate() {
+            let row = (f - g).row(s).norm_squared();
+            sigma = sigma.max(level * row / (ub * ub));
+        }
+    }
+    if sigma.is_finite() {
+        sigma.min(MAX_LYAPUNOV_SCALE)
+    } else {
+        1.0
+    }
+}
+
+/// The trigger problem for P = sigma P~ (and Y, L1, L2, Upsilon, T alike; xi
+/// and gamma unchanged), exact: Lambda_{ij r}(h) of `plan` equals, by the
+/// congruence diag(sqrt(sigma) I, I_tau, sqrt(sigma) I), sigma times that of
+/// the returned plan with the disturbance columns D_i scaled by sqrt(sigma);
+/// the region LMI [P, r'; r, u_bar^2 / c] is [P~, r'; r, sigma u_bar^2 / c]
+/// by diag(sigma^-1/2, sigma^1/2), so u_bar is scaled by sqrt(sigma); the peak
+/// LMI [phi P, 0, C'; *, (gamma - xi) I, G'; *, *, gamma I] takes C / sqrt(sigma)
+/// by diag(sigma^-1/2 I, I, I). Each congruence maps a margin eps of the scaled
+/// problem to a margin of at least eps (sigma >= 1), and the certificate
+/// re-checks the unscaled values against `plan` anyway. Initial sets are not
+/// scaled ([`lyapunov_scale`] is 1 with them).
+pub fn scaled_plan(plan: &TriggerPlan, sigma: f64) -> TriggerPlan {
+    if sigma == 1.0 {
+        return plan.clone();
+    }
+    let root = sigma.sqrt();
+    TriggerPlan {
+        d: plan.d.iter().map(|d| d * root).collect(),
+        levels: plan.levels.iter().map(|u| u * root).collect(),
+        c: &plan.c / root,
+        ..plan.clone()
+    }
+}
+
+/// The values of a problem solved for [`scaled_plan`] in the units of the
+/// original plan: every unknown but gamma and xi times sigma.
+fn unscale_values(values: &mut [(String, DMatrix<f64>)], sigma: f64) {
+    for (name, v) in values.iter_mut() {
+        if name != "gamma_tr" && name != "xi_tr" {
+            *v *= sigma;
+        }
+    }
+}
+
 /// xi of the event-triggered loop may be up to this multiple of step 1's xi
 /// (the region level 1 + xi tau_bar^2 / phi is computed with the bound).
 pub const XI_FACTOR: f64 = 4.0;
@@ -623,11 +755,17 @@ impl Runner<'_> {
         &mut self,
         plan: &TriggerPlan,
         what: &str,
+        gap_tol: Option<f64>,
     ) -> Result<Option<Solved>, SynthError> {
         let t0 = Instant::now();
         let built = build(self.model, plan, self.settings.eps, true)?;
         self.log.build_time += t0.elapsed();
-        let sol = self.solve(&built.problem, what)?;
+        let mut settings = self.settings.solver.clone();
+        if let Some(tol) = gap_tol {
+            settings.tol_gap_rel = settings.tol_gap_rel.max(tol);
+            settings.tol_gap_abs = settings.tol_gap_abs.max(tol);
+        }
+        let sol = self.solve_with(&built.problem, what, &settings)?;
         if sol.status != SolveStatus::Solved {
             return Ok(None);
         }
@@ -648,13 +786,20 @@ impl Runner<'_> {
     }
 
     /// One trigger SDP at threshold `nu`: the design, or None when not solved.
+    /// The SDP is solved in scaled units ([`lyapunov_scale`], [`scaled_plan`]);
+    /// the design holds the values in the units of `plan`.
     pub(super) fn trigger_attempt(
         &mut self,
         plan: &TriggerPlan,
     ) -> Result<Option<TriggerDesign>, SynthError> {
-        let Some((built, all)) = self.solve_looped(plan, "trigger problem")? else {
+        let sigma = lyapunov_scale(plan);
+        let solved = scaled_plan(plan, sigma);
+        let Some((built, mut all)) =
+            self.solve_looped(&solved, "trigger problem", Some(TRIGGER_GAP_TOL))?
+        else {
             return Ok(None);
         };
+        unscale_values(&mut all, sigma);
         Ok(Some(TriggerDesign {
             plan: plan.clone(),
             method: "two_step",
@@ -775,4 +920,24 @@ pub(super) fn named(
         .find(|(n, _)| n == name)
         .map(|(_, v)| v.clone())
         .ok_or_else(|| SynthError::Internal(format!("internal error: `{name}` has no value")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::on_segment;
+
+    #[test]
+    fn on_segment_accepts_points_of_the_segment_only() {
+        let (a, b) = ([1.0, -2.0, 0.5], [3.0, 2.0, 0.5]);
+        assert!(on_segment(&[2.0, 0.0, 0.5], &a, &b));
+        assert!(on_segment(&a, &a, &b));
+        assert!(on_segment(&[2.5, 1.0, 0.5], &a, &b));
+        // on the line, outside the segment
+        assert!(!on_segment(&[4.0, 4.0, 0.5], &a, &b));
+        assert!(!on_segment(&[0.0, -4.0, 0.5], &a, &b));
+        // off the line by 1e-9 relative
+        assert!(!on_segment(&[2.0, 0.0, 0.5 + 1e-9], &a, &b));
+        // a degenerate segment
+        assert!(!on_segment(&a, &a, &a));
+    }
 }
