@@ -140,6 +140,7 @@ fn clarabel_settings(s: &SolveSettings) -> DefaultSettings<f64> {
             LinearSolver::Faer => "faer".to_string(),
             LinearSolver::Qdldl => "qdldl".to_string(),
         },
+        max_threads: s.threads,
         ..DefaultSettings::default()
     }
 }

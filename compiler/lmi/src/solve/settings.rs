@@ -25,6 +25,10 @@ pub struct SolveSettings {
     pub equilibrate: bool,
     /// Sparse LDL factorization used for the KKT systems.
     pub linear_solver: LinearSolver,
+    /// Threads of the KKT factorization: 1 (the default) factors sequentially,
+    /// so the same problem gives the same bits on every machine; 0 lets the
+    /// solver use every core, whose count then changes the rounding.
+    pub threads: u32,
 }
 
 /// The sparse LDL factorization of the interior-point KKT systems.
@@ -50,6 +54,7 @@ impl Default for SolveSettings {
             chordal_decomposition: true,
             equilibrate: true,
             linear_solver: LinearSolver::Faer,
+            threads: 1,
         }
     }
 }
