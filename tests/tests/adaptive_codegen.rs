@@ -190,7 +190,7 @@ enum Cmd {
 fn sequences() -> Vec<Cmd> {
     let mut cmds = Vec::new();
     for seed in 0..50u64 {
-        let mut rng = Rng(0x5EED_0000 + seed);
+        let mut rng = Rng::new(0x5EED_0000 + seed);
         cmds.push(Cmd::Init);
         let scale = [0.5, 2.0, 5.0, 400.0][(seed % 4) as usize];
         let r: [f64; M] = if seed % 3 == 0 {
@@ -203,14 +203,15 @@ fn sequences() -> Vec<Cmd> {
             // A random walk with occasional jumps.
             for v in &mut x {
                 *v += rng.uniform(-0.1, 0.1) * scale;
-                if rng.unit() < 0.02 {
+                if rng.next_f64() < 0.02 {
                     *v = rng.uniform(-scale, scale);
                 }
             }
             let mut sent = x;
-            if rng.unit() < 0.03 {
-                let k = (rng.next() % N as u64) as usize;
-                sent[k] = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY][(rng.next() % 3) as usize];
+            if rng.next_f64() < 0.03 {
+                let k = (rng.next_u64() % N as u64) as usize;
+                sent[k] =
+                    [f64::NAN, f64::INFINITY, f64::NEG_INFINITY][(rng.next_u64() % 3) as usize];
             }
             cmds.push(Cmd::Step(sent, r));
         }

@@ -90,12 +90,12 @@ fn sigma(p: &[f64; 3], w: &[f64; 3]) -> [f64; 3] {
 
 #[test]
 fn the_given_gain_pdc_is_minus_k_sigma_on_random_states() {
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = Rng::new(0x9E37_79B9_7F4A_7C15);
     for _ in 0..100 {
         // p uniform in the cube [-0.57, 0.57]^3 (p'p <= 0.98 < 1: inside the
         // premise range), w in [-0.1, 0.1]^3 rad/s.
-        let p: [f64; 3] = std::array::from_fn(|_| 1.14 * rng.unit() - 0.57);
-        let w: [f64; 3] = std::array::from_fn(|_| 0.2 * rng.unit() - 0.1);
+        let p: [f64; 3] = std::array::from_fn(|_| 1.14 * rng.next_f64() - 0.57);
+        let w: [f64; 3] = std::array::from_fn(|_| 0.2 * rng.next_f64() - 0.1);
         let x0: Vec<f64> = p.iter().chain(&w).copied().collect();
         let (_, header, rows) = run(&Options {
             x0: Some(x0),

@@ -544,7 +544,7 @@ const EDGES: [f64; 14] = [
 /// magnitudes, and every edge value in every component.
 fn states(t: &Tables, seed: u64) -> Vec<Vec<f64>> {
     let n = t.n;
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut out = Vec::new();
     let mut x: Vec<f64> = (0..n).map(|_| rng.uniform(-0.1, 0.1)).collect();
     for _ in 0..500 {
@@ -562,7 +562,7 @@ fn states(t: &Tables, seed: u64) -> Vec<Vec<f64>> {
         out.push(
             (0..n)
                 .map(|_| {
-                    let s = if rng.next() & 1 == 0 { 1.0 } else { -1.0 };
+                    let s = if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
                     s * 10f64.powf(rng.uniform(-320.0, 308.0))
                 })
                 .collect(),
@@ -880,7 +880,7 @@ fn sensor_sequences(n: usize, seed: u64) -> Vec<Cmd> {
         1e30,
         -1e30,
     ];
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut out = Vec::new();
     for k in 0..SENSOR_SEQUENCES {
         out.push(Cmd::Reset);
@@ -899,8 +899,8 @@ fn sensor_sequences(n: usize, seed: u64) -> Vec<Cmd> {
                 1 => v.iter_mut().for_each(|c| *c = scale),
                 // Edge values in one component from time to time.
                 2 | 3 if i % 7 == 3 => {
-                    let at = (rng.next() % n as u64) as usize;
-                    v[at] = EDGE[(rng.next() % EDGE.len() as u64) as usize];
+                    let at = (rng.next_u64() % n as u64) as usize;
+                    v[at] = EDGE[(rng.next_u64() % EDGE.len() as u64) as usize];
                 }
                 _ => {}
             }
@@ -1292,7 +1292,7 @@ fn sensor_c_atan_is_the_runtimes() {
     let t = xu_tables();
     let dir = work_dir("sensor_atan");
     let drv = sensor_setup(&dir, t);
-    let mut rng = Rng(0xa7a2);
+    let mut rng = Rng::new(0xa7a2);
     let mut args: Vec<f64> = vec![
         0.0,
         -0.0,
@@ -1322,7 +1322,7 @@ fn sensor_c_atan_is_the_runtimes() {
         args.push(rng.uniform(-3.0, 3.0));
     }
     for _ in 0..100_000 {
-        let sign = if rng.next() & 1 == 0 { 1.0 } else { -1.0 };
+        let sign = if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
         args.push(sign * 10f64.powf(rng.uniform(-12.0, 25.0)));
     }
     let in_float = |v: f64| !v.is_finite() || v.abs() <= 1e38;

@@ -140,11 +140,11 @@ fn dv_dt_is_negative_at_random_memberships_and_rates_within_phi() {
     for pk in &c.p {
         assert!(pk.symmetric_eigenvalues().min() > 0.0, "P_k > 0");
     }
-    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15);
     let mut worst = f64::NEG_INFINITY;
     for s in 0..5000 {
         // h on the simplex (a vertex or an edge every few samples).
-        let mut h: [f64; 3] = std::array::from_fn(|_| -rng.unit().max(1e-300).ln());
+        let mut h: [f64; 3] = std::array::from_fn(|_| -rng.next_f64().max(1e-300).ln());
         if s % 5 == 0 {
             h[s / 5 % 3] = 0.0;
         }
@@ -155,11 +155,11 @@ fn dv_dt_is_negative_at_random_memberships_and_rates_within_phi() {
         let h = h.map(|v| v / sum);
         // hdot with sum 0 (sum h = 1) and |hdot_k| <= phi: a random direction
         // of the plane sum = 0 scaled to touch the bound.
-        let v: [f64; 3] = std::array::from_fn(|_| rng.unit() - 0.5);
+        let v: [f64; 3] = std::array::from_fn(|_| rng.next_f64() - 0.5);
         let mean = v.iter().sum::<f64>() / 3.0;
         let d = v.map(|x| x - mean);
         let top = d.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let scale = if s % 2 == 0 { 1.0 } else { rng.unit() };
+        let scale = if s % 2 == 0 { 1.0 } else { rng.next_f64() };
         let hdot = d.map(|x| x / top * PHI * scale);
         assert!(hdot.iter().all(|x| x.abs() <= PHI * (1.0 + 1e-12)));
         assert!(hdot.iter().sum::<f64>().abs() < 1e-12);

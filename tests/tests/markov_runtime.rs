@@ -232,7 +232,7 @@ fn generated_modal_c_matches_the_runtime_bit_for_bit() {
     };
     // Random states inside and far outside the region, edge values, and
     // modes 0, 1 and out of range (2, 7, 255).
-    let mut rng = Rng(0x4d0d);
+    let mut rng = Rng::new(0x4d0d);
     let mut cases: Vec<(u8, [f64; 2])> = Vec::new();
     for k in 0..3000 {
         let scale = [0.1, 1.0, 3.0, 1e6][k % 4];

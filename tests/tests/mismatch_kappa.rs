@@ -182,24 +182,24 @@ fn the_report_certificate_holds_at_random_memberships_within_kappa() {
         .collect();
     assert_eq!(gains.len(), 3);
     let rules = opposite_rules();
-    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15);
     let mut worst = f64::NEG_INFINITY;
     for s in 0..4000 {
-        let h = opposite_memberships(-1.0 + 2.0 * rng.unit());
+        let h = opposite_memberships(-1.0 + 2.0 * rng.next_f64());
         // k = (1 - t) h + t w, w on the simplex (a vertex every fourth sample):
         // |k_j - h_j| = t |w_j - h_j| <= t <= kappa.
         let w: [f64; 3] = if s % 4 == 0 {
-            let v = (rng.unit() * 3.0) as usize % 3;
+            let v = (rng.next_f64() * 3.0) as usize % 3;
             std::array::from_fn(|j| f64::from(u8::from(j == v)))
         } else {
-            let e: [f64; 3] = std::array::from_fn(|_| -rng.unit().max(1e-300).ln());
+            let e: [f64; 3] = std::array::from_fn(|_| -rng.next_f64().max(1e-300).ln());
             let sum: f64 = e.iter().sum();
             e.map(|v| v / sum)
         };
         let t = if s % 2 == 0 {
             kappa
         } else {
-            kappa * rng.unit()
+            kappa * rng.next_f64()
         };
         let k: [f64; 3] = std::array::from_fn(|j| (1.0 - t) * h[j] + t * w[j]);
         assert!(h

@@ -36,30 +36,8 @@ pub fn shipped(name: &str) -> TsModel {
     model_of(name, &text)
 }
 
-/// A small deterministic generator (SplitMix64, Steele, Lea and Flood,
-/// "Fast splittable pseudorandom number generators", 2014).
-pub struct Rng(pub u64);
-
-impl Rng {
-    /// The next 64 random bits.
-    pub fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Uniform in [lo, hi).
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-}
+/// The seeded generator of the simulator (SplitMix64), for random test points.
+pub use tsfc::sim::trigger::SplitMix64 as Rng;
 
 /// The local models (A_i, B_i) of the three-rule Kim & Lee-type benchmark
 /// (Kim and Lee, "New approaches to relaxed quadratic stability condition of
