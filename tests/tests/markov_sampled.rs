@@ -117,6 +117,37 @@ impl Loop {
         let yinv = self.y.clone().try_inverse().expect("Y invertible");
         xi + phi.transpose() * &self.y * &phi * (h - tau) + &nn * yinv * nn.transpose() * tau
     }
+    /// The largest eigenvalue of [`Loop::bound`] at every vertex (one mode,
+    /// one plant and one controller rule, tau in {0, h_max}, h = h_max) and at
+    /// `samples` random points (mode, memberships apart, h, tau) from `seed`.
+    fn worst(&self, plant: Plant<'_>, rules: usize, seed: u64, samples: usize) -> (f64, f64) {
+        let modes = self.p.len();
+        let mut worst_vertex = f64::NEG_INFINITY;
+        for a in 0..modes {
+            for i in 0..rules {
+                for j in 0..rules {
+                    let (mut hp, mut hc) = (vec![0.0; rules], vec![0.0; rules]);
+                    hp[i] = 1.0;
+                    hc[j] = 1.0;
+                    for tau in [0.0, self.h_max] {
+                        let m = self.bound(plant, a, (&hp, &hc), self.h_max, tau);
+                        worst_vertex = worst_vertex.max(max_eig(&m));
+                    }
+                }
+            }
+        }
+        let mut rng = Lcg(seed);
+        let mut worst = f64::NEG_INFINITY;
+        for _ in 0..samples {
+            let a = (rng.next() * modes as f64) as usize % modes;
+            let hp = rng.memberships(rules);
+            let hc = rng.memberships(rules);
+            let h = self.h_max * rng.next().max(1e-6);
+            let tau = h * rng.next();
+            worst = worst.max(max_eig(&self.bound(plant, a, (&hp, &hc), h, tau)));
+        }
+        (worst_vertex, worst)
+    }
 }
 
 fn two_rule_a() -> [DMatrix<f64>; 2] {
@@ -150,33 +181,9 @@ fn the_functional_derivative_bound_holds_from_the_report_at_random_modes_members
         assert!(min_eig(p) > 0.0);
     }
     let a_rules = two_rule_a();
-    // Every vertex at h_max (r = 1: tau = 0; r = 2: tau = h, the Schur form).
-    let mut worst_vertex = f64::NEG_INFINITY;
-    for a in 0..3 {
-        for i in 0..2 {
-            for j in 0..2 {
-                let (mut hp, mut hc) = (vec![0.0; 2], vec![0.0; 2]);
-                hp[i] = 1.0;
-                hc[j] = 1.0;
-                for tau in [0.0, lp.h_max] {
-                    let m = lp.bound((&a_rules, &input_matrix), a, (&hp, &hc), lp.h_max, tau);
-                    worst_vertex = worst_vertex.max(max_eig(&m));
-                }
-            }
-        }
-    }
-    // Random modes, memberships (plant and controller apart), h and tau.
-    let mut rng = Lcg(17);
-    let mut worst = f64::NEG_INFINITY;
-    for _ in 0..2000 {
-        let a = (rng.next() * 3.0) as usize % 3;
-        let hp = rng.memberships(2);
-        let hc = rng.memberships(2);
-        let h = lp.h_max * rng.next().max(1e-6);
-        let tau = h * rng.next();
-        let m = lp.bound((&a_rules, &input_matrix), a, (&hp, &hc), h, tau);
-        worst = worst.max(max_eig(&m));
-    }
+    // Every vertex at h_max (r = 1: tau = 0; r = 2: tau = h, the Schur form),
+    // then random modes, memberships (plant and controller apart), h and tau.
+    let (worst_vertex, worst) = lp.worst((&a_rules, &input_matrix), 2, 17, 2000);
     println!("sampled modes: worst vertex eigenvalue {worst_vertex:.3e}, worst random {worst:.3e}");
     assert!(worst_vertex < 0.0, "{worst_vertex}");
     assert!(worst < 0.0, "{worst}");
@@ -401,31 +408,7 @@ fn xue2024_fault_blind_sampled_is_co_designed_certified_rechecked_and_converges(
     let a_rules: Vec<DMatrix<f64>> = run.model.rules.iter().map(|r| r.a.clone()).collect();
     let b_rules: Vec<DMatrix<f64>> = run.model.rules.iter().map(|r| r.b.clone()).collect();
     let b_of = |a: usize, i: usize| xue_input(&b_rules[i], a);
-    let mut worst_vertex = f64::NEG_INFINITY;
-    for a in 0..3 {
-        for i in 0..3 {
-            for j in 0..3 {
-                let (mut hp, mut hc) = (vec![0.0; 3], vec![0.0; 3]);
-                hp[i] = 1.0;
-                hc[j] = 1.0;
-                for tau in [0.0, lp.h_max] {
-                    let m = lp.bound((&a_rules, &b_of), a, (&hp, &hc), lp.h_max, tau);
-                    worst_vertex = worst_vertex.max(max_eig(&m));
-                }
-            }
-        }
-    }
-    let mut rng = Lcg(29);
-    let mut worst = f64::NEG_INFINITY;
-    for _ in 0..500 {
-        let a = (rng.next() * 3.0) as usize % 3;
-        let hp = rng.memberships(3);
-        let hc = rng.memberships(3);
-        let h = lp.h_max * rng.next().max(1e-6);
-        let tau = h * rng.next();
-        let m = lp.bound((&a_rules, &b_of), a, (&hp, &hc), h, tau);
-        worst = worst.max(max_eig(&m));
-    }
+    let (worst_vertex, worst) = lp.worst((&a_rules, &b_of), 3, 29, 500);
     assert!(worst_vertex < 0.0, "{worst_vertex}");
     assert!(worst < 0.0, "{worst}");
     // The continuous certificate (common P, decay 0.05) holds for these gains
