@@ -219,7 +219,7 @@ mod tests {
     fn scratch(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("tsfc-output-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&d);
-        fs::create_dir_all(&d).expect("scratch folder");
+        fs::create_dir_all(&d).expect("scratch folder"); // ok: unit test
         d
     }
 
@@ -227,16 +227,16 @@ mod tests {
     fn a_set_replaces_regular_files_and_leaves_no_temporaries() {
         let d = scratch("set");
         let (a, b) = (d.join("a.c"), d.join("a.h"));
-        fs::write(&a, "old").expect("write");
+        fs::write(&a, "old").expect("write"); // ok: unit test
         write_set(&[
             (a.clone(), b"new a".to_vec()),
             (b.clone(), b"new h".to_vec()),
         ])
-        .expect("written");
-        assert_eq!(fs::read(&a).expect("a"), b"new a");
-        assert_eq!(fs::read(&b).expect("b"), b"new h");
+        .expect("written"); // ok: unit test
+        assert_eq!(fs::read(&a).expect("a"), b"new a"); // ok: unit test
+        assert_eq!(fs::read(&b).expect("b"), b"new h"); // ok: unit test
         let names: Vec<String> = fs::read_dir(&d)
-            .expect("list")
+            .expect("list") // ok: unit test
             .flatten()
             .map(|e| e.file_name().to_string_lossy().into_owned())
             .collect();
@@ -249,16 +249,16 @@ mod tests {
     fn symlinks_and_devices_are_refused_and_left_alone() {
         let d = scratch("special");
         let real = d.join("real.json");
-        fs::write(&real, "keep").expect("write");
+        fs::write(&real, "keep").expect("write"); // ok: unit test
         let link = d.join("link.json");
-        std::os::unix::fs::symlink(&real, &link).expect("symlink");
+        std::os::unix::fs::symlink(&real, &link).expect("symlink"); // ok: unit test
         let e = write_atomic(&link, b"x").expect_err("symlink refused");
         assert!(e.to_string().contains("symbolic link"), "{e}");
         assert!(fs::symlink_metadata(&link)
-            .expect("still there")
+            .expect("still there") // ok: unit test
             .file_type()
             .is_symlink());
-        assert_eq!(fs::read(&real).expect("target"), b"keep");
+        assert_eq!(fs::read(&real).expect("target"), b"keep"); // ok: unit test
         let e = write_atomic(Path::new("/dev/null"), b"x").expect_err("device refused");
         assert!(e.to_string().contains("not a regular file"), "{e}");
         let e = write_atomic(&d, b"x").expect_err("folder refused");
@@ -272,8 +272,8 @@ mod tests {
         let target = d.join("c.rs");
         // PID 0 never names a user process: its file counts as left by a dead run.
         let stale = d.join(format!(".c.rs{TMP_MARK}0.7"));
-        fs::write(&stale, "partial").expect("write");
-        write_atomic(&target, b"fn main() {}").expect("written");
+        fs::write(&stale, "partial").expect("write"); // ok: unit test
+        write_atomic(&target, b"fn main() {}").expect("written"); // ok: unit test
         if cfg!(target_os = "linux") {
             assert!(!stale.exists(), "stale temporary removed");
         }

@@ -299,7 +299,7 @@ mod tests {
             format!("trigger {t}{end}")
         };
         for text in texts {
-            let t = spec_with(&item(text)).trigger.expect("a trigger").node;
+            let t = spec_with(&item(text)).trigger.expect("a trigger").node; // ok: unit test (cfg(test))
             let printed = t.to_string();
             assert_eq!(printed, text.replace("[2]", "2"));
             let again = spec_with(&item(&printed)).trigger;

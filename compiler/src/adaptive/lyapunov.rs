@@ -101,10 +101,10 @@ mod tests {
             &DMatrix::from_element(1, 1, -2.0),
             &DMatrix::from_element(1, 1, 2.0),
         )
-        .unwrap();
+        .unwrap(); // ok: unit test
         assert!((l.p[(0, 0)] - 0.5).abs() < 1e-14);
         let a = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![-0.5, -1.0, -4.0]));
-        let l = solve(&a, &DMatrix::identity(3, 3)).unwrap();
+        let l = solve(&a, &DMatrix::identity(3, 3)).unwrap(); // ok: unit test
         for (k, ak) in [-0.5, -1.0, -4.0].iter().enumerate() {
             assert!((l.p[(k, k)] + 1.0 / (2.0 * ak)).abs() < 1e-13);
         }
@@ -114,7 +114,7 @@ mod tests {
     fn a_full_matrix_satisfies_the_equation_and_p_is_positive() {
         let a = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -2.0, -3.0]);
         let q = DMatrix::from_row_slice(2, 2, &[2.0, 0.5, 0.5, 1.0]);
-        let l = solve(&a, &q).unwrap();
+        let l = solve(&a, &q).unwrap(); // ok: unit test
         let r = a.transpose() * &l.p + &l.p * &a + &q;
         assert!(r.norm() < 1e-12);
         assert!(l.p_eig[0] > 0.0);

@@ -172,7 +172,7 @@ pub fn design(model: &TsModel) -> Outcome {
         .spec
         .adaptive
         .as_ref()
-        .expect("design() is called on adaptive specs only");
+        .expect("design() is called on adaptive specs only"); // ok: its one caller, cli::outcome, returns None first when the spec has no adaptive block
     let (n, m, rules) = (model.n, model.m, model.r());
     let mut refusals = Vec::new();
     let lyap = lyapunov::solve(&ad.reference, &ad.q);

@@ -157,8 +157,8 @@ mod tests {
 
     fn text(v: f64) -> String {
         let mut out = Vec::new();
-        number(&mut out, v).expect("in memory");
-        String::from_utf8(out).expect("ASCII")
+        number(&mut out, v).expect("in memory"); // ok: unit test
+        String::from_utf8(out).expect("ASCII") // ok: unit test
     }
 
     #[test]

@@ -320,7 +320,7 @@ mod tests {
             match p.mode() {
                 1 => to1 += 1,
                 2 => to2 += 1,
-                m => panic!("jumped to {m}"),
+                m => panic!("jumped to {m}"), // ok: unit test
             }
             // Modes 1 and 2 are absorbing.
             assert_eq!(p.next_jump(), f64::INFINITY);

@@ -147,7 +147,11 @@ fn gain_step_problem(
     };
     match goal {
         GainGoal::RaiseNu { target } => {
-            let nu = nu.expect("declared above");
+            let Some(nu) = nu else {
+                return Err(SynthError::Internal(
+                    "co-design: the nu unknown of a RaiseNu step is missing".into(),
+                ));
+            };
             problem
                 .add_scalar("co-design nu >= 0", Expr::var(nu), Relation::Ge, 0.0)
                 .and_then(|_| {

@@ -293,7 +293,7 @@ mod tests {
         for edge in [0.9, 0.3, 0.0891, 0.002] {
             let ok = |s: f64| Ok(s <= edge);
             for found in [longest_scale(ok), longest_scale_from_above(ok)] {
-                let s = found.expect("no error").expect("found");
+                let s = found.expect("no error").expect("found"); // ok: unit test
                 assert!(
                     s <= edge && s >= edge * (1.0 - 2.0 * PERIOD_REL_TOL),
                     "{edge}: {s}"
@@ -306,7 +306,7 @@ mod tests {
             calls += 1;
             Ok(false)
         });
-        assert!(none.expect("no error").is_none());
+        assert!(none.expect("no error").is_none()); // ok: unit test
         assert_eq!(calls, 10);
     }
 }

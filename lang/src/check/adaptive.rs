@@ -485,10 +485,10 @@ mod tests {
     #[test]
     fn a_scalar_block_checks() {
         let spec = spec_with(BLOCK);
-        let a = spec.adaptive.expect("adaptive");
+        let a = spec.adaptive.expect("adaptive"); // ok: unit test (cfg(test))
         assert_eq!(a.error.as_slice(), &[1.0]);
         assert_eq!(a.reference[(0, 0)], -2.0);
-        assert_eq!(a.a.expect("a").rate, 4.0);
+        assert_eq!(a.a.expect("a").rate, 4.0); // ok: unit test (cfg(test))
         assert!(a.b.is_none() && a.robust.is_none());
     }
 

@@ -159,7 +159,7 @@ mod tests {
         let spec = valid(&scenario(
             "state e[2]; const k = 3; e' = -k * e; x1' = -x1 + u + e[0];",
         ));
-        let d = spec.simulate.and_then(|s| s.dynamics).expect("dynamics");
+        let d = spec.simulate.and_then(|s| s.dynamics).expect("dynamics"); // ok: unit test
         assert_eq!(d.extra_states[0].len, 2);
         assert_eq!(d.consts[0].0, "k");
         // Ordered as the states: declared first, then extra.

@@ -187,7 +187,7 @@ mod tests {
         let (file, d, _) = crate::parser::parse_file("const y = f(x1[k])' + g;");
         assert!(d.is_empty(), "{d:?}");
         let crate::ast::ItemKind::Const(_, e) = &file.items[0].kind else {
-            panic!("not a constant");
+            panic!("not a constant"); // ok: unit test
         };
         let mut seen = Vec::new();
         walk_names(e, &mut |n, _, call| seen.push((n.to_string(), call)));

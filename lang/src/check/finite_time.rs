@@ -159,7 +159,7 @@ mod tests {
         ));
         assert_eq!(spec.disturbance_energy, Some(0.5));
         let Objective::FiniteTime(ft) = &spec.objectives[0].node else {
-            panic!("not finite_time");
+            panic!("not finite_time"); // ok: unit test
         };
         assert_eq!(ft.target, Target::Fixed(4.0));
         assert_eq!((ft.c1, ft.horizon, ft.alpha), (1.0, 2.0, Some(0.3)));

@@ -160,7 +160,7 @@ mod tests {
             "at(x1 = -1), F = [-1, -2]",
             "F = [-1.5, -2.25], A = [0, 1; -2, 0]",
         ));
-        let f = spec.given_gains().expect("given gains");
+        let f = spec.given_gains().expect("given gains"); // ok: unit test
         assert_eq!(f.len(), 2);
         assert_eq!((f[1].nrows(), f[1].ncols()), (1, 2));
         assert_eq!(f[1][(0, 1)].to_bits(), (-2.25f64).to_bits());

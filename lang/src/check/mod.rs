@@ -497,7 +497,7 @@ pub(crate) mod testing {
     pub fn valid(src: &str) -> Spec {
         let (spec, diags) = crate::check_source(src);
         assert!(diags.iter().all(|d| !d.is_error()), "{diags:#?}");
-        spec.expect("a valid spec")
+        spec.expect("a valid spec") // ok: unit test
     }
 
     /// The only error of `src`: its message and the text under its span.

@@ -585,7 +585,7 @@ mod tests {
     #[test]
     fn a_valid_block_is_checked() {
         let spec = spec_with(TWO);
-        let m = spec.modes.expect("modes");
+        let m = spec.modes.expect("modes"); // ok: unit test
         assert_eq!(m.len(), 2);
         assert_eq!(m.design, ModeDesign::Dependent);
         assert_eq!(m.modes[1].actuator, Actuator::Effectiveness(vec![0.5]));
@@ -608,7 +608,7 @@ mod tests {
     #[test]
     fn the_design_option_is_read() {
         let src = TWO.replace("rates", "design = mode_independent; rates");
-        let m = spec_with(&src).modes.expect("modes");
+        let m = spec_with(&src).modes.expect("modes"); // ok: unit test
         assert_eq!(m.design, ModeDesign::Independent);
         let (msg, at) = only_error(&TWO.replace("rates", "design = mode_blind; rates"));
         assert_eq!(msg, "unknown mode design `mode_blind`");
@@ -676,7 +676,7 @@ mod tests {
         let d = e
             .iter()
             .find(|(d, _)| d.message.starts_with("an event-triggered loop"))
-            .unwrap_or_else(|| panic!("{e:#?}"));
+            .unwrap_or_else(|| panic!("{e:#?}")); // ok: unit test
         assert!(d.1.starts_with("trigger aperiodic"), "{}", d.1);
         assert!(d
             .0

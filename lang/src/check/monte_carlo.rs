@@ -371,7 +371,7 @@ mod tests {
         let spec = spec_with(&format!(
             "{SIM} monte_carlo {{ runs = 20; k scale uniform(0.9, 1.1); x0 offset uniform(-0.1, 0.1); d scale uniform(0.5, 1.5); converged |x| <= 1e-2 by 8; }} }}"
         ));
-        let mc = spec.simulate.and_then(|s| s.monte_carlo).expect("a block");
+        let mc = spec.simulate.and_then(|s| s.monte_carlo).expect("a block"); // ok: unit test
         assert_eq!(mc.runs, Some(20));
         assert_eq!(mc.uncertain.len(), 3);
         assert!(

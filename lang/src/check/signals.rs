@@ -152,10 +152,10 @@ mod tests {
             on,
         }) = spec.trigger.clone().map(|t| t.node)
         else {
-            panic!("not mixed");
+            panic!("not mixed"); // ok: unit test (cfg(test))
         };
         assert_eq!((monitor, beta, rho), (Monitor::Continuous, 0.5, 1e-6));
-        let on = on.expect("a signal");
+        let on = on.expect("a signal"); // ok: unit test (cfg(test))
         assert_eq!((on.name.as_str(), on.dim), ("s", 2));
         assert_eq!(on.eval(&spec, &[3.0]), Some(vec![5.0, 9.0]));
     }

@@ -315,7 +315,7 @@ mod tests {
         let spec = spec_with(
             "disturbance d; D = 1;\nsimulate { x0 = 0.5; time = 0 .. 2 step 0.1; seed = 3; integrator = dopri5; d(t) = sin(t); }",
         );
-        let s = spec.simulate.expect("a scenario");
+        let s = spec.simulate.expect("a scenario"); // ok: unit test
         assert_eq!(s.x0, vec![0.5]);
         assert_eq!(s.time, (0.0, 2.0, 0.1));
         assert_eq!((s.seed, s.integrator), (3, Integrator::Dopri5));
@@ -341,7 +341,7 @@ mod tests {
         let spec = spec_with(&format!(
             "{modes}simulate {{ x0 = 0; time = 0 .. 1; mode0 = weak; mode_seed = 7; }}"
         ));
-        let s = spec.simulate.expect("a scenario");
+        let s = spec.simulate.expect("a scenario"); // ok: unit test
         assert_eq!(s.mode0.map(|m| m.node), Some("weak".to_string()));
         assert_eq!(s.mode_seed, Some(7));
         let (m, at) = only_error(&format!(

@@ -347,7 +347,7 @@ mod tests {
         let spec = spec_with(&format!(
             "{SIM} sweep {{ trigger periodic {{ every = [0.1, 0.2]; }}\n trigger mixed {{ sampling = 0.01 .. 0.1; beta = [0.5, 1]; rho = [1e-6, 1e-5, 1e-4]; }}\n window = 5 .. 10; columns {{ s = x1; all = x; }} }} }}"
         ));
-        let sw = spec.simulate.and_then(|s| s.sweep).expect("a sweep");
+        let sw = spec.simulate.and_then(|s| s.sweep).expect("a sweep"); // ok: unit test (cfg(test))
         assert_eq!(sw.window, Some((5.0, 10.0)));
         assert_eq!(sw.columns.len(), 2);
         assert_eq!((sw.columns[0].at, sw.columns[1].at), ((0, 1), (0, 1)));
@@ -374,11 +374,11 @@ mod tests {
         let spec = spec_with(&format!(
             "{SIM} sweep {{ trigger mixed {{ on = s; beta = 0.5; rho = [1e-6, 1e-5]; monitor = step; }} }} }}\nsignal s = [2 * x1];"
         ));
-        let sw = spec.simulate.and_then(|s| s.sweep).expect("a sweep");
+        let sw = spec.simulate.and_then(|s| s.sweep).expect("a sweep"); // ok: unit test (cfg(test))
         assert_eq!(sw.scenarios.len(), 2);
         for sc in &sw.scenarios {
             let Trigger::Mixed { on, monitor, .. } = &sc.trigger else {
-                panic!("{:?}", sc.trigger);
+                panic!("{:?}", sc.trigger); // ok: unit test (cfg(test))
             };
             assert_eq!(*monitor, Monitor::Step);
             assert_eq!(on.as_ref().map(|s| s.name.as_str()), Some("s"));

@@ -459,7 +459,7 @@ mod tests {
 
     fn trigger(body: &str) -> Trigger {
         let spec = spec_with(&format!("trigger {body}"));
-        spec.trigger.expect("a trigger").node
+        spec.trigger.expect("a trigger").node // ok: unit test
     }
 
     #[test]
@@ -486,7 +486,7 @@ mod tests {
             "aperiodic { sampling = 0.001 .. 0.1; threshold nu = 0.02 adaptive(mu1 = 10, mu2 = 1, mu3 = 0.02, max = 0.05); weight = 2; }",
         )
         else {
-            panic!("not aperiodic");
+            panic!("not aperiodic"); // ok: unit test
         };
         assert_eq!(sampling, (0.001, 0.1));
         assert_eq!(

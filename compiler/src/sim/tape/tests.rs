@@ -27,11 +27,11 @@ fn shares_folds_and_faults() {
     let zero = b.constant(0.0);
     let dead = b.bin(Binary::Mul, zero, q);
     assert_eq!(b.value(dead), Some(0.0));
-    let tape = b.finish(&[s, c, q, dead]).expect("a small tape");
+    let tape = b.finish(&[s, c, q, dead]).expect("a small tape"); // ok: unit test
     assert_eq!(tape.len(), 4, "x*y, the sum, 6 + y, x / y");
     let mut regs = tape.registers();
     tape.write(&mut regs, 0, &[3.0, 2.0]);
-    tape.run(&mut regs).expect("no fault");
+    tape.run(&mut regs).expect("no fault"); // ok: unit test
     let mut out = [0.0; 4];
     tape.read(&regs, &mut out);
     assert_eq!(out, [12.0, 8.0, 1.5, 0.0]);
@@ -53,7 +53,7 @@ fn pendulum_with(theta_dot: &str, extra: &str) -> Spec {
     );
     match tsf_lang::check_source(&text) {
         (Some(spec), _) => spec,
-        (None, diags) => panic!("{diags:#?}"),
+        (None, diags) => panic!("{diags:#?}"), // ok: unit test
     }
 }
 
@@ -61,8 +61,8 @@ fn pendulum_with(theta_dot: &str, extra: &str) -> Spec {
 /// random times, states and inputs.
 fn worst_difference(spec: &Spec, compiled: bool) -> f64 {
     let source = SpecSource::default();
-    let mut reference = Plant::new(spec, &source, Evaluator::Interpreter).expect("plant");
-    let mut tape = Plant::new(spec, &source, Evaluator::Compiled).expect("plant");
+    let mut reference = Plant::new(spec, &source, Evaluator::Interpreter).expect("plant"); // ok: unit test
+    let mut tape = Plant::new(spec, &source, Evaluator::Compiled).expect("plant"); // ok: unit test
     assert_eq!(tape.is_compiled(), compiled);
     let (dim, m, q) = (tape.dim(), spec.m(), spec.q());
     let mut rng = SplitMix64::new(3);
@@ -72,8 +72,8 @@ fn worst_difference(spec: &Spec, compiled: bool) -> f64 {
             |len: usize| -> Vec<f64> { (0..len).map(|_| rng.next_f64() - 0.5).collect() };
         let (t, s, u, w) = (10.0 * draw(1)[0].abs(), draw(dim), draw(m), draw(q));
         let (mut a, mut b) = (vec![0.0; dim], vec![0.0; dim]);
-        reference.rhs(t, &s, &u, &w, &mut a).expect("interpreter");
-        tape.rhs(t, &s, &u, &w, &mut b).expect("tape");
+        reference.rhs(t, &s, &u, &w, &mut a).expect("interpreter"); // ok: unit test
+        tape.rhs(t, &s, &u, &w, &mut b).expect("tape"); // ok: unit test
         for (x, y) in a.iter().zip(&b) {
             assert!(x.is_finite() && y.is_finite(), "{a:?} {b:?}");
             worst = worst.max((x - y).abs() / x.abs().max(y.abs()).max(1e-300));
@@ -111,19 +111,19 @@ fn the_shipped_plants_and_signals_compile() {
     let source = SpecSource::default();
     for text in [PENDULUM, XU] {
         let (Some(spec), _) = tsf_lang::check_source(text) else {
-            panic!("shipped spec")
+            panic!("shipped spec") // ok: unit test
         };
-        let plant = Plant::new(&spec, &source, Evaluator::Compiled).expect("plant");
+        let plant = Plant::new(&spec, &source, Evaluator::Compiled).expect("plant"); // ok: unit test
         assert!(plant.is_compiled());
         let mut reference = Signals::new(&spec, &source, Evaluator::Interpreter);
         let mut tape = Signals::new(&spec, &source, Evaluator::Compiled);
         assert!(tape.is_compiled());
         for k in 0..50 {
             let t = 0.37 * k as f64;
-            let a = reference.at(t).expect("interpreter").to_vec();
-            assert_eq!(a, tape.at(t).expect("tape"), "t = {t}");
+            let a = reference.at(t).expect("interpreter").to_vec(); // ok: unit test
+            assert_eq!(a, tape.at(t).expect("tape"), "t = {t}"); // ok: unit test
         }
     }
-    let worst = worst_difference(&tsf_lang::check_source(XU).0.expect("spec"), true);
+    let worst = worst_difference(&tsf_lang::check_source(XU).0.expect("spec"), true); // ok: unit test
     assert!(worst < 1e-12, "relative difference {worst:e}");
 }
