@@ -38,6 +38,8 @@ pub mod summary;
 pub mod synth;
 #[doc(hidden)]
 pub mod tables;
+#[doc(hidden)]
+pub mod tape;
 
 pub use builder::Builder;
 pub use error::{Error, ErrorKind};

@@ -8,6 +8,8 @@
 
 use super::premise::{premise_values, rule_weight, PremiseLayout, TermSpec};
 use super::LocalModel;
+use crate::tape::lower::{Lowerer, Scope, SymMat};
+use crate::tape::{Builder, Registers, Tape};
 use nalgebra::DMatrix;
 use tsf_lang::eval::Mode;
 use tsf_lang::spec::{ModelMatrix, Spec};
@@ -121,26 +123,48 @@ pub(super) fn check(
         firing: Vec::new(),
     };
     let mut worst_h = Vec::new();
+    let exprs: Vec<&ModelMatrix> = targets.iter().map(|(_, m, _)| m).collect();
+    let mut compiled = Compiled::new(spec, &exprs);
+    // ||M_i||_F of the largest local model, per target.
+    let scales: Vec<f64> = targets
+        .iter()
+        .map(|(_, _, locals)| {
+            locals
+                .iter()
+                .map(|l| l.norm())
+                .fold(f64::MIN_POSITIVE, f64::max)
+        })
+        .collect();
+    let mut x = vec![0.0; grid.len()];
+    let mut h = vec![0.0; rules.len()];
+    let mut blend = Vec::new();
     loop {
-        let x: Vec<f64> = idx.iter().zip(&grid).map(|(&i, a)| a[i]).collect();
-        if let Some(h) = normalized_weights(spec, &x, &ranges, terms) {
+        for ((v, &i), a) in x.iter_mut().zip(&idx).zip(&grid) {
+            *v = a[i];
+        }
+        let fast = compiled.as_mut().is_some_and(|c| c.eval(&x));
+        let fired = match (fast, &compiled) {
+            (true, Some(c)) => normalized_weights(c.premises(), &ranges, terms, &mut h),
+            _ => premise_values(spec, &x)
+                .is_ok_and(|z| normalized_weights(&z, &ranges, terms, &mut h)),
+        };
+        if fired {
             worst.points += 1;
-            let env = spec.state_env(&x, Mode::Exact);
-            for (name, m, locals) in &targets {
-                let Ok(exact) = env.eval(&m.expr) else {
-                    continue;
+            let env = (!fast).then(|| spec.state_env(&x, Mode::Exact));
+            for (k, (name, m, locals)) in targets.iter().enumerate() {
+                let interpreted;
+                let (exact, shape) = match (&compiled, &env) {
+                    (Some(c), None) => c.matrix(k),
+                    (_, Some(env)) => match env.eval(&m.expr) {
+                        Ok(v) => {
+                            interpreted = v;
+                            (interpreted.as_slice(), interpreted.shape())
+                        }
+                        Err(_) => continue,
+                    },
+                    (None, None) => continue,
                 };
-                let scale = locals
-                    .iter()
-                    .map(|l| l.norm())
-                    .fold(f64::MIN_POSITIVE, f64::max);
-                let mut blend = DMatrix::zeros(exact.nrows(), exact.ncols());
-                for (hi, l) in h.iter().zip(locals) {
-                    if l.shape() == blend.shape() {
-                        blend += *l * *hi;
-                    }
-                }
-                let rel = (blend - exact).norm() / scale;
+                let rel = blend_distance(&h, locals, exact, shape, &mut blend) / scales[k];
                 if rel > worst.worst {
                     worst.worst = rel;
                     worst.matrix = name;
@@ -175,25 +199,134 @@ pub(super) fn check(
     Some(worst)
 }
 
-/// Normalized rule weights at state `x`, if its premise values lie in the
-/// declared ranges and some rule fires.
+/// The premise values z(x) and the state-dependent matrices of the check,
+/// compiled once into a tape (the interpreter's values to rounding); a state
+/// where the tape faults (a division by 0) goes to the interpreter, and so
+/// does every state when an expression has no tape form.
+struct Compiled {
+    tape: Tape,
+    regs: Box<Registers>,
+    /// Number of premise values (the first outputs).
+    nz: usize,
+    /// Shapes of the matrices that follow, column-major.
+    shapes: Vec<(usize, usize)>,
+    out: Vec<f64>,
+}
+
+impl Compiled {
+    fn new(spec: &Spec, mats: &[&ModelMatrix]) -> Option<Self> {
+        let n = spec.n();
+        let mut lw = Lowerer::new(Builder::new(n), &spec.consts, &spec.fns);
+        let col = |lw: &Lowerer, at: usize, len: usize| {
+            SymMat::column((at..at + len).map(|k| lw.b.input(k)).collect())
+        };
+        // The interpreter's bindings (`Spec::state_env`), in its order.
+        let mut scope = vec![("x".to_string(), col(&lw, 0, n))];
+        scope.extend(
+            spec.states
+                .iter()
+                .map(|s| (s.name.clone(), col(&lw, s.offset, s.len))),
+        );
+        let scope: &Scope = &scope;
+        let mut outputs = Vec::new();
+        for p in &spec.premises {
+            let v = lw.expr(&p.expr, scope).ok()?;
+            match p.component {
+                Some(k) => outputs.push(*v.data.get(k)?),
+                None => outputs.extend(v.data),
+            }
+        }
+        let nz = outputs.len();
+        let mut shapes = Vec::with_capacity(mats.len());
+        for m in mats {
+            let v = lw.expr(&m.expr, scope).ok()?;
+            shapes.push((v.rows, v.cols));
+            outputs.extend(v.data);
+        }
+        let tape = lw.finish(&outputs).ok()?;
+        Some(Compiled {
+            regs: tape.registers(),
+            out: vec![0.0; outputs.len()],
+            tape,
+            nz,
+            shapes,
+        })
+    }
+
+    /// Evaluates z(x) and the matrices at `x`; `false` where the tape faults.
+    fn eval(&mut self, x: &[f64]) -> bool {
+        self.tape.write(&mut self.regs, 0, x);
+        if self.tape.run(&mut self.regs).is_err() {
+            return false;
+        }
+        self.tape.read(&self.regs, &mut self.out);
+        true
+    }
+
+    /// z of the last [`Compiled::eval`].
+    fn premises(&self) -> &[f64] {
+        &self.out[..self.nz]
+    }
+
+    /// Matrix `k` of the last [`Compiled::eval`], column-major, and its shape.
+    fn matrix(&self, k: usize) -> (&[f64], (usize, usize)) {
+        let at = self.nz + self.shapes[..k].iter().map(|(r, c)| r * c).sum::<usize>();
+        let (r, c) = self.shapes[k];
+        (&self.out[at..at + r * c], (r, c))
+    }
+}
+
+/// ||sum_i h_i M_i - exact||_F (column-major `exact` of `shape`; local
+/// models of another shape are left out), accumulated in `blend` (reused).
+fn blend_distance(
+    h: &[f64],
+    locals: &[&DMatrix<f64>],
+    exact: &[f64],
+    shape: (usize, usize),
+    blend: &mut Vec<f64>,
+) -> f64 {
+    blend.clear();
+    blend.resize(exact.len(), 0.0);
+    for (hi, l) in h.iter().zip(locals).filter(|(_, l)| l.shape() == shape) {
+        for (b, v) in blend.iter_mut().zip(l.as_slice()) {
+            *b += hi * v;
+        }
+    }
+    blend
+        .iter()
+        .zip(exact)
+        .map(|(b, v)| (b - v) * (b - v))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Normalized rule weights at premise values `z` into `h`: `true` if the
+/// values lie in the declared ranges and some rule fires.
 fn normalized_weights(
-    spec: &Spec,
-    x: &[f64],
+    z: &[f64],
     ranges: &[(f64, f64)],
     terms: &[Vec<TermSpec>],
-) -> Option<Vec<f64>> {
-    let z = premise_values(spec, x).ok()?;
+    h: &mut [f64],
+) -> bool {
     let inside = z.len() == ranges.len()
         && z.iter()
             .zip(ranges)
             .all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
     if !inside {
-        return None;
+        return false;
     }
-    let w: Vec<f64> = terms.iter().map(|t| rule_weight(t, &z)).collect();
-    let total: f64 = w.iter().sum();
-    (total > 0.0 && total.is_finite()).then(|| w.iter().map(|v| v / total).collect())
+    let mut total = 0.0;
+    for (w, t) in h.iter_mut().zip(terms) {
+        *w = rule_weight(t, z);
+        total += *w;
+    }
+    if !(total > 0.0 && total.is_finite()) {
+        return false;
+    }
+    for w in h.iter_mut() {
+        *w /= total;
+    }
+    true
 }
 
 fn warning(
@@ -237,4 +370,43 @@ fn warning(
         }
     }
     d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{premise_values, Compiled};
+    use tsf_lang::eval::Mode;
+
+    const XU: &str = include_str!("../../../specs/xu2020_event_triggered.tsf");
+
+    /// The compiled z(x), A(x), B(x) equal the interpreter's to rounding at
+    /// random states of the Xu & Huang region (sqrt, skew, inv(J) products).
+    #[test]
+    fn compiled_grid_values_equal_the_interpreters() {
+        let spec = tsf_lang::check_source(XU)
+            .0
+            .expect("the shipped spec checks"); // ok: unit test
+        let a = spec.a.clone().expect("A(x)"); // ok: unit test
+        let mut c = Compiled::new(&spec, &[&a]).expect("a tape"); // ok: unit test
+        let mut rng = crate::sim::trigger::SplitMix64::new(17);
+        for _ in 0..200 {
+            let x: Vec<f64> = (0..6)
+                .map(|k| {
+                    let r = if k < 3 { 1.0 } else { 0.56 };
+                    rng.uniform(-r, r)
+                })
+                .collect();
+            assert!(c.eval(&x), "no division by 0");
+            let z0 = premise_values(&spec, &x).expect("premises"); // ok: unit test
+            let a0 = spec.state_env(&x, Mode::Exact).eval(&a.expr).expect("A(x)"); // ok: unit test
+            assert_eq!(c.premises().len(), z0.len());
+            for (p, q) in c.premises().iter().zip(&z0) {
+                assert!((p - q).abs() <= 1e-15 * q.abs().max(1.0), "{p} vs {q}");
+            }
+            let (m, shape) = c.matrix(0);
+            assert_eq!(shape, a0.shape());
+            let d = (nalgebra::DMatrix::from_column_slice(6, 6, m) - &a0).amax();
+            assert!(d <= 1e-13 * a0.amax().max(1.0), "A differs by {d}");
+        }
+    }
 }

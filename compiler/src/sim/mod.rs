@@ -36,7 +36,7 @@ pub mod scenario;
 pub mod signal;
 pub mod source;
 pub mod sweep;
-pub mod tape;
+pub use crate::tape;
 pub mod trigger;
 
 pub use metrics::{Metrics, Trace};

@@ -1,7 +1,9 @@
-//! Straight-line code for the simulator's hot paths: the plant's right-hand
-//! side, the disturbance signals and the premise vector, compiled once per run
-//! from the spec's expressions into a [`Tape`] of scalar instructions over a
-//! flat register file.
+//! Straight-line code for the hot paths: the simulator's plant right-hand
+//! side, disturbance signals and premise vector, and the model stage's
+//! consistency grid (A(x), B(x) and z(x) at up to 20,000 states), compiled
+//! once from the spec's expressions into a [`Tape`] of scalar instructions
+//! over a flat register file. A shared utility of the model and simulation
+//! stages (it depends on the language only).
 //!
 //! A tape is built by a [`Builder`] (a hash-consed expression graph: common
 //! subexpressions are shared, constants folded, products with a constant 0

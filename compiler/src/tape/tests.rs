@@ -40,8 +40,8 @@ fn shares_folds_and_faults() {
     assert_eq!(tape.run(&mut regs), Err(Fault));
 }
 
-const PENDULUM: &str = include_str!("../../../../specs/inverted_pendulum.tsf");
-const XU: &str = include_str!("../../../../specs/xu2020_event_triggered.tsf");
+const PENDULUM: &str = include_str!("../../../specs/inverted_pendulum.tsf");
+const XU: &str = include_str!("../../../specs/xu2020_event_triggered.tsf");
 
 /// The pendulum spec with `theta'` replaced by `theta_dot` (and `extra`
 /// items added), checked.
