@@ -8,7 +8,7 @@
 
 use super::premise::{premise_values, rule_weight, PremiseLayout, TermSpec};
 use super::LocalModel;
-use crate::tape::lower::{Lowerer, Scope, SymMat};
+use crate::tape::lower::{Lowerer, Scope};
 use crate::tape::{Builder, Registers, Tape};
 use nalgebra::DMatrix;
 use tsf_lang::eval::Mode;
@@ -217,16 +217,9 @@ impl Compiled {
     fn new(spec: &Spec, mats: &[&ModelMatrix]) -> Option<Self> {
         let n = spec.n();
         let mut lw = Lowerer::new(Builder::new(n), &spec.consts, &spec.fns);
-        let col = |lw: &Lowerer, at: usize, len: usize| {
-            SymMat::column((at..at + len).map(|k| lw.b.input(k)).collect())
-        };
         // The interpreter's bindings (`Spec::state_env`), in its order.
-        let mut scope = vec![("x".to_string(), col(&lw, 0, n))];
-        scope.extend(
-            spec.states
-                .iter()
-                .map(|s| (s.name.clone(), col(&lw, s.offset, s.len))),
-        );
+        let mut scope = vec![("x".to_string(), lw.inputs(0, n))];
+        scope.extend(lw.bind(&spec.states, 0));
         let scope: &Scope = &scope;
         let mut outputs = Vec::new();
         for p in &spec.premises {

@@ -14,7 +14,7 @@ use super::{Evaluator, SimError};
 use nalgebra::DMatrix;
 use tsf_lang::ast::Expr;
 use tsf_lang::eval::Mode;
-use tsf_lang::spec::{Dynamics, ModelMatrix, Signal, Spec};
+use tsf_lang::spec::{Dynamics, ModelMatrix, Spec};
 
 /// A model matrix: constant, or an expression of the state.
 enum Coef<'a> {
@@ -128,22 +128,14 @@ impl<'a> Plant<'a> {
         let spec = self.spec;
         let (n, dim, m, q) = (self.n, self.dim(), spec.m(), spec.q());
         let mut lw = Lowerer::new(Builder::new(1 + dim + m + q), &spec.consts, &spec.fns);
-        let col = |lw: &Lowerer, at: usize, len: usize| {
-            SymMat::column((at..at + len).map(|k| lw.b.input(k)).collect())
-        };
         let (x, u, w) = (
-            col(&lw, 1, n),
-            col(&lw, 1 + dim, m),
-            col(&lw, 1 + dim + m, q),
+            lw.inputs(1, n),
+            lw.inputs(1 + dim, m),
+            lw.inputs(1 + dim + m, q),
         );
-        let bind = |lw: &Lowerer, sigs: &[Signal], at: usize| -> Vec<(String, SymMat)> {
-            sigs.iter()
-                .map(|s| (s.name.clone(), col(lw, at + s.offset, s.len)))
-                .collect()
-        };
         // The evaluator's bindings, in its order (later ones shadow).
         let mut scope = vec![("x".to_string(), x.clone())];
-        scope.extend(bind(&lw, &spec.states, 1));
+        scope.extend(lw.bind(&spec.states, 1));
         let outputs = match &self.truth {
             Truth::Model { a, b, d } => {
                 let mut coef = |c: &Coef, scope: &Scope| match c {
@@ -172,10 +164,10 @@ impl<'a> Plant<'a> {
                     let c = lw.constant(value);
                     scope.push((name.clone(), c));
                 }
-                scope.extend(bind(&lw, &dy.extra_states, 1 + n));
-                scope.extend(bind(&lw, &spec.inputs, 1 + dim));
-                scope.extend(bind(&lw, &spec.disturbances, 1 + dim + m));
-                scope.push(("t".to_string(), col(&lw, 0, 1)));
+                scope.extend(lw.bind(&dy.extra_states, 1 + n));
+                scope.extend(lw.bind(&spec.inputs, 1 + dim));
+                scope.extend(lw.bind(&spec.disturbances, 1 + dim + m));
+                scope.push(("t".to_string(), lw.inputs(0, 1)));
                 let mut out = Vec::with_capacity(dim);
                 for (_, e) in &dy.derivatives {
                     out.extend(lw.expr(e, &scope)?.data);

@@ -14,6 +14,7 @@ use std::collections::HashMap;
 use tsf_lang::ast::{Arg, BinOp, Expr, ExprKind, IndexArg};
 use tsf_lang::eval::{Env, FnDef, Mat, Mode};
 use tsf_lang::limits::{MAX_EXPR_DEPTH, MAX_MATRIX_POWER};
+use tsf_lang::spec::Signal;
 use tsf_lang::Span;
 
 /// Most graph nodes one tape may have (a larger expansion keeps the interpreter).
@@ -98,6 +99,20 @@ impl<'a> Lowerer<'a> {
         fns: &'a HashMap<String, FnDef>,
     ) -> Self {
         Lowerer { b, consts, fns }
+    }
+
+    /// The inputs `at .. at + len` as a column.
+    pub fn inputs(&self, at: usize, len: usize) -> SymMat {
+        SymMat::column((at..at + len).map(|k| self.b.input(k)).collect())
+    }
+
+    /// Each of `signals` bound by name to its slice of the inputs, which
+    /// start at input `at` (the evaluator's bindings, in its order).
+    pub fn bind(&self, signals: &[Signal], at: usize) -> Vec<(String, SymMat)> {
+        signals
+            .iter()
+            .map(|s| (s.name.clone(), self.inputs(at + s.offset, s.len)))
+            .collect()
     }
 
     /// The tape computing `outputs`.
