@@ -78,7 +78,7 @@ pub struct Timings {
 /// region of the saturation (generalized sector condition).
 #[derive(Debug, Serialize)]
 pub struct RegionOfAttraction {
-    /// U = P (n x n rows).
+    /// U = P / c (n x n rows): the certified region E(P, c) is {x : x' U x <= 1}.
     #[serde(rename = "U")]
     pub u: Vec<Vec<f64>>,
     /// x0' U x0 for the objective's `for x0 = ...` (a certified containment).
@@ -541,11 +541,20 @@ pub fn report(
             .map(|d| {
                 // The region of the loop that ships: event-triggered, sampled
                 // or continuous.
-                let p = match (&d.trigger, &d.sampled) {
-                    (Some(t), _) => &t.p,
-                    (None, Some(s)) => &s.p,
-                    (None, None) => &d.p,
+                let (p, c) = match (&d.trigger, &d.sampled) {
+                    (Some(t), _) => (&t.p, t.plan.region_level()),
+                    (None, Some(s)) => (&s.p, s.plan.region_level()),
+                    (None, None) => (
+                        &d.p,
+                        d.plan
+                            .get::<crate::synth::objectives::Saturation>()
+                            .and_then(|s| s.level(&d.plan).ok())
+                            .unwrap_or(1.0),
+                    ),
                 };
+                // The certified region E(P, c) as E(U, 1).
+                let u = p / c;
+                let p = &u;
                 let level = |x0: &[f64]| {
                     let x0 = nalgebra::DVector::from_column_slice(x0);
                     (x0.transpose() * p * &x0)[(0, 0)]

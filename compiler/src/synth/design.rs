@@ -137,7 +137,8 @@ impl Design {
 pub struct SampledDesign {
     /// The problem data.
     pub plan: TriggerPlan,
-    /// P of the sampled loop's functional: under saturation the region is E(P, 1).
+    /// P of the sampled loop's functional: under saturation the region is
+    /// E(P, c), c = [`TriggerPlan::region_level`].
     pub p: DMatrix<f64>,
     /// Values of every variable of the solved problem.
     pub values: Vec<(String, DMatrix<f64>)>,
@@ -154,7 +155,8 @@ pub struct TriggerDesign {
     pub method: &'static str,
     /// Trigger weight Upsilon (n x n).
     pub weight: DMatrix<f64>,
-    /// P of the event-triggered loop's functional: the region is E(P, 1).
+    /// P of the event-triggered loop's functional: the region is E(P, c),
+    /// c = [`TriggerPlan::region_level`].
     pub p: DMatrix<f64>,
     /// Certified L-inf bound of the event-triggered loop at that nu.
     pub gamma: f64,
@@ -291,7 +293,7 @@ pub struct TriggerPlan {
     pub nu: f64,
     /// phi of V' + phi V - xi tau' tau < 0.
     pub phi: f64,
-    /// Upper bound on xi; the region level is 1 + xi_max tau_bar^2 / phi.
+    /// Upper bound on xi; it sets the region level ([`TriggerPlan::region_level`]).
     pub xi_max: f64,
     /// Bound tau_bar on ||tau(t)||.
     pub tau_bar: f64,
@@ -307,4 +309,22 @@ pub struct TriggerPlan {
     pub c: DMatrix<f64>,
     /// Disturbance feedthrough G_y.
     pub g: DMatrix<f64>,
+}
+
+impl TriggerPlan {
+    /// The level c of the certified region E(P, c) inside the linear region:
+    /// with the L-inf channel, the level reached from rest, xi_max tau_bar^2 /
+    /// phi ([`crate::synth::objectives::reach_level`]), raised to 1 when
+    /// initial sets must lie in E(P, 1); 1 otherwise.
+    pub fn region_level(&self) -> f64 {
+        if !self.linf {
+            return 1.0;
+        }
+        let reach = crate::synth::objectives::reach_level(self.xi_max, self.tau_bar, self.phi);
+        if self.contain.is_empty() {
+            reach
+        } else {
+            reach.max(1.0)
+        }
+    }
 }

@@ -38,9 +38,9 @@ pub enum Goal {
 
 /// What a family needs to know of the other objectives of its plan.
 pub trait PlanView {
-    /// The factor by which a disturbance bounded by `tau` enlarges the level
-    /// set the state can reach (1 when no objective bounds it that way).
-    fn level_factor(&self, tau: f64) -> Result<f64, BuildError>;
+    /// The level of V the state reaches from rest under a disturbance
+    /// bounded by `tau` (`None` when no objective bounds it that way).
+    fn reach_level(&self, tau: f64) -> Result<Option<f64>, BuildError>;
     /// An objective whose conditions cannot carry the sector (dead-zone) column.
     fn without_sector(&self) -> Option<ObjectiveKind>;
 }
@@ -109,9 +109,9 @@ pub trait Objective: ObjectiveBase + std::fmt::Debug + Send + Sync {
         false
     }
 
-    /// The factor by which a disturbance bounded by `tau` enlarges the level
-    /// set its conditions keep the state in (`None`: it does not bound it).
-    fn level_factor(&self, _tau: f64) -> Option<Result<f64, BuildError>> {
+    /// The level of V its conditions keep the state below from rest under a
+    /// disturbance bounded by `tau` (`None`: it does not bound it).
+    fn reach_level(&self, _tau: f64) -> Option<Result<f64, BuildError>> {
         None
     }
 

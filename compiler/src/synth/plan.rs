@@ -140,14 +140,15 @@ pub fn initial_plan(spec: &Spec, default_phi: f64) -> (Plan, Goal) {
 }
 
 impl PlanView for Plan {
-    fn level_factor(&self, tau: f64) -> Result<f64, BuildError> {
-        let mut f = 1.0f64;
+    fn reach_level(&self, tau: f64) -> Result<Option<f64>, BuildError> {
+        let mut level: Option<f64> = None;
         for o in self.objectives() {
-            if let Some(k) = o.level_factor(tau) {
-                f = f.max(k?);
+            if let Some(k) = o.reach_level(tau) {
+                let k = k?;
+                level = Some(level.map_or(k, |l| l.max(k)));
             }
         }
-        Ok(f)
+        Ok(level)
     }
 
     fn without_sector(&self) -> Option<ObjectiveKind> {

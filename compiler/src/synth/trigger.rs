@@ -486,14 +486,10 @@ pub(super) fn impose(
             }
         }
     }
-    // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = 1 + xi tau_bar^2 / phi:
+    // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = plan.region_level():
     // [P, r'; r, u_bar_s^2 / c] >= 0, solved as [P, k r'; k r, 1] >= 0 with k = sqrt(c) / u_bar_s
     // (the congruence diag(I, k); entries of one size when the gains are large).
-    let level = if plan.linf {
-        1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi
-    } else {
-        1.0
-    };
+    let level = plan.region_level();
     for j in (0..r).filter(|_| sector) {
         for (s, ub) in plan.levels.iter().enumerate() {
             let pick_s = pick(1, s, model.m);
@@ -691,11 +687,7 @@ pub fn lyapunov_scale(plan: &TriggerPlan) -> f64 {
     if !plan.contain.is_empty() {
         return 1.0;
     }
-    let level = if plan.linf {
-        1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi
-    } else {
-        1.0
-    };
+    let level = plan.region_level();
     let mut sigma = 1.0f64;
     for (f, g) in plan.gains.iter().zip(&plan.sector) {
         for (s, ub) in plan.levels.iter().enumerate() {

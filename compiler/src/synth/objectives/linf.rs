@@ -41,15 +41,24 @@ pub struct Linf {
     pub minimize_xi: bool,
 }
 
+/// The level V = x'Px stays below from rest under ||w(t)|| <= tau when
+/// V' <= -phi V + xi w'w: xi tau^2 / phi. From V(0) = v0 the bound is
+/// e^{-phi t} v0 + (1 - e^{-phi t}) xi tau^2 / phi <= max(v0, xi tau^2 / phi),
+/// so a region that must also hold the initial set E(P, 1) needs the larger of
+/// 1 and this level (Xu & Huang (19)/(40) use the sum 1 + xi tau^2 / phi).
+pub fn reach_level(xi: f64, tau: f64, phi: f64) -> f64 {
+    xi * tau * tau / phi
+}
+
 impl Linf {
-    /// The factor by which a disturbance bounded by `tau` enlarges the level
-    /// set V <= 1 that the state can reach: 1 + xi tau^2 / phi (Xu & Huang
-    /// (19)/(40)), with xi's bound when xi is a variable (the factor grows with
-    /// xi, so the bound's is sound); `None` when xi is free and unbounded.
-    pub fn level_factor(&self, tau: f64) -> Option<f64> {
+    /// The level the state reaches from rest under a disturbance bounded by
+    /// `tau` ([`reach_level`]), with xi's bound when xi is a variable (the
+    /// level grows with xi, so the bound's is sound); `None` when xi is free
+    /// and unbounded.
+    pub fn reach_level(&self, tau: f64) -> Option<f64> {
         self.xi
             .or(self.xi_bound)
-            .map(|xi| 1.0 + xi * tau * tau / self.phi)
+            .map(|xi| reach_level(xi, tau, self.phi))
     }
 }
 
@@ -74,10 +83,10 @@ impl Objective for Linf {
         true
     }
 
-    /// V stays below 1 + xi tau^2 / phi under ||w|| <= tau (Xu & Huang
-    /// (19)/(40)): a fixed xi is needed to know that level.
-    fn level_factor(&self, tau: f64) -> Option<Result<f64, BuildError>> {
-        Some(match Linf::level_factor(self, tau) {
+    /// From rest V stays below xi tau^2 / phi under ||w|| <= tau: a fixed xi
+    /// (or a bound on it) is needed to know that level.
+    fn reach_level(&self, tau: f64) -> Option<Result<f64, BuildError>> {
+        Some(match Linf::reach_level(self, tau) {
             Some(f) => Ok(f),
             None => Err(BuildError::Unsupported("the saturation region with a bounded disturbance needs a fixed xi: write `objective linf(...) ... with xi = ...`".into())),
         })

@@ -17,7 +17,7 @@ mod saturation;
 pub use decay::Decay;
 pub use hinf::Hinf;
 pub use input_norm::InputNorm;
-pub use linf::Linf;
+pub use linf::{reach_level, Linf};
 pub use output_norm::OutputNorm;
 pub use saturation::Saturation;
 

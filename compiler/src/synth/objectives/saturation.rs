@@ -2,12 +2,12 @@
 //! Garcia, Gomes da Silva & Queinnec, *Stability and Stabilization of Linear
 //! Systems with Saturating Actuators*, 2011): S = T^{-1} diagonal and
 //! Z_j = G_j X add the dead-zone column to the decay and L-inf blocks; the
-//! region E(P, 1) lies where |(F_j - G_j)_k x| <= u_bar_k, so it is a
-//! certified region of attraction.
+//! region E(P, c) lies where |(F_j - G_j)_k x| <= u_bar_k, so it is a
+//! certified region of attraction (c from [`Saturation::level`]).
 
 use crate::model::TsModel;
 use crate::synth::blocks::{region_block, row_selector, var_row};
-use crate::synth::objective::{BuildError, Ctx, Lmis, Objective, Sector};
+use crate::synth::objective::{BuildError, Ctx, Lmis, Objective, PlanView, Sector};
 use nalgebra::DMatrix;
 use tsf_lang::spec::{InitialSet, ObjectiveKind};
 use tsf_lmi::Expr;
@@ -23,6 +23,26 @@ pub struct Saturation {
     pub contain: Option<InitialSet>,
     /// Implied by declared `saturate` levels, not asked for by an objective.
     pub implied: bool,
+}
+
+impl Saturation {
+    /// The level c of the certified region E(P, c) the linear region must
+    /// hold: with a bounded disturbance and an objective that bounds the level
+    /// reached from rest (L-inf: xi tau^2 / phi), the larger of that level and
+    /// 1 (V <= max(V(0), reach) from V(0) <= 1: E(P, 1) is a region of
+    /// attraction under the disturbance); otherwise 1 (a normalization of P).
+    /// E(P, 1) also bounds the gains tsfc designs: with the reach level alone
+    /// a matched disturbance's L-inf gain tends to 0 with unbounded gains
+    /// (measured on Xu & Huang: gamma 0.001 after 20 SDPs). The sampled and
+    /// event-triggered certificates of fixed gains use the reach level alone
+    /// ([`crate::synth::TriggerPlan::region_level`]).
+    pub fn level(&self, plan: &dyn PlanView) -> Result<f64, BuildError> {
+        let reach = match self.disturbance_bound {
+            Some(tau) => plan.reach_level(tau)?,
+            None => None,
+        };
+        Ok(reach.map_or(1.0, |c| c.max(1.0)))
+    }
 }
 
 impl Objective for Saturation {
@@ -59,13 +79,7 @@ impl Objective for Saturation {
         if let Some(init) = &self.contain {
             lmis.contain(ctx.x, init, "region of attraction")?;
         }
-        // With a disturbance bounded by tau, V stays below 1 + xi tau^2 / phi
-        // only if the linear region holds on the larger level set: shrink the
-        // levels by that factor.
-        let shrink = match self.disturbance_bound {
-            Some(tau) => ctx.plan.level_factor(tau)?,
-            None => 1.0,
-        };
+        let shrink = self.level(ctx.plan)?;
         for (j, (mj, &zj)) in ctx.m.iter().zip(&sector.z).enumerate() {
             for (k, level) in self.levels.iter().enumerate() {
                 let row = mj
