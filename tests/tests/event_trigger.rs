@@ -116,11 +116,12 @@ fn trigger_conditions_hold_for_every_rule_pair_and_sampling_interval() {
     let (model, _) = compiled();
     let t = trigger();
     conditions_hold(model, t);
-    // The check can fail: the paper's threshold nu = 0.2 is not certified for
-    // these multipliers.
+    // The check can fail: four times the certified threshold is not certified
+    // for these multipliers.
     assert!(
-        violated_at(model, t, 0.2),
-        "nu = 0.2 unexpectedly satisfies the conditions"
+        violated_at(model, t, 4.0 * t.plan.nu),
+        "nu = {} unexpectedly satisfies the conditions",
+        4.0 * t.plan.nu
     );
 }
 
@@ -178,9 +179,11 @@ fn region_and_peak_hold(t: &TriggerDesign) {
             > 0.0
     );
     // E(P, c) inside |(F_j - G_j)_s x| <= u_bar_s: max over the ellipsoid of
-    // |k x| is sqrt(c k P^{-1} k'), c = 1 + xi_max tau_bar^2 / phi.
+    // |k x| is sqrt(c k P^{-1} k'), c = xi_max tau_bar^2 / phi, the level
+    // V' <= -phi V + xi tau'tau keeps V below from rest (xi <= xi_max).
     let plan = &t.plan;
-    let c = 1.0 + plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi;
+    assert!(xi <= plan.xi_max);
+    let c = plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi;
     let p_inv = p.clone().try_inverse().expect("P > 0");
     for (f, g) in plan.gains.iter().zip(&plan.sector) {
         for (s, ub) in plan.levels.iter().enumerate() {
@@ -226,8 +229,8 @@ fn certificate_and_report_cover_the_trigger() {
             assert_eq!(v.as_f64(), Some(t.weight[(a, b)]));
         }
     }
-    assert_eq!(trig["nu"].as_f64(), Some(0.05));
-    assert_eq!(trig["nu_min"].as_f64(), Some(0.02));
+    assert_eq!(trig["nu"].as_f64(), Some(0.25));
+    assert_eq!(trig["nu_min"].as_f64(), Some(0.2));
     assert_eq!(trig["sampling"][0].as_f64(), Some(0.001));
     assert_eq!(trig["sampling"][1].as_f64(), Some(0.1));
     let roa = &json["region_of_attraction"];
@@ -236,6 +239,15 @@ fn certificate_and_report_cover_the_trigger() {
     // the scenario starts outside it; the objective asks no containment.
     assert_eq!(roa["contains_scenario_x0"].as_bool(), Some(false));
     assert!(roa["scenario_x0_level"].as_f64().expect("level") > 1.0);
+    // U = P / c with c the certified level (xi_max tau_bar^2 / phi).
+    let plan = &t.plan;
+    let c = plan.xi_max * plan.tau_bar * plan.tau_bar / plan.phi;
+    let u00 = roa["U"][0][0].as_f64().expect("U");
+    assert!(
+        (u00 * c / t.p[(0, 0)] - 1.0).abs() < 1e-12,
+        "{u00} vs {}",
+        t.p[(0, 0)] / c
+    );
     assert!(roa["contains_x0"].is_null());
     let obj = &json["objectives"];
     assert_eq!(obj["linf_gamma_paper"].as_f64(), Some(0.1616));
@@ -244,8 +256,16 @@ fn certificate_and_report_cover_the_trigger() {
         .as_f64()
         .expect("event-triggered gamma");
     assert_eq!(g_et, t.gamma);
-    // Sampling and the event condition cost L-inf performance.
-    assert!(g_et > g_ct, "{g_et} vs {g_ct}");
+    // Issue 17's goal: the paper's nu = 0.2 (here up to 0.25) with gamma at or
+    // below its 0.1616. The continuous number is larger: the continuous design
+    // keeps E(P, 1) inside the linear region (it bounds the designed gains),
+    // the certificate of the fixed gains only the level reached from rest.
+    assert!(
+        t.plan.nu >= 0.2 && g_et <= 0.1616,
+        "nu {}, gamma {g_et}",
+        t.plan.nu
+    );
+    assert!(g_et < g_ct, "{g_et} vs {g_ct}");
     eprintln!(
         "linf gamma: continuous {g_ct:.4}, event-triggered {g_et:.4}, paper 0.1616; nu <= {}",
         t.plan.nu
@@ -322,7 +342,7 @@ pub(crate) fn paper_design(base: &Prepared) -> (Prepared, Options) {
 fn tsfc_design_and_paper_design_in_the_papers_scenario() {
     // Paper's x(0) and tau(t), 100 s, aperiodic sampling in [0.001, 0.1] s.
     let ours = run(prepared(), &Options::default());
-    eprintln!("{}", summary("tsfc (nu in [0.02, 0.05])", &ours));
+    eprintln!("{}", summary("tsfc (nu in [0.2, 0.25])", &ours));
     assert!(ours.metrics.converged, "{:?}", ours.metrics);
     assert!(ours.metrics.nonfinite_at_s.is_none());
     for u in &ours.trace.u {
@@ -335,7 +355,7 @@ fn tsfc_design_and_paper_design_in_the_papers_scenario() {
         ours.metrics.samples
     );
     let final_nu = ours.metrics.final_nu.expect("adaptive nu");
-    assert!((0.02..=0.05).contains(&final_nu), "nu = {final_nu}");
+    assert!((0.2..=0.25).contains(&final_nu), "nu = {final_nu}");
 
     let (paper, opts) = paper_design(prepared());
     let theirs = run(&paper, &opts);
@@ -354,7 +374,7 @@ fn tsfc_design_and_paper_design_in_the_papers_scenario() {
 /// with xi fixed, then one trigger SDP: 4 SDPs (the bisection took 10 + 1).
 /// The certified numbers are those of the bisection or better (issue 16's
 /// goal: continuous gamma <= 0.2906, event-triggered gamma <= 0.7639 at
-/// nu_c >= 0.05).
+/// nu_c >= 0.05; since issue 17 the spec certifies nu_c = 0.25).
 #[test]
 fn xi_search_and_trigger_take_four_sdps_with_the_same_or_better_gammas() {
     let (_, c) = compiled();
@@ -381,7 +401,7 @@ fn xi_search_and_trigger_take_four_sdps_with_the_same_or_better_gammas() {
     assert!(gamma >= xi && gamma <= 0.2906, "continuous gamma {gamma}");
     let t = trigger();
     assert!(t.gamma <= 0.7639, "event-triggered gamma {}", t.gamma);
-    assert!(t.plan.nu >= 0.05);
+    assert!(t.plan.nu >= 0.2);
     assert_eq!(design.log.solves, 4, "SDPs");
 }
 
@@ -397,7 +417,7 @@ fn trigger_scaling_is_a_congruence_of_every_condition() {
     let (model, _) = compiled();
     let t = trigger();
     let sigma = lyapunov_scale(&t.plan);
-    assert!(sigma > 1e3, "Xu & Huang's large gains: sigma = {sigma}");
+    assert!(sigma > 10.0, "Xu & Huang's large gains: sigma = {sigma}");
     let eps = Settings::default().eps;
     let plain = build(model, &t.plan, eps, false).expect("builds");
     let scaled = build(model, &scaled_plan(&t.plan, sigma), eps, false).expect("builds");
@@ -478,8 +498,8 @@ fn codesign_is_certified_for_the_emitted_gains() {
     let (design, _) = run.certified().expect("certified");
     // The certificate speaks of the emitted gains: those of the trigger plan.
     assert_eq!(design.gains, t.plan.gains);
-    // The spec's ceiling `max = 0.05` (the paper's 0.2 is not reached: docs).
-    assert_eq!(t.plan.nu, 0.05);
+    // The spec's ceiling `max = 0.25` (the paper's nu_ = 0.2, law capped at 0.25).
+    assert_eq!(t.plan.nu, 0.25);
     conditions_hold(&run.model, t);
     region_and_peak_hold(t);
     // The check can fail: a threshold well above the certified one breaks it.
@@ -491,7 +511,12 @@ fn codesign_is_certified_for_the_emitted_gains() {
         .achieved
         .get(tsfc::synth::Quantity::LinfGamma)
         .expect("continuous gamma of the co-designed gains");
-    assert!(continuous <= t.gamma, "{continuous} vs {}", t.gamma);
+    // The continuous analysis keeps E(P, 1) inside the linear region, the
+    // event-triggered certificate only the level reached from rest (docs): the
+    // continuous number is the larger one here, and the issue-17 goal's gamma
+    // (<= 0.1616) is the event-triggered one.
+    assert!(t.gamma < continuous, "{continuous} vs {}", t.gamma);
+    assert!(t.gamma <= 0.1616, "{}", t.gamma);
     eprintln!(
         "co-design: nu = {}, event-triggered gamma = {:.4} (continuous {continuous:.4}, paper 0.1616), rounds {:?}",
         t.plan.nu, t.gamma, t.rounds

@@ -625,8 +625,8 @@ fn tsfc_design_true_gain_lies_below_its_certificates() {
         "{measured} vs {event_triggered}"
     );
     // Transmissions against threshold and gains (paper's tau from x(0) = 0,
-    // 300 s): each design at both thresholds (0.2 is not certified for tsfc's
-    // gains; the paper's gains are not certified by tsfc at any threshold).
+    // 300 s): each design at both thresholds (tsfc's gains are certified up to
+    // 0.25; the paper's gains are not certified by tsfc at any threshold).
     for (who, d) in [("tsfc", tsfc_design()), ("paper", paper())] {
         for nu in [0.05, 0.2] {
             let (ratio, run) = papers_scenario_ratio(&model, &Design { nu, ..d.clone() });
@@ -636,10 +636,11 @@ fn tsfc_design_true_gain_lies_below_its_certificates() {
             );
         }
     }
-    // tsfc's gains give a 5 times smaller true gain than the paper's.
+    // tsfc's gains give a smaller true gain than the paper's (2.7 times since
+    // issue 17's region level: the continuous design's level is max(1, reach)).
     let paper_bound = linear_bounds(&linearize(&model, &paper().gains)).l1_lower;
     assert!(
-        ev.lb.l1_upper < paper_bound / 4.0,
+        ev.lb.l1_upper < paper_bound / 2.0,
         "tsfc's LTI gain {} vs the paper's {paper_bound}: the shipped gains changed; update docs/event_trigger.md",
         ev.lb.l1_upper
     );
