@@ -93,8 +93,9 @@ fn envelope(p: &Partial) -> Figure {
     }
 }
 
-/// A histogram of `values` (30 bins from the smallest to the largest), the
-/// x-range widened to show `mark`.
+/// A histogram of `values` (30 bins from the smallest to the largest; for
+/// whole numbers at most 30 bins of a whole width), the x-range widened to
+/// show `mark`.
 fn histogram(values: &[f64], mark: Option<Mark>) -> (Panel, String) {
     let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
     let (mut lo, mut hi) = finite
@@ -105,16 +106,24 @@ fn histogram(values: &[f64], mark: Option<Mark>) -> (Panel, String) {
     if finite.is_empty() {
         (lo, hi) = (0.0, 1.0);
     }
-    if hi <= lo {
+    // Counts (integers): bins of a whole number of values centred on them, so
+    // no bin holds one value where its neighbours hold two.
+    let integral = !finite.is_empty() && finite.iter().all(|v| v.fract() == 0.0);
+    if integral || hi <= lo {
         (lo, hi) = (lo - 0.5, hi + 0.5);
     }
-    let w = (hi - lo) / BINS as f64;
-    let mut counts = [0u64; BINS];
+    let (w, bins) = if integral {
+        let w = ((hi - lo) / BINS as f64).ceil();
+        (w, ((hi - lo) / w).ceil() as usize)
+    } else {
+        ((hi - lo) / BINS as f64, BINS)
+    };
+    let mut counts = vec![0u64; bins];
     for &v in &finite {
-        let k = (((v - lo) / w).floor().max(0.0) as usize).min(BINS - 1);
+        let k = (((v - lo) / w).floor().max(0.0) as usize).min(bins - 1);
         counts[k] += 1;
     }
-    let bars = (0..BINS)
+    let bars = (0..bins)
         .map(|k| (lo + k as f64 * w, lo + (k + 1) as f64 * w, counts[k]))
         .collect();
     let mut x = (lo - w, hi + w);
@@ -210,4 +219,37 @@ pub fn plots(p: &Partial) -> Result<Vec<(String, Vec<u8>)>, SimError> {
         files.push((format!("{}.mc.{tag}.png", p.name), png));
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bars(values: &[f64]) -> Vec<(f64, f64, u64)> {
+        let (panel, _) = histogram(values, None);
+        match &panel.marks[0].shape {
+            Shape::Bars(b) => b.clone(),
+            _ => panic!("bars expected"),
+        }
+    }
+
+    /// Counts from 180 to 238 (59 whole values) with two runs each: bins of
+    /// width 2 centred on whole numbers, every bin holding 4 runs but the last
+    /// (one value); with a width of 59/30 some bins held one value.
+    #[test]
+    fn whole_numbers_get_whole_bins() {
+        let values: Vec<f64> = (180..=238).flat_map(|v| [v as f64; 2]).collect();
+        let b = bars(&values);
+        assert_eq!(b.len(), 30);
+        for (k, &(lo, hi, count)) in b.iter().enumerate() {
+            assert_eq!(hi - lo, 2.0);
+            assert_eq!(lo, 179.5 + 2.0 * k as f64);
+            assert_eq!(count, if k == 29 { 2 } else { 4 }, "bin {k}");
+        }
+        assert_eq!(b.iter().map(|x| x.2).sum::<u64>(), values.len() as u64);
+        // One value: one bin around it.
+        assert_eq!(bars(&[7.0, 7.0]), vec![(6.5, 7.5, 2)]);
+        // Fractional values keep 30 bins over their range.
+        assert_eq!(bars(&[0.5, 1.25, 3.0]).len(), BINS);
+    }
 }
