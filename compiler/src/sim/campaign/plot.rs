@@ -229,7 +229,7 @@ mod tests {
         let (panel, _) = histogram(values, None);
         match &panel.marks[0].shape {
             Shape::Bars(b) => b.clone(),
-            _ => panic!("bars expected"),
+            _ => panic!("bars expected"), // ok: test helper, the first mark is the bars
         }
     }
 
