@@ -14,7 +14,8 @@ use tsf_lmi::{Problem, Solution, SolveStatus};
 
 /// With `linf <= g`, the largest xi tried is g (1 - XI_CAP_REL).
 const XI_CAP_REL: f64 = 1e-6;
-/// The xi hint's SDP computes the linear-region level with this factor.
+/// The xi hint's first SDP bounds xi where the level reached from rest,
+/// xi tau^2 / phi, is this minus 1 (the region level is then max(1, it) = 1).
 const XI_HINT_LEVEL_FACTOR: f64 = 1.1;
 /// After a feasible xi from the hint, xi times this is tried next.
 const XI_PROBE: f64 = 0.9;
