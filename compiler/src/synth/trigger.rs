@@ -646,7 +646,11 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     let sector = (0..model.r())
         .map(|j| value(&format!("Z{}", j + 1)).map(|z| z * &design.p))
         .collect::<Result<Vec<_>, _>>()?;
+    // gamma >= xi; where step 1 is not balanced (gamma above xi, set by
+    // 1 / (phi lambda_min(P))) the sampled loop's optimum may trade a larger xi
+    // for a smaller gamma, so the cap follows the larger of the two.
     let xi1 = design.achieved.get(Quantity::LinfXi).unwrap_or(0.0);
+    let xi1 = xi1.max(design.achieved.get(Quantity::LinfGamma).unwrap_or(0.0));
     Ok(TriggerPlan {
         sampling: *sampling,
         event: true,
@@ -737,7 +741,7 @@ fn unscale_values(values: &mut [(String, DMatrix<f64>)], sigma: f64) {
 }
 
 /// xi of the event-triggered loop may be up to this multiple of step 1's xi
-/// (the region level 1 + xi tau_bar^2 / phi is computed with the bound).
+/// or gamma, the larger (the region level is computed with the bound).
 pub const XI_FACTOR: f64 = 4.0;
 
 impl Runner<'_> {
