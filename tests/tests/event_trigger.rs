@@ -574,3 +574,59 @@ fn codesign_and_papers_design_transmissions_in_300_s() {
         theirs.metrics.transmissions
     );
 }
+
+/// An inverted single-link arm (sector model of sinc(theta), torque limit 20,
+/// matched disturbance bounded by 0.5), written as a new user would: its
+/// continuous design is unbalanced (L-inf gamma far above xi, set by
+/// 1 / (phi lambda_min(P))), and with the trigger step's xi capped at 4 times
+/// step 1's xi the certificate refused the threshold the bisection advised.
+/// The cap now follows the larger of step 1's xi and gamma.
+const ARM: &str = "tsf 1;
+controller arm_et;
+const gl = 9.8;
+const c  = 0.2;
+state th, om;
+input u saturate 20.0;
+disturbance tau bound 0.5;
+output y = x;
+A(x) = [0, 1; gl * sinc(th), -c];
+B = [0; 1];
+D = B;
+premise z = sinc(th) range sinc(pi() / 3) .. 1;
+rules sector;
+objective linf(tau -> y) minimize with phi = 0.5;
+objective saturation region;
+trigger aperiodic {
+    sampling = 0.001 .. 0.005;
+    threshold nu = 0.0125;
+    weight = synthesize;
+}
+";
+
+#[test]
+fn unbalanced_step_one_still_certifies_the_trigger() {
+    let model = common::model_of("arm.tsf", ARM);
+    let info = SpecInfo {
+        path: "arm.tsf".into(),
+        sha256: String::new(),
+    };
+    let c = compile(&model, info, &Settings::default(), Default::default());
+    let (design, cert) = c.outcome.as_ref().unwrap_or_else(|e| panic!("{e}"));
+    assert!(cert.ok);
+    let q = |k| design.achieved.get(k).expect("step-1 L-inf");
+    let (xi1, gamma1) = (
+        q(tsfc::synth::Quantity::LinfXi),
+        q(tsfc::synth::Quantity::LinfGamma),
+    );
+    assert!(
+        gamma1 > 10.0 * xi1,
+        "step 1 balanced: xi {xi1}, gamma {gamma1}"
+    );
+    let t = design.trigger.as_ref().expect("a trigger design");
+    // The certified point needs xi above the old cap 4 xi1.
+    let xi = value(t, "xi_tr")[(0, 0)];
+    assert!(xi > 4.0 * xi1, "xi {xi} vs step 1 {xi1}");
+    assert!(t.gamma < gamma1, "{} vs {gamma1}", t.gamma);
+    conditions_hold(&model, t);
+    region_and_peak_hold(t);
+}
