@@ -531,50 +531,35 @@ pub fn report(
             tolerance: crate::model::MISMATCH_TOLERANCE,
             within_tolerance: c.worst <= crate::model::MISMATCH_TOLERANCE,
         }),
-        region_of_attraction: design
-            .filter(|d| {
-                certified
-                    && d.plan
-                        .get::<crate::synth::objectives::Saturation>()
-                        .is_some()
+        region_of_attraction: design.filter(|_| certified).and_then(|d| {
+            let sat = d.plan.get::<crate::synth::objectives::Saturation>()?;
+            // The region of the loop that ships: event-triggered, sampled
+            // or continuous (no region when its level cannot be computed).
+            let (p, c) = match (&d.trigger, &d.sampled) {
+                (Some(t), _) => (&t.p, t.plan.region_level()),
+                (None, Some(s)) => (&s.p, s.plan.region_level()),
+                (None, None) => (&d.p, sat.level(&d.plan).ok()?),
+            };
+            // The certified region E(P, c) as E(U, 1).
+            let u = p / c;
+            let p = &u;
+            let level = |x0: &[f64]| {
+                let x0 = nalgebra::DVector::from_column_slice(x0);
+                (x0.transpose() * p * &x0)[(0, 0)]
+            };
+            let objective_x0 = match &sat.contain {
+                Some(tsf_lang::spec::InitialSet::Point(x0)) => Some(level(x0)),
+                _ => None,
+            };
+            let scenario = model.spec.simulate.as_ref().map(|sim| level(&sim.x0));
+            Some(RegionOfAttraction {
+                u: rows(p),
+                x0_level: objective_x0,
+                contains_x0: objective_x0.map(|l| l <= 1.0),
+                scenario_x0_level: scenario,
+                contains_scenario_x0: scenario.map(|l| l <= 1.0),
             })
-            .map(|d| {
-                // The region of the loop that ships: event-triggered, sampled
-                // or continuous.
-                let (p, c) = match (&d.trigger, &d.sampled) {
-                    (Some(t), _) => (&t.p, t.plan.region_level()),
-                    (None, Some(s)) => (&s.p, s.plan.region_level()),
-                    (None, None) => (
-                        &d.p,
-                        d.plan
-                            .get::<crate::synth::objectives::Saturation>()
-                            .and_then(|s| s.level(&d.plan).ok())
-                            .unwrap_or(1.0),
-                    ),
-                };
-                // The certified region E(P, c) as E(U, 1).
-                let u = p / c;
-                let p = &u;
-                let level = |x0: &[f64]| {
-                    let x0 = nalgebra::DVector::from_column_slice(x0);
-                    (x0.transpose() * p * &x0)[(0, 0)]
-                };
-                let objective_x0 = d
-                    .plan
-                    .get::<crate::synth::objectives::Saturation>()
-                    .and_then(|s| match &s.contain {
-                        Some(tsf_lang::spec::InitialSet::Point(x0)) => Some(level(x0)),
-                        _ => None,
-                    });
-                let scenario = model.spec.simulate.as_ref().map(|sim| level(&sim.x0));
-                RegionOfAttraction {
-                    u: rows(p),
-                    x0_level: objective_x0,
-                    contains_x0: objective_x0.map(|l| l <= 1.0),
-                    scenario_x0_level: scenario,
-                    contains_scenario_x0: scenario.map(|l| l <= 1.0),
-                }
-            }),
+        }),
         trigger: design
             .filter(|_| certified)
             .and_then(|d| d.trigger.as_ref())
