@@ -8,6 +8,7 @@ use crate::cone::{Cone, ConeProgram, CscMatrix};
 use crate::error::{LmiError, Result};
 use crate::status::SolveStatus;
 
+use super::guard;
 use super::settings::{LinearSolver, SolveSettings};
 use super::solver::{ConeSolution, ConeSolver};
 
@@ -89,7 +90,9 @@ impl ConeSolver for ClarabelSolver {
             clarabel_settings(settings),
         )
         .map_err(|e| LmiError::Solver(e.to_string()))?;
-        solver.solve();
+        if guard::run(|| solver.solve()).is_err() {
+            return Ok(ConeSolution::failed(program.q.len()));
+        }
         let raw = &solver.solution;
         Ok(ConeSolution {
             status: status(raw.status),

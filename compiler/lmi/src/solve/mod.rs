@@ -3,6 +3,7 @@
 //! variables.
 
 mod clarabel;
+mod guard;
 mod settings;
 mod solver;
 

@@ -53,3 +53,20 @@ pub struct ConeSolution {
     /// The last primal iterate, one value per unknown.
     pub x: Vec<f64>,
 }
+
+impl ConeSolution {
+    /// The outcome of a solver that stopped abnormally (a failure inside the
+    /// solver's own linear algebra): a numerical error with no usable iterate.
+    pub fn failed(unknowns: usize) -> Self {
+        Self {
+            status: SolveStatus::NumericalError,
+            iterations: 0,
+            solve_time: 0.0,
+            objective: f64::NAN,
+            dual_objective: f64::NAN,
+            primal_residual: f64::NAN,
+            dual_residual: f64::NAN,
+            x: vec![f64::NAN; unknowns],
+        }
+    }
+}
