@@ -378,12 +378,18 @@ fn memory_estimate_matches_its_closed_form_and_bounds_the_floor() -> TestResult 
     Ok(())
 }
 
-/// Non-finite data makes Clarabel's PSD-cone scaling fail inside the
-/// solver (it unwraps its SVD); the seam reports a numerical error instead
-/// of a panic, and no iterate that could pass for a solution.
+/// Non-finite or overflowing data in b, q or A ends in a status that is not
+/// `Solved`, never a panic (Clarabel's own failures inside an iteration are
+/// caught by the seam's guard, unit-tested in `solve::guard`).
 #[test]
-fn a_failure_inside_clarabel_is_a_numerical_error_not_a_panic() -> TestResult {
-    for (at, poison) in [(0, f64::NAN), (1, f64::NAN), (2, f64::NAN), (0, f64::INFINITY), (2, 1e308)] {
+fn non_finite_data_ends_in_a_status_not_a_panic() -> TestResult {
+    for (at, poison) in [
+        (0, f64::NAN),
+        (1, f64::NAN),
+        (2, f64::NAN),
+        (0, f64::INFINITY),
+        (2, 1e308),
+    ] {
         let mut program = epigraph(false)?.cone_program();
         match at {
             0 => program.b[4] = poison,
@@ -395,7 +401,6 @@ fn a_failure_inside_clarabel_is_a_numerical_error_not_a_panic() -> TestResult {
             continue; // rejected at set-up: also no panic
         };
         assert_ne!(solution.status, SolveStatus::Solved, "poison {poison}");
-        eprintln!("poison {poison}: {:?} {} {}", solution.status, solution.iterations, solution.objective);
     }
     Ok(())
 }
