@@ -43,16 +43,25 @@ pub fn compile(
     if matches!(&outcome, Ok((_, c)) if !c.ok) {
         settings.eps *= 100.0;
         let (retry, retry_log) = run(model, &settings);
-        if let (Ok((d, c)), Ok(_)) = (&retry, &outcome) {
-            if c.ok {
-                let mut d = d.clone();
-                d.notes.push(format!(
-                    "certificate failed at margin {:.1e}; re-solved with margin {:.1e}",
-                    settings.eps / 100.0,
-                    settings.eps
-                ));
-                outcome = Ok((d, c.clone()));
-                log = retry_log;
+        let failed = format!(
+            "certificate failed at margin {:.1e}; re-solved with margin {:.1e}",
+            settings.eps / 100.0,
+            settings.eps
+        );
+        match retry {
+            Ok((mut d, c)) if c.ok => {
+                d.notes.push(failed);
+                outcome = Ok((d, c));
+                let first = std::mem::replace(&mut log, retry_log);
+                log.count_also(&first);
+            }
+            _ => {
+                if let Ok((d, _)) = &mut outcome {
+                    d.notes.push(format!(
+                        "{failed}, which did not certify either (its SDPs are counted)"
+                    ));
+                }
+                log.count_also(&retry_log);
             }
         }
     }

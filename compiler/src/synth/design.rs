@@ -72,6 +72,18 @@ pub struct SolverLog {
     pub last_status: Option<SolveStatus>,
 }
 
+impl SolverLog {
+    /// Adds the work of `other` (an earlier or discarded run of the same
+    /// compile) to this log: SDP count, times and the largest memory
+    /// estimate; the statuses and sizes of the kept SDP stay this log's.
+    pub fn count_also(&mut self, other: &SolverLog) {
+        self.solves += other.solves;
+        self.solve_time += other.solve_time;
+        self.build_time += other.build_time;
+        self.memory_estimate = self.memory_estimate.max(other.memory_estimate);
+    }
+}
+
 /// A synthesized (not yet certified) design.
 #[derive(Debug, Clone)]
 pub struct Design {
@@ -326,5 +338,44 @@ impl TriggerPlan {
         } else {
             reach.max(1.0)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SolverLog;
+    use std::time::Duration;
+    use tsf_lmi::SolveStatus;
+
+    #[test]
+    fn counting_a_second_run_adds_its_work_and_keeps_the_kept_status() {
+        let mut kept = SolverLog {
+            solves: 3,
+            status: Some(SolveStatus::Solved),
+            iterations: 19,
+            solve_time: Duration::from_secs(2),
+            build_time: Duration::from_millis(300),
+            memory_estimate: 10,
+            last_status: Some(SolveStatus::Solved),
+            ..SolverLog::default()
+        };
+        let other = SolverLog {
+            solves: 25,
+            status: Some(SolveStatus::NumericalError),
+            iterations: 40,
+            solve_time: Duration::from_secs(990),
+            build_time: Duration::from_millis(200),
+            memory_estimate: 50,
+            last_status: Some(SolveStatus::NumericalError),
+            ..SolverLog::default()
+        };
+        kept.count_also(&other);
+        assert_eq!(kept.solves, 28);
+        assert_eq!(kept.solve_time, Duration::from_secs(992));
+        assert_eq!(kept.build_time, Duration::from_millis(500));
+        assert_eq!(kept.memory_estimate, 50);
+        assert_eq!(kept.status, Some(SolveStatus::Solved));
+        assert_eq!(kept.iterations, 19);
+        assert_eq!(kept.last_status, Some(SolveStatus::Solved));
     }
 }
