@@ -39,6 +39,12 @@ const PAPER_GAMMA: f64 = 0.1616;
 /// of both designs decays by more than e^-20 over the horizon (asserted).
 const DT: f64 = 0.01;
 const T_IR: f64 = 200.0;
+/// x(0) = 0: the L-inf gain (14) is defined from rest.
+const REST: [f64; 6] = [0.0; 6];
+/// The paper's initial state (Section 4): omega = 0, q = (-0.3802, 0.2124, 0.5013).
+const PAPER_X0: [f64; 6] = [0.0, 0.0, 0.0, -0.3802, 0.2124, 0.5013];
+/// The paper's decay rate phi (Section 4): V' <= -phi V + xi tau' tau, (29).
+const PHI: f64 = 0.05;
 
 /// The paper's Appendix A (gains read block-wise, and Upsilon), from the
 /// reference file kept with the specs.
@@ -328,6 +334,7 @@ struct Run {
 fn closed_loop(
     model: &TsModel,
     d: &Design,
+    x0: &[f64; 6],
     tau: &dyn Fn(usize) -> Vector3<f64>,
     steps: usize,
 ) -> Run {
@@ -344,7 +351,7 @@ fn closed_loop(
     let axpy = |x: &[f64; 6], k: &[f64; 6], c: f64| -> [f64; 6] {
         std::array::from_fn(|i| x[i] + c * k[i])
     };
-    let mut x = [0.0; 6];
+    let mut x = *x0;
     let mut xk = DVector::<f64>::zeros(6);
     let mut u = Vector3::zeros();
     let mut nu = d.nu;
@@ -445,10 +452,10 @@ fn evidence(name: &str, model: &TsModel, d: &Design) -> Evidence {
         region: d.region.clone(),
     };
     let ev = Evidence {
-        constant: closed_loop(model, d, &|_| constant_tau, steps),
-        bang: closed_loop(model, d, &bang_tau, steps),
-        constant_all: closed_loop(model, &every, &|_| constant_tau, steps),
-        bang_all: closed_loop(model, &every, &bang_tau, steps),
+        constant: closed_loop(model, d, &REST, &|_| constant_tau, steps),
+        bang: closed_loop(model, d, &REST, &bang_tau, steps),
+        constant_all: closed_loop(model, &every, &REST, &|_| constant_tau, steps),
+        bang_all: closed_loop(model, &every, &REST, &bang_tau, steps),
         lb,
         freq_peak,
     };
@@ -499,7 +506,7 @@ fn papers_scenario_ratio(model: &TsModel, d: &Design) -> (f64, Run) {
     let steps = (300.0 / DT).round() as usize;
     let tau = |k: usize| paper_tau(k as f64 * DT);
     let tau_peak = (0..steps).map(|k| tau(k).norm()).fold(0.0, f64::max);
-    let r = closed_loop(model, d, &tau, steps);
+    let r = closed_loop(model, d, &REST, &tau, steps);
     (r.peak / tau_peak, r)
 }
 
@@ -781,4 +788,132 @@ fn papers_gains_cross_pairs() {
         .collect();
     assert_eq!(unstable, vec![(3, 6), (4, 5), (5, 6), (6, 5)]);
     assert!((worst[4][5] - 0.0199).abs() < 5e-4, "{}", worst[4][5]);
+}
+
+/// Spectral abscissa max Re eig(m).
+fn abscissa(m: &DMatrix<f64>) -> f64 {
+    m.complex_eigenvalues()
+        .iter()
+        .map(|c| c.re)
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The paper's local models (7) at its printed operating points, built here
+/// from the formula (not from the spec): A_i = [-J^-1 w_i^x J, 0;
+/// 1/2 sqrt(1 - |q_i|^2) I, -1/2 w_i^x], B = [J^-1; 0].
+fn paper_local_models() -> (Vec<DMatrix<f64>>, DMatrix<f64>) {
+    let jm = inertia();
+    let j_inv = jm.try_inverse().expect("J invertible");
+    let points: [(f64, f64); 7] = [
+        (0.0, 0.0),
+        (0.0, 0.56),
+        (0.0, -0.56),
+        (0.5, 0.0),
+        (-0.5, 0.0),
+        (1.0, 0.56),
+        (-1.0, -0.56),
+    ];
+    let a = points
+        .iter()
+        .map(|&(w, q)| {
+            let w = Vector3::new(w, w, w);
+            let s = (1.0 - 3.0 * q * q).sqrt();
+            let mut a = DMatrix::zeros(6, 6);
+            a.view_mut((0, 0), (3, 3))
+                .copy_from(&(-j_inv * w.cross_matrix() * jm));
+            a.view_mut((3, 0), (3, 3))
+                .copy_from(&(0.5 * s * Matrix3::identity()));
+            a.view_mut((3, 3), (3, 3))
+                .copy_from(&(-0.5 * w.cross_matrix()));
+            a
+        })
+        .collect();
+    let mut b = DMatrix::zeros(6, 3);
+    b.view_mut((0, 0), (3, 3)).copy_from(&j_inv);
+    (a, b)
+}
+
+/// The paper's gains violate a necessary condition of its own Theorem 2.
+/// Every LMI Lambda_iir(h) < 0 (the mismatch relaxation (37)-(39) covers
+/// h(x(t)) = h(x(t_k)) = e_i, so it implies the matched vertex condition),
+/// evaluated at psi = (x, (A_i + B F_i) x, x, 0, 0, 0) (descriptor terms,
+/// L-terms, sector and disturbance rows vanish; the Y-terms, h-terms and
+/// the trigger's nu x'Upsilon x are >= 0), gives
+/// 2 x'U (A_i + B F_i) x + phi x'U x < 0, so A_i + B F_i + (phi / 2) I must be
+/// Hurwitz: max Re eig(A_i + B F_i) < -phi / 2 = -0.025. Four printed vertex
+/// loops miss it. tsfc's certified gains meet it for every pair (its
+/// certificate imposes every pair). Scaling the attitude (q) columns of the
+/// four failing gains by the smallest factor (steps of 0.1) that meets it
+/// leaves the transmissions of the paper's scenario unchanged (83 and 83).
+#[test]
+fn papers_gains_violate_the_decay_condition_of_their_theorem() {
+    let model = common::shipped(SPEC);
+    let (a, b) = paper_local_models();
+    // The spec's rules are the same local models (a second construction).
+    for (i, r) in model.rules.iter().enumerate() {
+        assert!((&r.a - &a[i]).amax() < 1e-12, "rule R{}", i + 1);
+        assert!((&r.b - &b).amax() < 1e-12, "rule R{}", i + 1);
+    }
+    let own = |gains: &[DMatrix<f64>]| -> Vec<f64> {
+        (0..7)
+            .map(|i| abscissa(&(&a[i] + &b * &gains[i])))
+            .collect()
+    };
+    let printed = paper().gains;
+    let alpha = own(&printed);
+    eprintln!(
+        "paper's own pairs, max Re eig(A_i + B F_i): {alpha:.4?}; needed < {:.4}",
+        -PHI / 2.0
+    );
+    let violated: Vec<usize> = (0..7).filter(|&i| alpha[i] >= -PHI / 2.0).collect();
+    assert_eq!(violated, vec![1, 2, 5, 6], "{alpha:?}");
+    assert!((alpha[5] + 0.0147).abs() < 5e-4, "{}", alpha[5]);
+    assert!((alpha[1] + 0.0174).abs() < 5e-4, "{}", alpha[1]);
+
+    // tsfc's shipped gains: every (plant, controller) pair meets it.
+    let shipped = tsfc_design().gains;
+    let worst = (0..7)
+        .flat_map(|i| (0..shipped.len()).map(move |j| (i, j)))
+        .map(|(i, j)| abscissa(&(&a[i] + &b * &shipped[j])))
+        .fold(f64::NEG_INFINITY, f64::max);
+    eprintln!("tsfc's shipped gains, worst pair: {worst:.4}");
+    assert!(worst < -PHI / 2.0, "{worst}");
+
+    // The smallest scaling of the failing rules' attitude columns that meets it.
+    let scaled = |s: f64| -> Vec<DMatrix<f64>> {
+        printed
+            .iter()
+            .enumerate()
+            .map(|(i, f)| {
+                let mut f = f.clone();
+                if violated.contains(&i) {
+                    f.columns_mut(3, 3).scale_mut(s);
+                }
+                f
+            })
+            .collect()
+    };
+    let s_min = (10..=40)
+        .map(|k| k as f64 / 10.0)
+        .find(|&s| own(&scaled(s)).iter().all(|&v| v < -PHI / 2.0))
+        .expect("a scaling up to 4 meets the condition");
+    eprintln!("smallest q-column scaling meeting it: {s_min}");
+    assert!((1.5..=2.5).contains(&s_min), "{s_min}");
+
+    // Transmissions in the paper's scenario (x(0), tau(t), 300 s, nu = 0.2,
+    // the paper's Upsilon): the condition does not cost transmissions.
+    let steps = (300.0 / DT).round() as usize;
+    let tau = |k: usize| paper_tau(k as f64 * DT);
+    let run = |gains: Vec<DMatrix<f64>>| {
+        let d = Design { gains, ..paper() };
+        closed_loop(&model, &d, &PAPER_X0, &tau, steps)
+    };
+    let (p, r) = (run(printed.clone()), run(scaled(s_min)));
+    eprintln!(
+        "paper's scenario, 300 s: printed gains {} of {} samples transmitted (final |x| {:.2e}); failing rules' q columns x {s_min}: {} of {} (final |x| {:.2e})",
+        p.transmissions, p.samples, p.last, r.transmissions, r.samples, r.last
+    );
+    assert!(p.last < 1e-3 && r.last < 1e-3, "{} {}", p.last, r.last);
+    let (p, r) = (p.transmissions as f64, r.transmissions as f64);
+    assert!((r - p).abs() <= 0.1 * p, "{r} vs {p}");
 }
