@@ -53,6 +53,9 @@ pub struct SolverInfo {
     pub iterations: u32,
     /// SDPs solved in all (bisections, line searches, diagnosis).
     pub solves: usize,
+    /// Of those, SDPs re-solved without the solver's equilibration after a
+    /// numerical failure in the first iterations (docs/limits.md, "solver scaling").
+    pub unscaled_retries: usize,
     /// Size of the kept SDP.
     pub problem: BTreeMap<String, serde_json::Value>,
 }
@@ -590,6 +593,7 @@ pub fn report(
             .map_or_else(|| "none".to_string(), |s| format!("{s:?}")),
             iterations: log.iterations,
             solves: log.solves,
+            unscaled_retries: log.unscaled_retries,
             problem,
         },
         timings_s: timings,

@@ -77,9 +77,13 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
             let _ = writeln!(s, "    {a}");
         }
     }
+    let retried = match r.solver.unscaled_retries {
+        0 => String::new(),
+        k => format!(" ({k} re-solved without equilibration)"),
+    };
     let _ = writeln!(
         s,
-        "  solver               clarabel, {} SDP(s), status {}, {} iterations; solve {:.3} s of {:.3} s total",
+        "  solver               clarabel, {} SDP(s){retried}, status {}, {} iterations; solve {:.3} s of {:.3} s total",
         r.solver.solves, r.solver.status, r.solver.iterations, r.timings_s.solve, r.timings_s.total
     );
     let _ = writeln!(s, "  report               {}", report_path.display());

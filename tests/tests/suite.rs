@@ -29,6 +29,7 @@ mod sector;
 mod shipped_specs;
 mod sim_evaluators;
 mod simulation;
+mod solver_scaling;
 mod stored_precision;
 mod sweep;
 mod synthesis;

@@ -45,6 +45,20 @@ impl SolveStatus {
         )
     }
 
+    /// Whether the solver reached a verdict: solved, or a certificate of
+    /// infeasibility, each possibly to reduced accuracy.
+    pub fn is_verdict(self) -> bool {
+        matches!(
+            self,
+            SolveStatus::Solved
+                | SolveStatus::AlmostSolved
+                | SolveStatus::PrimalInfeasible
+                | SolveStatus::DualInfeasible
+                | SolveStatus::AlmostPrimalInfeasible
+                | SolveStatus::AlmostDualInfeasible
+        )
+    }
+
     /// A short lower-case description for people (e.g. `"primal infeasible"`).
     pub fn describe(self) -> &'static str {
         match self {

@@ -334,6 +334,7 @@ impl ConeSolver for Stub {
             primal_residual: 0.0,
             dual_residual: 0.0,
             x: self.x.clone(),
+            unscaled_retry: false,
         })
     }
 }

@@ -27,6 +27,8 @@ pub enum Refusal {
     QNotDefinite(f64),
     /// The Kronecker system is singular or P is not positive definite.
     NoPositiveP(String),
+    /// The Schur iteration for the eigenvalues of A did not converge.
+    NoEigenvalues,
 }
 
 impl std::fmt::Display for Refusal {
@@ -35,6 +37,7 @@ impl std::fmt::Display for Refusal {
             Refusal::NotHurwitz(re) => write!(f, "the reference model A_m is not Hurwitz (largest real part of an eigenvalue {re:.6e})"),
             Refusal::QNotDefinite(l) => write!(f, "Q is not positive definite (smallest eigenvalue {l:.6e})"),
             Refusal::NoPositiveP(why) => write!(f, "no positive definite P: {why}"),
+            Refusal::NoEigenvalues => write!(f, "the eigenvalues of the reference model A_m did not converge in {SCHUR_ITERATIONS} Schur iterations"),
         }
     }
 }
@@ -44,10 +47,28 @@ fn sorted(mut v: Vec<f64>) -> Vec<f64> {
     v
 }
 
+/// Iteration cap of the Schur decomposition behind the eigenvalues of A.
+/// nalgebra's `complex_eigenvalues` iterates without a cap to machine
+/// precision and does not return on some matrices with repeated
+/// eigenvalues (a critically damped 6-state loop, in the tests).
+pub const SCHUR_ITERATIONS: usize = 100_000;
+
+/// Convergence tolerance of that Schur decomposition.
+const SCHUR_EPS: f64 = 1e-13;
+
+/// Real parts of the eigenvalues of `a`, ascending, by a Schur decomposition
+/// with a bounded number of iterations; `None` if it does not converge.
+pub fn eigenvalue_real_parts(a: &DMatrix<f64>) -> Option<Vec<f64>> {
+    let schur = a.clone().try_schur(SCHUR_EPS, SCHUR_ITERATIONS)?;
+    Some(sorted(
+        schur.complex_eigenvalues().iter().map(|z| z.re).collect(),
+    ))
+}
+
 /// Solves `A' P + P A = -Q` and checks A Hurwitz, Q > 0 and P > 0.
 pub fn solve(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<Lyapunov, Refusal> {
     let m = a.nrows();
-    let a_eig_re = sorted(a.complex_eigenvalues().iter().map(|z| z.re).collect());
+    let a_eig_re = eigenvalue_real_parts(a).ok_or(Refusal::NoEigenvalues)?;
     let worst = a_eig_re.last().copied().unwrap_or(f64::NAN);
     // NaN (an empty or non-finite A_m) is refused too.
     if worst.is_nan() || worst >= 0.0 {
@@ -93,6 +114,40 @@ pub fn solve(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<Lyapunov, Refusal> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A critically damped 6-state loop (Xu & Huang's spacecraft near the
+    /// origin, u = -J (0.44 w + 0.0968 q)) on which nalgebra's uncapped
+    /// `complex_eigenvalues` does not return: the capped Schur form does.
+    #[test]
+    fn repeated_eigenvalues_get_an_answer() {
+        let s = 0.5 * (1.0f64 - 3.0 * 0.056 * 0.056).sqrt();
+        let j = nalgebra::Matrix3::new(350.0, 3.0, 4.0, 3.0, 270.0, 10.0, 4.0, 10.0, 190.0);
+        let j_inv = j.try_inverse().expect("J invertible");
+        let f = DMatrix::from_row_slice(
+            3,
+            6,
+            &[
+                -154.0, -1.32, -1.76, -33.88, -0.2904, -0.3872, -1.32, -118.8, -4.4, -0.2904,
+                -26.136, -0.968, -1.76, -4.4, -83.6, -0.3872, -0.968, -18.392,
+            ],
+        );
+        let mut a = DMatrix::<f64>::zeros(6, 6);
+        let mut b = DMatrix::<f64>::zeros(6, 3);
+        for i in 0..3 {
+            a[(3 + i, i)] = s;
+            for k in 0..3 {
+                b[(i, k)] = j_inv[(i, k)];
+            }
+        }
+        let acl = &a + &b * &f;
+        let re = eigenvalue_real_parts(&acl).expect("converges");
+        // Each axis: s^2 + 0.44 s + 0.0968 * (2 s_q) with the J coupling;
+        // all six poles are real parts near -0.2 and negative.
+        assert_eq!(re.len(), 6);
+        assert!(re.iter().all(|&r| (-0.35..-0.1).contains(&r)), "{re:?}");
+        let l = solve(&acl, &DMatrix::identity(6, 6)).expect("Hurwitz");
+        assert!(l.residual < 1e-9, "{}", l.residual);
+    }
 
     #[test]
     fn scalar_and_diagonal_closed_forms() {

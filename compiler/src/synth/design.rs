@@ -70,6 +70,9 @@ pub struct SolverLog {
     pub memory_estimate: u64,
     /// Status of the last SDP solved (what a failed synthesis ended on).
     pub last_status: Option<SolveStatus>,
+    /// SDPs whose verdict came from a second run without the solver's
+    /// equilibration (the first stopped on a numerical failure at once).
+    pub unscaled_retries: usize,
 }
 
 impl SolverLog {
@@ -78,6 +81,7 @@ impl SolverLog {
     /// estimate; the statuses and sizes of the kept SDP stay this log's.
     pub fn count_also(&mut self, other: &SolverLog) {
         self.solves += other.solves;
+        self.unscaled_retries += other.unscaled_retries;
         self.solve_time += other.solve_time;
         self.build_time += other.build_time;
         self.memory_estimate = self.memory_estimate.max(other.memory_estimate);
@@ -357,6 +361,7 @@ mod tests {
             build_time: Duration::from_millis(300),
             memory_estimate: 10,
             last_status: Some(SolveStatus::Solved),
+            unscaled_retries: 1,
             ..SolverLog::default()
         };
         let other = SolverLog {
@@ -367,6 +372,7 @@ mod tests {
             build_time: Duration::from_millis(200),
             memory_estimate: 50,
             last_status: Some(SolveStatus::NumericalError),
+            unscaled_retries: 2,
             ..SolverLog::default()
         };
         kept.count_also(&other);
@@ -374,6 +380,7 @@ mod tests {
         assert_eq!(kept.solve_time, Duration::from_secs(992));
         assert_eq!(kept.build_time, Duration::from_millis(500));
         assert_eq!(kept.memory_estimate, 50);
+        assert_eq!(kept.unscaled_retries, 3);
         assert_eq!(kept.status, Some(SolveStatus::Solved));
         assert_eq!(kept.iterations, 19);
         assert_eq!(kept.last_status, Some(SolveStatus::Solved));

@@ -280,6 +280,7 @@ impl Runner<'_> {
         };
         let sampled = runner.sampled_attempt(&plan_for(&model, &design, (h, h)));
         self.log.solves += runner.log.solves;
+        self.log.unscaled_retries += runner.log.unscaled_retries;
         matches!(sampled, Ok(Some(_)))
     }
 }

@@ -181,6 +181,7 @@ impl Runner<'_> {
             .solve(settings)
             .map_err(|e| SynthError::Internal(format!("solver refused the {what}: {e}")))?;
         self.log.solves += 1;
+        self.log.unscaled_retries += usize::from(sol.unscaled_retry);
         self.log.last_status = Some(sol.status);
         self.log.solve_time += Duration::from_secs_f64(sol.solve_time.max(0.0));
         Ok(sol)

@@ -79,32 +79,74 @@ impl ConeSolver for ClarabelSolver {
         COPIES * 8 * entries
     }
 
+    /// Solves once; when that run stops on a numerical failure within its
+    /// first [`EARLY_FAILURE`] iterations and equilibration was on, solves
+    /// again without it and keeps the second run if it reached a verdict
+    /// (solved or infeasible, exactly or almost). Both runs' time is counted.
     fn solve(&self, program: &ConeProgram, settings: &SolveSettings) -> Result<ConeSolution> {
-        let cones: Vec<SupportedConeT<f64>> = program.cones.iter().map(|&c| cone(c)).collect();
-        let mut solver = DefaultSolver::new(
-            &csc(&program.p),
-            &program.q,
-            &csc(&program.a),
-            &program.b,
-            &cones,
-            clarabel_settings(settings),
-        )
-        .map_err(|e| LmiError::Solver(e.to_string()))?;
-        if guard::run(|| solver.solve()).is_err() {
-            return Ok(ConeSolution::failed(program.q.len()));
+        let first = solve_once(program, settings)?;
+        if !(settings.equilibrate && failed_early(&first)) {
+            return Ok(first);
         }
-        let raw = &solver.solution;
-        Ok(ConeSolution {
-            status: status(raw.status),
-            iterations: raw.iterations,
-            solve_time: raw.solve_time,
-            objective: raw.obj_val,
-            dual_objective: raw.obj_val_dual,
-            primal_residual: raw.r_prim,
-            dual_residual: raw.r_dual,
-            x: raw.x.clone(),
-        })
+        let plain = SolveSettings {
+            equilibrate: false,
+            ..settings.clone()
+        };
+        let mut second = solve_once(program, &plain)?;
+        second.solve_time += first.solve_time;
+        if second.status.is_verdict() {
+            second.unscaled_retry = true;
+            Ok(second)
+        } else {
+            Ok(ConeSolution {
+                solve_time: second.solve_time,
+                ..first
+            })
+        }
     }
+}
+
+/// Iterations within which a numerical failure is taken for a scaling
+/// failure. Clarabel's equilibration (Ruiz scaling of the data, entries kept
+/// in [1e-4, 1e4]) makes some feasible event-trigger SDPs stop at iteration 1
+/// with a zero step; the same data unscaled solve (docs/limits.md, "solver scaling").
+pub const EARLY_FAILURE: u32 = 3;
+
+/// Whether `s` stopped on a numerical failure within [`EARLY_FAILURE`] iterations.
+fn failed_early(s: &ConeSolution) -> bool {
+    matches!(
+        s.status,
+        SolveStatus::NumericalError | SolveStatus::InsufficientProgress
+    ) && s.iterations <= EARLY_FAILURE
+}
+
+/// One Clarabel run with `settings`.
+fn solve_once(program: &ConeProgram, settings: &SolveSettings) -> Result<ConeSolution> {
+    let cones: Vec<SupportedConeT<f64>> = program.cones.iter().map(|&c| cone(c)).collect();
+    let mut solver = DefaultSolver::new(
+        &csc(&program.p),
+        &program.q,
+        &csc(&program.a),
+        &program.b,
+        &cones,
+        clarabel_settings(settings),
+    )
+    .map_err(|e| LmiError::Solver(e.to_string()))?;
+    if guard::run(|| solver.solve()).is_err() {
+        return Ok(ConeSolution::failed(program.q.len()));
+    }
+    let raw = &solver.solution;
+    Ok(ConeSolution {
+        status: status(raw.status),
+        iterations: raw.iterations,
+        solve_time: raw.solve_time,
+        objective: raw.obj_val,
+        dual_objective: raw.obj_val_dual,
+        primal_residual: raw.r_prim,
+        dual_residual: raw.r_dual,
+        x: raw.x.clone(),
+        unscaled_retry: false,
+    })
 }
 
 /// The same matrix in Clarabel's type.
@@ -162,5 +204,37 @@ fn status(s: SolverStatus) -> SolveStatus {
         SolverStatus::NumericalError => SolveStatus::NumericalError,
         SolverStatus::InsufficientProgress => SolveStatus::InsufficientProgress,
         SolverStatus::CallbackTerminated => SolveStatus::CallbackTerminated,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{failed_early, EARLY_FAILURE};
+    use crate::solve::solver::ConeSolution;
+    use crate::status::SolveStatus;
+
+    fn ended(status: SolveStatus, iterations: u32) -> ConeSolution {
+        ConeSolution {
+            status,
+            iterations,
+            ..ConeSolution::failed(1)
+        }
+    }
+
+    #[test]
+    fn only_numerical_failures_at_the_start_are_retried() {
+        assert!(failed_early(&ended(SolveStatus::NumericalError, 1)));
+        assert!(failed_early(&ended(SolveStatus::InsufficientProgress, 0)));
+        assert!(failed_early(&ended(
+            SolveStatus::NumericalError,
+            EARLY_FAILURE
+        )));
+        assert!(!failed_early(&ended(
+            SolveStatus::NumericalError,
+            EARLY_FAILURE + 1
+        )));
+        assert!(!failed_early(&ended(SolveStatus::Solved, 1)));
+        assert!(!failed_early(&ended(SolveStatus::PrimalInfeasible, 1)));
+        assert!(!failed_early(&ended(SolveStatus::MaxIterations, 1)));
     }
 }

@@ -44,6 +44,9 @@ pub struct Solution {
     pub primal_residual: f64,
     /// Dual residual reported by the solver.
     pub dual_residual: f64,
+    /// Whether the solver ran a second time without its data scaling
+    /// ([`ConeSolution::unscaled_retry`]); this is that run.
+    pub unscaled_retry: bool,
     iterate: Assignment,
 }
 
@@ -116,6 +119,7 @@ impl Problem {
             dual_objective: self.objective.in_own_sense(raw.dual_objective),
             primal_residual: raw.primal_residual,
             dual_residual: raw.dual_residual,
+            unscaled_retry: raw.unscaled_retry,
             iterate: Assignment::from_unknowns(self, &raw.x),
         })
     }

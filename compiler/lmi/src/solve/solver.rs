@@ -52,6 +52,10 @@ pub struct ConeSolution {
     pub dual_residual: f64,
     /// The last primal iterate, one value per unknown.
     pub x: Vec<f64>,
+    /// Whether this is a second run without the solver's data scaling
+    /// (equilibration), made because the first stopped on a numerical failure
+    /// in its first iterations.
+    pub unscaled_retry: bool,
 }
 
 impl ConeSolution {
@@ -67,6 +71,7 @@ impl ConeSolution {
             primal_residual: f64::NAN,
             dual_residual: f64::NAN,
             x: vec![f64::NAN; unknowns],
+            unscaled_retry: false,
         }
     }
 }
