@@ -122,7 +122,7 @@ mod tests {
     fn repeated_eigenvalues_get_an_answer() {
         let s = 0.5 * (1.0f64 - 3.0 * 0.056 * 0.056).sqrt();
         let j = nalgebra::Matrix3::new(350.0, 3.0, 4.0, 3.0, 270.0, 10.0, 4.0, 10.0, 190.0);
-        let j_inv = j.try_inverse().expect("J invertible");
+        let j_inv = j.try_inverse().expect("J invertible"); // ok: unit test
         let f = DMatrix::from_row_slice(
             3,
             6,
@@ -140,12 +140,12 @@ mod tests {
             }
         }
         let acl = &a + &b * &f;
-        let re = eigenvalue_real_parts(&acl).expect("converges");
-        // Each axis: s^2 + 0.44 s + 0.0968 * (2 s_q) with the J coupling;
-        // all six poles are real parts near -0.2 and negative.
+        // Each axis about s^2 + 0.44 s + 0.0484 * 2 s (s = sqrt(1 - |q|^2) /
+        // 2 = 0.497), J coupling them: six poles with real parts near -0.22.
+        let re = eigenvalue_real_parts(&acl).expect("converges"); // ok: unit test
         assert_eq!(re.len(), 6);
         assert!(re.iter().all(|&r| (-0.35..-0.1).contains(&r)), "{re:?}");
-        let l = solve(&acl, &DMatrix::identity(6, 6)).expect("Hurwitz");
+        let l = solve(&acl, &DMatrix::identity(6, 6)).expect("Hurwitz"); // ok: unit test
         assert!(l.residual < 1e-9, "{}", l.residual);
     }
 
