@@ -12,7 +12,6 @@
 
 use crate::common;
 
-use nalgebra::{DMatrix, Matrix3, Vector3};
 use tsfc::compile::{compile, Status};
 use tsfc::report::SpecInfo;
 use tsfc::synth::{Quantity, Settings};
@@ -93,29 +92,10 @@ fn a_trigger_sdp_that_fails_scaled_is_certified_unscaled() {
 
     // Independent necessary condition of the certificate (V' <= -phi V at
     // every vertex loop): max Re eig(A_i + B F) < -phi / 2, from the formula.
-    let jm = Matrix3::new(350.0, 3.0, 4.0, 3.0, 270.0, 10.0, 4.0, 10.0, 190.0);
-    let j_inv = jm.try_inverse().expect("J invertible");
     let f = &t.plan.gains[0];
     for &(w, q) in &POINTS {
-        let wv = Vector3::new(w, w, w);
-        let mut a = DMatrix::<f64>::zeros(6, 6);
-        a.view_mut((0, 0), (3, 3))
-            .copy_from(&(-j_inv * wv.cross_matrix() * jm));
-        a.view_mut((3, 0), (3, 3))
-            .copy_from(&(0.5 * (1.0 - 3.0 * q * q).sqrt() * Matrix3::identity()));
-        a.view_mut((3, 3), (3, 3))
-            .copy_from(&(-0.5 * wv.cross_matrix()));
-        let mut b = DMatrix::<f64>::zeros(6, 3);
-        b.view_mut((0, 0), (3, 3)).copy_from(&j_inv);
-        // A bounded Schur iteration: this loop has double eigenvalues
-        // (zeta = 1), on which the unbounded one does not return.
-        let alpha = (&a + &b * f)
-            .try_schur(1e-13, 100_000)
-            .expect("Schur form")
-            .complex_eigenvalues()
-            .iter()
-            .map(|l| l.re)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let (a, b) = common::spacecraft_local_model(w, q);
+        let alpha = common::abscissa(&(&a + &b * f));
         assert!(alpha < -0.025, "({w}, {q}): {alpha}");
     }
 }

@@ -790,20 +790,9 @@ fn papers_gains_cross_pairs() {
     assert!((worst[4][5] - 0.0199).abs() < 5e-4, "{}", worst[4][5]);
 }
 
-/// Spectral abscissa max Re eig(m).
-fn abscissa(m: &DMatrix<f64>) -> f64 {
-    m.complex_eigenvalues()
-        .iter()
-        .map(|c| c.re)
-        .fold(f64::NEG_INFINITY, f64::max)
-}
-
-/// The paper's local models (7) at its printed operating points, built here
-/// from the formula (not from the spec): A_i = [-J^-1 w_i^x J, 0;
-/// 1/2 sqrt(1 - |q_i|^2) I, -1/2 w_i^x], B = [J^-1; 0].
+/// The paper's local models (7) at its printed operating points, built
+/// from the formula (not from the spec).
 fn paper_local_models() -> (Vec<DMatrix<f64>>, DMatrix<f64>) {
-    let jm = inertia();
-    let j_inv = jm.try_inverse().expect("J invertible");
     let points: [(f64, f64); 7] = [
         (0.0, 0.0),
         (0.0, 0.56),
@@ -815,22 +804,9 @@ fn paper_local_models() -> (Vec<DMatrix<f64>>, DMatrix<f64>) {
     ];
     let a = points
         .iter()
-        .map(|&(w, q)| {
-            let w = Vector3::new(w, w, w);
-            let s = (1.0 - 3.0 * q * q).sqrt();
-            let mut a = DMatrix::zeros(6, 6);
-            a.view_mut((0, 0), (3, 3))
-                .copy_from(&(-j_inv * w.cross_matrix() * jm));
-            a.view_mut((3, 0), (3, 3))
-                .copy_from(&(0.5 * s * Matrix3::identity()));
-            a.view_mut((3, 3), (3, 3))
-                .copy_from(&(-0.5 * w.cross_matrix()));
-            a
-        })
+        .map(|&(w, q)| common::spacecraft_local_model(w, q).0)
         .collect();
-    let mut b = DMatrix::zeros(6, 3);
-    b.view_mut((0, 0), (3, 3)).copy_from(&j_inv);
-    (a, b)
+    (a, common::spacecraft_local_model(0.0, 0.0).1)
 }
 
 /// The paper's gains violate a necessary condition of its own Theorem 2.
@@ -856,7 +832,7 @@ fn papers_gains_violate_the_decay_condition_of_their_theorem() {
     }
     let own = |gains: &[DMatrix<f64>]| -> Vec<f64> {
         (0..7)
-            .map(|i| abscissa(&(&a[i] + &b * &gains[i])))
+            .map(|i| common::abscissa(&(&a[i] + &b * &gains[i])))
             .collect()
     };
     let printed = paper().gains;
@@ -874,7 +850,7 @@ fn papers_gains_violate_the_decay_condition_of_their_theorem() {
     let shipped = tsfc_design().gains;
     let worst = (0..7)
         .flat_map(|i| (0..shipped.len()).map(move |j| (i, j)))
-        .map(|(i, j)| abscissa(&(&a[i] + &b * &shipped[j])))
+        .map(|(i, j)| common::abscissa(&(&a[i] + &b * &shipped[j])))
         .fold(f64::NEG_INFINITY, f64::max);
     eprintln!("tsfc's shipped gains, worst pair: {worst:.4}");
     assert!(worst < -PHI / 2.0, "{worst}");

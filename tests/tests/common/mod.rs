@@ -51,3 +51,33 @@ pub fn kim_lee_rules(a: f64, b: f64) -> [(nalgebra::DMatrix<f64>, nalgebra::DMat
         (m(&[-a, -4.33, 0.0, 0.05]), v(&[-b + 6.0, -1.0])),
     ]
 }
+
+/// Xu & Huang's spacecraft local model (7) at the operating point
+/// w = (w, w, w), q = (q, q, q), built from the formula (not from a spec):
+/// A = [-J^-1 w^x J, 0; 1/2 sqrt(1 - |q|^2) I, -1/2 w^x], B = [J^-1; 0],
+/// J = [350, 3, 4; 3, 270, 10; 4, 10, 190] kg m^2.
+pub fn spacecraft_local_model(w: f64, q: f64) -> (nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>) {
+    use nalgebra::{DMatrix, Matrix3, Vector3};
+    let jm = Matrix3::new(350.0, 3.0, 4.0, 3.0, 270.0, 10.0, 4.0, 10.0, 190.0);
+    let j_inv = jm.try_inverse().expect("J invertible");
+    let w = Vector3::new(w, w, w);
+    let mut a = DMatrix::zeros(6, 6);
+    a.view_mut((0, 0), (3, 3))
+        .copy_from(&(-j_inv * w.cross_matrix() * jm));
+    a.view_mut((3, 0), (3, 3))
+        .copy_from(&(0.5 * (1.0 - 3.0 * q * q).sqrt() * Matrix3::identity()));
+    a.view_mut((3, 3), (3, 3))
+        .copy_from(&(-0.5 * w.cross_matrix()));
+    let mut b = DMatrix::zeros(6, 3);
+    b.view_mut((0, 0), (3, 3)).copy_from(&j_inv);
+    (a, b)
+}
+
+/// Spectral abscissa max Re eig(m), by the compiler's capped Schur form
+/// (nalgebra's uncapped `complex_eigenvalues` does not return on some
+/// matrices with repeated eigenvalues).
+pub fn abscissa(m: &nalgebra::DMatrix<f64>) -> f64 {
+    tsfc::adaptive::lyapunov::eigenvalue_real_parts(m)
+        .and_then(|re| re.last().copied())
+        .expect("the Schur form converges")
+}
