@@ -118,6 +118,25 @@ pub struct TriggerReport {
     pub linf_xi: f64,
     /// Eigenvalues of Upsilon, ascending.
     pub weight_eigenvalues: Vec<f64>,
+    /// The premise region the certificate is local to (`region z = lo .. hi;`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<RegionReport>,
+}
+
+/// A local (regional) event-trigger certificate: the LMIs hold at vertices
+/// enclosing the model and gains the rules blend on the premise box, and the
+/// certified set E(P, c) (c = level) lies inside the box.
+#[derive(Debug, Serialize)]
+pub struct RegionReport {
+    /// The box, its memberships and the polytope of h.
+    pub premise_box: crate::model::region::PremiseBox,
+    /// The vertex sets (plant, controller).
+    pub vertices: Option<crate::synth::vertices::RegionVertices>,
+    /// The level c of E(P, c).
+    pub level: f64,
+    /// Per face, the extent max |c_k x| on E(P, c), sqrt(c c_k P^-1 c_k'),
+    /// recomputed from the solved P (at most the face's bound).
+    pub extents: Vec<f64>,
 }
 
 /// How far the model the rules blend, sum_i h_i(z(x)) M_i, is from the
@@ -539,7 +558,7 @@ pub fn report(
             // The region of the loop that ships: event-triggered, sampled
             // or continuous (no region when its level cannot be computed).
             let (p, c) = match (&d.trigger, &d.sampled) {
-                (Some(t), _) => (&t.p, t.plan.region_level()),
+                (Some(t), _) => (&t.p, t.level()),
                 (None, Some(s)) => (&s.p, s.plan.region_level()),
                 (None, None) => (&d.p, sat.level(&d.plan).ok()?),
             };
@@ -656,7 +675,30 @@ fn trigger_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> TriggerRe
         linf_gamma: t.gamma,
         linf_xi: t.xi,
         weight_eigenvalues: eig,
+        region: region_report(model, t),
     }
+}
+
+/// The regional part of the trigger report (`None` without a region).
+fn region_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> Option<RegionReport> {
+    let premise_box = t.plan.region.clone()?;
+    let level = t.level();
+    let p_inv = t.p.clone().try_inverse();
+    let extents = premise_box
+        .faces
+        .iter()
+        .map(|f| {
+            p_inv.as_ref().map_or(f64::INFINITY, |pi| {
+                (level * (&f.row * pi * f.row.transpose())[(0, 0)]).sqrt()
+            })
+        })
+        .collect();
+    Some(RegionReport {
+        vertices: crate::synth::vertices::describe(model, &t.plan).ok().flatten(),
+        premise_box,
+        level,
+        extents,
+    })
 }
 
 pub use crate::output::write_atomic;

@@ -451,6 +451,19 @@ pub enum Trigger {
     },
 }
 
+/// One `region z = lo .. hi;` of an aperiodic trigger: every component of
+/// premise `z` stays in `[lo, hi]` on the certified set (lo < 0 < hi, inside
+/// the premise's range).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionBound {
+    /// The premise variable.
+    pub premise: String,
+    /// Bounds of each of its components.
+    pub range: (f64, f64),
+    /// The setting.
+    pub span: Span,
+}
+
 /// How the gains of a `trigger periodic` loop are designed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PeriodicDesign {
@@ -722,6 +735,9 @@ pub struct Spec {
     /// How a synthesized trigger weight is designed (aperiodic trigger with
     /// `weight = synthesize`; None otherwise).
     pub trigger_synthesis: Option<TriggerSynthesis>,
+    /// `region z = lo .. hi;` of an aperiodic trigger: the premise box the
+    /// event-triggered certificate is local to (empty: the whole premise range).
+    pub trigger_region: Vec<RegionBound>,
     /// The L-inf gamma a source reports (`with paper = ...`), echoed in the
     /// report as `objectives.linf_gamma_paper`; not used by synthesis.
     pub linf_paper: Option<f64>,

@@ -7,6 +7,7 @@ mod coverage;
 pub mod explain;
 mod local;
 mod premise;
+pub mod region;
 
 pub use consistency::{Consistency, MISMATCH_TOLERANCE};
 pub use coverage::{check_coverage, Coverage};

@@ -34,6 +34,9 @@ pub struct Built {
     /// The Lyapunov matrices of a fuzzy Lyapunov function (then `x` is the
     /// full slack G and `m` holds Z_j = F_j G; [`super::lyapunov::fuzzy`]).
     pub fuzzy: Option<super::lyapunov::fuzzy::FuzzyVars>,
+    /// The spec's given gains when the LMIs are imposed at a region's
+    /// vertices (`m` then holds one term per vertex): the gains emitted.
+    pub given: Option<Vec<DMatrix<f64>>>,
 }
 
 impl Built {
@@ -45,6 +48,9 @@ impl Built {
         value: impl Fn(Var) -> Result<DMatrix<f64>, E>,
         x: &Cholesky<f64, Dyn>,
     ) -> Result<Vec<DMatrix<f64>>, E> {
+        if let Some(given) = &self.given {
+            return Ok(given.clone());
+        }
         self.m
             .iter()
             .map(|g| match g {
@@ -67,6 +73,13 @@ pub fn build(
     if let Some(phi) = super::lyapunov::fuzzy::phi(model) {
         return super::lyapunov::fuzzy::build(model, plan, relaxation, eps, reduce, phi);
     }
+    // With a premise region and one common given gain, the continuous loop
+    // is certified on the box: the LMIs at the vertices of the blended model,
+    // and E(P, c) inside the box (below).
+    let regional = crate::model::region::continuous_model(model)
+        .map_err(|what| BuildError::Lmi(tsf_lmi::LmiError::Dimension { what }))?;
+    let given = regional.as_ref().and_then(|_| model.spec.given_gains());
+    let model = regional.as_ref().map_or(model, |(m, _)| m);
     let (n, m, r) = (model.n, model.m, model.r());
     let mut problem = Problem::new();
     let x = problem.symmetric("X", n)?;
@@ -112,6 +125,19 @@ pub fn build(
     for o in plan.ordered(objectives::IMPOSE_ORDER) {
         o.impose(&ctx, &mut lmis)?;
     }
+    if let Some((_, region)) = &regional {
+        // E(P, c) inside |c_k x| <= b_k: c c_k X c_k' <= b_k^2 (X = P^{-1}),
+        // c the saturation objective's level (1 without one).
+        let level = match plan.get::<objectives::Saturation>() {
+            Some(sat) => sat.level(plan)?,
+            None => 1.0,
+        };
+        for face in &region.faces {
+            let inside = Expr::constant(&DMatrix::from_element(1, 1, face.bound * face.bound / level))?
+                .sub(Expr::product(&face.row, x, &face.row.transpose())?)?;
+            lmis.nonstrict(&format!("premise region {}", face.name), inside)?;
+        }
+    }
     Ok(Built {
         problem: lmis.problem,
         x,
@@ -119,5 +145,6 @@ pub fn build(
         reductions: lmis.relaxer.reductions,
         nonstrict: lmis.relaxer.nonstrict,
         fuzzy: None,
+        given,
     })
 }

@@ -187,6 +187,16 @@ pub struct TriggerDesign {
     pub rounds: Vec<super::codesign::Round>,
 }
 
+impl TriggerDesign {
+    /// The level c of the certified set E(P, c): xi tau_bar^2 / phi with the
+    /// solved xi when the LMIs tie it to xi (a premise region,
+    /// [`crate::synth::trigger::joint_level`]), else [`TriggerPlan::region_level`].
+    pub fn level(&self) -> f64 {
+        crate::synth::trigger::joint_level(&self.plan)
+            .map_or_else(|| self.plan.region_level(), |per_xi| per_xi * self.xi)
+    }
+}
+
 /// Why synthesis produced no design.
 #[derive(Debug, Clone)]
 pub enum SynthError {
@@ -325,6 +335,10 @@ pub struct TriggerPlan {
     pub c: DMatrix<f64>,
     /// Disturbance feedthrough G_y.
     pub g: DMatrix<f64>,
+    /// The premise box of a local certificate (`region z = lo .. hi;`): the
+    /// LMIs are imposed at vertices of the blended model over the memberships
+    /// the box allows, and E(P, c) is kept inside the box ([`crate::synth::vertices`]).
+    pub region: Option<crate::model::region::PremiseBox>,
 }
 
 impl TriggerPlan {

@@ -32,6 +32,7 @@ pub mod sampling;
 mod search;
 pub mod signal_trigger;
 pub mod trigger;
+pub mod vertices;
 
 pub use achieved::{Achieved, Quantity};
 pub use blocks::common_b;

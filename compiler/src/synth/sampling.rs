@@ -87,6 +87,7 @@ pub fn plan_for(model: &TsModel, design: &Design, sampling: (f64, f64)) -> Trigg
         d: Vec::new(),
         c: DMatrix::zeros(0, model.n),
         g: DMatrix::zeros(0, 0),
+        region: None,
     }
 }
 

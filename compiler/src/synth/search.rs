@@ -316,6 +316,16 @@ impl Runner<'_> {
                 Attempt::Infeasible | Attempt::Trouble(_) => lo = mid,
             }
         }
+        // The design at the bisection's edge has margins at the solver's
+        // tolerance; one more at xi + XI_MARGIN_REL (as for the hinted route)
+        // is strictly inside and is the one kept when it solves.
+        let backed = (hi * (1.0 + XI_MARGIN_REL)).min(cap);
+        if backed > hi {
+            if let Attempt::Solved(d) = self.attempt(&with(backed))? {
+                let note = format!("xi minimized by bisection (the linear-region level depends on it): feasible at {hi:.6}, not at {lo:.6}; designed with xi fixed at {backed:.6} (margin {XI_MARGIN_REL})");
+                return Ok(Some((*d, note)));
+            }
+        }
         let note = format!("xi minimized by bisection (the linear-region level depends on it): feasible at {hi:.6}, not at {lo:.6}");
         Ok(Some((best, note)))
     }

@@ -27,6 +27,7 @@ use super::objective::BuildError;
 use super::objectives::{Linf, Saturation};
 use super::reduction::Reduction;
 use super::search::Runner;
+use super::vertices::{self, PlantVertex};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use std::time::Instant;
@@ -188,7 +189,7 @@ fn lambda(
     model: &TsModel,
     plan: &TriggerPlan,
     v: &LoopVars<'_>,
-    (i, j): (usize, usize),
+    (plant, (f, g)): (&PlantVertex, (Factor<'_>, Factor<'_>)),
     h: f64,
     r: u8,
 ) -> Result<Expr, LmiError> {
@@ -196,7 +197,7 @@ fn lambda(
     let lay = Layout::of(model, plan);
     let k = lay.k;
     let (ex, es) = (pick(n, 0, k), pick(n, n, k));
-    let b = &model.rules[i].b;
+    let b = &plant.b;
     let id_n = DMatrix::identity(n, n);
     // x(t_k) = x(s) - e: the state the controller holds.
     let xk = match lay.e {
@@ -204,14 +205,13 @@ fn lambda(
         None => es.clone(),
     };
     // Phi = phi_c + B F_j x(t_k): the part without the gain is known.
-    let mut phi_c = &model.rules[i].a * &ex;
+    let mut phi_c = &plant.a * &ex;
     if let Some(at) = lay.dz {
         phi_c -= b * pick(m, at, k);
     }
     if let Some((at, q)) = lay.tau {
-        phi_c += &plan.d[i] * pick(q, at, k);
+        phi_c += &plant.d * pick(q, at, k);
     }
-    let f = v.gains[j];
     let exs = &ex - &es;
     let mut xi_block =
         v.p.between(&ex.transpose(), &phi_c)?
@@ -238,7 +238,6 @@ fn lambda(
     }
     if let (Some(at), Some(t)) = (lay.dz, v.t) {
         let edz = pick(m, at, k);
-        let g = v.sector[j];
         xi_block = xi_block
             .add(chain(&edz.transpose(), t, &DMatrix::identity(m, m), g, &xk)?.he()?)?
             .sub(t.between(&edz.transpose(), &edz)?.scale(2.0)?)?;
@@ -272,16 +271,12 @@ fn lambda(
     ])
 }
 
-/// Representatives of the plant rules whose Lambda_{ij r}(h) differ: rule i
-/// enters only through (A_i, B_i, D_i), so a rule with the same three as an
-/// earlier one repeats that rule's conditions exactly.
-fn distinct_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
-    let same = |a: usize, b: usize| {
-        let (ra, rb) = (&model.rules[a], &model.rules[b]);
-        ra.a == rb.a && ra.b == rb.b && plan.d.get(a) == plan.d.get(b)
-    };
-    (0..model.r())
-        .filter(|&i| (0..i).all(|e| !same(e, i)))
+/// Representatives of the plant vertices whose Lambda_{ij r}(h) differ: a
+/// vertex enters only through (A_i, B_i, D_i), so one with the same three as an
+/// earlier one repeats that vertex's conditions exactly.
+fn distinct_plant_rules(plant: &[PlantVertex]) -> Vec<usize> {
+    (0..plant.len())
+        .filter(|&i| (0..i).all(|e| plant[e] != plant[i]))
         .collect()
 }
 
@@ -317,14 +312,12 @@ fn on_segment(x: &[f64], a: &[f64], b: &[f64]) -> bool {
 /// combination of the kept ones: the left-out conditions are implied, with at
 /// least their margin. Removing one at a time keeps the convex hull of the
 /// kept rules (Xu & Huang: R1 is the midpoint of R4, R5 and R2 of R6, R7).
-fn kept_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
-    let data = |i: usize| -> Vec<f64> {
-        let rule = &model.rules[i];
-        let d = plan.d.get(i).map_or(&[][..], |d| d.as_slice());
-        [rule.a.as_slice(), rule.b.as_slice(), d].concat()
-    };
-    let mut kept = distinct_plant_rules(model, plan);
-    let points: Vec<Vec<f64>> = (0..model.r()).map(data).collect();
+fn kept_plant_rules(plant: &[PlantVertex]) -> Vec<usize> {
+    let mut kept = distinct_plant_rules(plant);
+    let points: Vec<Vec<f64>> = plant
+        .iter()
+        .map(|v| [v.a.as_slice(), v.b.as_slice(), v.d.as_slice()].concat())
+        .collect();
     while let Some(at) = kept.iter().position(|&i| {
         let others: Vec<usize> = kept.iter().copied().filter(|&k| k != i).collect();
         others.iter().enumerate().any(|(u, &k)| {
@@ -338,17 +331,13 @@ fn kept_plant_rules(model: &TsModel, plan: &TriggerPlan) -> Vec<usize> {
     kept
 }
 
-/// Representatives of the controller rules whose gains (F_j, G_j) differ:
+/// Representatives of the controller vertices whose gains (F_j, G_j) differ:
 /// known gains equal bit for bit, or the same unknown.
-fn distinct_controller_rules(v: &LoopVars<'_>) -> Vec<usize> {
-    let equal = |a: Factor<'_>, b: Factor<'_>| match (a, b) {
-        (Factor::Val(x), Factor::Val(y)) => x == y,
-        (Factor::Var(x), Factor::Var(y)) => x == y,
-        _ => false,
+fn distinct_controller_rules(ctrl: &[(Factor<'_>, Factor<'_>)]) -> Vec<usize> {
+    let same = |a: usize, b: usize| {
+        vertices::same(ctrl[a].0, ctrl[b].0) && vertices::same(ctrl[a].1, ctrl[b].1)
     };
-    let same =
-        |a: usize, b: usize| equal(v.gains[a], v.gains[b]) && equal(v.sector[a], v.sector[b]);
-    (0..v.gains.len())
+    (0..ctrl.len())
         .filter(|&j| (0..j).all(|e| !same(e, j)))
         .collect()
 }
@@ -422,7 +411,7 @@ pub(super) fn impose(
     eps: f64,
     reduce: bool,
 ) -> Result<TriggerBuilt, LmiError> {
-    let (n, r) = (model.n, model.r());
+    let n = model.n;
     let sector = !plan.levels.is_empty();
     let (gamma, xi) = if plan.linf {
         (
@@ -451,37 +440,41 @@ pub(super) fn impose(
     } else {
         &[h_min, h_max]
     };
+    let (plant, _) = vertices::plant_vertices(model, plan)?;
+    let blended = vertices::controller_vertices(plan, &vars.gains, &vars.sector)?;
+    let ctrl = blended.pairs();
+    let pairs = plant.len() * ctrl.len();
+    let tag = if plan.region.is_some() { "V" } else { "Q" };
     if reduce && h_min < h_max {
-        reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * r * r)));
+        reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * pairs)));
     }
-    let (plant, ctrl) = if reduce {
-        (
-            kept_plant_rules(model, plan),
-            distinct_controller_rules(&vars),
-        )
+    let (kept, kept_ctrl) = if reduce {
+        (kept_plant_rules(&plant), distinct_controller_rules(&ctrl))
     } else {
-        ((0..r).collect(), (0..r).collect())
+        ((0..plant.len()).collect(), (0..ctrl.len()).collect())
     };
-    if plant.len() * ctrl.len() < r * r {
+    if kept.len() * kept_ctrl.len() < pairs {
         let distinct = if reduce {
-            distinct_plant_rules(model, plan).len()
+            distinct_plant_rules(&plant).len()
         } else {
-            r
+            plant.len()
         };
         reductions.push(Reduction::Implied(format!(
-            "trigger: {} of the {} rule pairs per condition repeat kept ones or are implied by them (plant rules with the same A_i, B_i, D_i: {distinct} distinct, of which {} lie on a segment between two kept ones, where Lambda is convex in (A_i, B_i, D_i); controller rules with the same F_j, G_j: {} distinct) and are left out of the solved problem; the certificate checks them",
-            r * r - plant.len() * ctrl.len(),
-            r * r,
-            distinct - plant.len(),
-            ctrl.len()
+            "trigger: {} of the {pairs} plant/controller pairs per condition repeat kept ones or are implied by them (plant {} with the same A_i, B_i, D_i: {distinct} distinct, of which {} lie on a segment between two kept ones, where Lambda is convex in (A_i, B_i, D_i); controller {} with the same F_j, G_j: {} distinct) and are left out of the solved problem; the certificate checks them",
+            pairs - kept.len() * kept_ctrl.len(),
+            if plan.region.is_some() { "vertices" } else { "rules" },
+            distinct - kept.len(),
+            if plan.region.is_some() { "vertices" } else { "rules" },
+            kept_ctrl.len()
         )));
     }
     for &h in hs {
         for rr in [1u8, 2] {
-            for &i in &plant {
-                for &j in &ctrl {
-                    let name = format!("trigger r={rr} h={h} Q[{},{}]", i + 1, j + 1);
-                    problem.nsd(&name, lambda(model, plan, &vars, (i, j), h, rr)?, eps)?;
+            for &i in &kept {
+                for &j in &kept_ctrl {
+                    let name = format!("trigger r={rr} h={h} {tag}[{},{}]", i + 1, j + 1);
+                    let e = lambda(model, plan, &vars, (&plant[i], ctrl[j]), h, rr)?;
+                    problem.nsd(&name, e, eps)?;
                 }
             }
         }
@@ -489,16 +482,38 @@ pub(super) fn impose(
     // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = plan.region_level():
     // [P, r'; r, u_bar_s^2 / c] >= 0, solved as [P, k r'; k r, 1] >= 0 with k = sqrt(c) / u_bar_s
     // (the congruence diag(I, k); entries of one size when the gains are large).
+    // With a premise region and known gains the level is xi's own,
+    // c = xi tau_bar^2 / phi (xi an unknown): P - xi (tau_bar^2 / (phi b^2)) r' r >= 0
+    // is [P, r'; r, b^2 / c] >= 0 by a Schur complement, linear in (P, xi).
     let level = plan.region_level();
-    for j in (0..r).filter(|_| sector) {
+    let joint = joint_level(plan).zip(xi);
+    let one = || Expr::constant(&DMatrix::identity(1, 1));
+    let contain = |row: &DMatrix<f64>, bound: f64| -> Result<Expr, LmiError> {
+        match joint {
+            Some((per_xi, xi)) => vars.p.expr()?.sub(Expr::scaled(
+                xi,
+                &(row.transpose() * row * (per_xi / (bound * bound))),
+            )?),
+            None => region_block(
+                vars.p.expr()?,
+                Expr::constant(&(row * (level.sqrt() / bound)))?,
+                one()?,
+            ),
+        }
+    };
+    for (j, (f, g)) in ctrl.iter().enumerate().filter(|_| sector) {
         for (s, ub) in plan.levels.iter().enumerate() {
             let pick_s = pick(1, s, model.m);
-            let row = vars.gains[j]
-                .between(&pick_s, &DMatrix::identity(n, n))?
-                .sub(vars.sector[j].between(&pick_s, &DMatrix::identity(n, n))?)?
-                .scale(level.sqrt() / ub)?;
-            let rhs = Expr::constant(&DMatrix::identity(1, 1))?;
-            let e = region_block(vars.p.expr()?, row, rhs)?;
+            let e = match (f, g, joint) {
+                (Factor::Val(f), Factor::Val(g), Some(_)) => contain(&(&pick_s * (*f - *g)), *ub)?,
+                _ => {
+                    let row = f
+                        .between(&pick_s, &DMatrix::identity(n, n))?
+                        .sub(g.between(&pick_s, &DMatrix::identity(n, n))?)?
+                        .scale(level.sqrt() / ub)?;
+                    region_block(vars.p.expr()?, row, one()?)?
+                }
+            };
             nonstrict_psd(
                 &mut problem,
                 &mut nonstrict,
@@ -507,6 +522,17 @@ pub(super) fn impose(
                 eps,
             )?;
         }
+    }
+    // E(P, c) inside the premise box |c_k x| <= b_k, the same block.
+    for face in plan.region.iter().flat_map(|r| &r.faces) {
+        let e = contain(&face.row, face.bound)?;
+        nonstrict_psd(
+            &mut problem,
+            &mut nonstrict,
+            &format!("trigger premise region {}", face.name),
+            e,
+            eps,
+        )?;
     }
     for (name, e) in &plan.contain {
         nonstrict_psd(
@@ -535,6 +561,14 @@ pub(super) fn impose(
         reductions,
         nonstrict,
     })
+}
+
+/// With a premise region, the L-inf channel and no initial set, the level of
+/// E(P, c) is xi's own, c = xi tau_bar^2 / phi: `Some(tau_bar^2 / phi)`, the
+/// level per unit xi; `None`: the level is [`TriggerPlan::region_level`].
+pub fn joint_level(plan: &TriggerPlan) -> Option<f64> {
+    (plan.region.is_some() && plan.linf && plan.contain.is_empty())
+        .then(|| crate::synth::objectives::reach_level(1.0, plan.tau_bar, plan.phi))
 }
 
 /// `E(P, 1)` contains the initial set: `1 - x0' P x0 >= 0` for a point,
@@ -642,9 +676,18 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
             .map(|(_, v)| v.clone())
             .ok_or_else(|| unsupported(&format!("step-1 variable `{name}` missing")))
     };
-    // G_j = Z_j X^{-1} = Z_j P.
+    let region = crate::model::region::premise_box(model).map_err(SynthError::Unsupported)?;
+    // G_j = Z_j X^{-1} = Z_j P. With a premise region G = 0 (any G is a valid
+    // choice of the generalized sector condition; the controller never uses
+    // it): the LMIs then keep E(P, c) where |F(h)_s x| <= u_bar_s, so the
+    // actuator does not saturate on the certified set. Step 1's G_j, made for
+    // the whole premise range, certify far less there (Xu & Huang with a soft
+    // gain: nu 0.034 against 0.25 with G = 0).
     let sector = (0..model.r())
-        .map(|j| value(&format!("Z{}", j + 1)).map(|z| z * &design.p))
+        .map(|j| match region {
+            Some(_) => Ok(DMatrix::zeros(model.m, model.n)),
+            None => value(&format!("Z{}", j + 1)).map(|z| z * &design.p),
+        })
         .collect::<Result<Vec<_>, _>>()?;
     // gamma >= xi; where step 1 is not balanced (gamma above xi, set by
     // 1 / (phi lambda_min(P))) the sampled loop's optimum may trade a larger xi
@@ -670,6 +713,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
             .collect(),
         c: out.c.clone(),
         g: out.g.columns(sig.offset, sig.len).into_owned(),
+        region,
     })
 }
 
@@ -688,7 +732,7 @@ const MAX_LYAPUNOV_SCALE: f64 = 1e12;
 /// that size while xi and gamma stay near 1; the SDP is then badly scaled and
 /// the solver crawls. 1 without a linear region or with initial sets.
 pub fn lyapunov_scale(plan: &TriggerPlan) -> f64 {
-    if !plan.contain.is_empty() {
+    if !plan.contain.is_empty() || joint_level(plan).is_some() {
         return 1.0;
     }
     let level = plan.region_level();
@@ -726,6 +770,11 @@ pub fn scaled_plan(plan: &TriggerPlan, sigma: f64) -> TriggerPlan {
         d: plan.d.iter().map(|d| d * root).collect(),
         levels: plan.levels.iter().map(|u| u * root).collect(),
         c: &plan.c / root,
+        region: plan.region.as_ref().map(|r| {
+            let mut r = r.clone();
+            r.faces.iter_mut().for_each(|f| f.bound *= root);
+            r
+        }),
         ..plan.clone()
     }
 }
@@ -743,6 +792,7 @@ fn unscale_values(values: &mut [(String, DMatrix<f64>)], sigma: f64) {
 /// xi of the event-triggered loop may be up to this multiple of step 1's xi
 /// or gamma, the larger (the region level is computed with the bound).
 pub const XI_FACTOR: f64 = 4.0;
+
 
 impl Runner<'_> {
     /// Builds and solves the looped-functional problem of `plan` (reduced):
@@ -796,13 +846,25 @@ impl Runner<'_> {
             return Ok(None);
         };
         unscale_values(&mut all, sigma);
+        let xi = named(&all, "xi_tr")?[(0, 0)];
+        // With a premise region the cap does not set the level (joint_level):
+        // tighten it to the xi found, for the gain step of a co-design that
+        // follows (its level is the cap's).
+        let xi_max = if joint_level(plan).is_some() {
+            plan.xi_max.min(XI_FACTOR * xi)
+        } else {
+            plan.xi_max
+        };
         Ok(Some(TriggerDesign {
-            plan: plan.clone(),
+            plan: TriggerPlan {
+                xi_max,
+                ..plan.clone()
+            },
             method: "two_step",
             weight: named(&all, "Upsilon")?,
             p: named(&all, "Ptr")?,
             gamma: named(&all, "gamma_tr")?[(0, 0)],
-            xi: named(&all, "xi_tr")?[(0, 0)],
+            xi,
             values: all,
             reductions: built.reductions,
             rounds: Vec::new(),

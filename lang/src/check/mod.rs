@@ -159,6 +159,8 @@ struct Draft<'a> {
     /// Named signals (`signal name = expr;`).
     signals: Vec<NamedSignal>,
     trigger_synthesis: Option<TriggerSynthesis>,
+    /// `region z = lo .. hi;` settings of an aperiodic trigger (premises checked later).
+    trigger_region: Vec<crate::spec::RegionBound>,
     /// `design = ..` of a periodic trigger.
     periodic_design: Option<Spanned<crate::spec::PeriodicDesign>>,
     /// Where a synthesized trigger weight is asked for (when its design method checked).
@@ -232,6 +234,7 @@ impl<'a> Checker<'a> {
         self.resolve_sweep_signals(&mut draft);
         self.check_model(&draft, dims);
         let mut premises = self.premises(&draft.premise_items, &draft.rule_items);
+        let trigger_region = self.trigger_region(&draft.trigger_region, &premises);
         let matrices = [
             ("A", draft.a.as_ref(), dims.n, dims.n),
             ("B", draft.b.as_ref(), dims.n, dims.m),
@@ -338,6 +341,7 @@ impl<'a> Checker<'a> {
             signals: draft.signals,
             trigger: draft.trigger,
             trigger_synthesis: draft.trigger_synthesis,
+            trigger_region,
             linf_paper: self.linf_paper,
             emit: draft.emit,
             precision: draft.precision.unwrap_or(Precision::F64),

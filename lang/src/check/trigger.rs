@@ -7,7 +7,10 @@ use crate::ast::{Expr, ExprKind, Ident, Item, Setting, Value};
 use crate::diag::Diagnostic;
 use crate::limits::{DEFAULT_CODESIGN_ROUNDS, MAX_CODESIGN_ROUNDS};
 use crate::span::Spanned;
-use crate::spec::{Monitor, PeriodicDesign, Threshold, Trigger, TriggerSynthesis, Weight};
+use crate::num::Num;
+use crate::spec::{
+    Monitor, PeriodicDesign, RegionBound, Threshold, Trigger, TriggerSynthesis, Weight,
+};
 use std::collections::HashMap;
 
 impl Checker<'_> {
@@ -53,12 +56,100 @@ impl Checker<'_> {
                 draft.weight_span = Some(weight.map_or(kind.span, |s| s.span));
             }
         }
+        for s in settings.iter().filter(|s| s.key.node == "region") {
+            if let Some(b) = self.region_setting(s, &draft.trigger_region) {
+                draft.trigger_region.push(b);
+            }
+        }
         if matches!(t, Trigger::Periodic { .. }) {
             if let Some(s) = settings.iter().find(|s| s.key.node == "design") {
                 draft.periodic_design = self.periodic_design(s);
             }
         }
         draft.trigger = Some(Spanned::new(t, it.span));
+    }
+
+    /// `region z = lo .. hi;` (lo < 0 < hi; the premise is checked by
+    /// [`Checker::trigger_region`] once premises are known), at most once per premise.
+    fn region_setting(&mut self, s: &Setting, seen: &[RegionBound]) -> Option<RegionBound> {
+        let hint = "write `region z = lo .. hi;` with z a premise variable and lo < 0 < hi: the event-triggered certificate then holds on the states reached from rest, kept inside that premise box";
+        let Some(premise) = &s.qualifier else {
+            self.err(Diagnostic::error(s.span, "`region` names a premise variable").with_help(hint));
+            return None;
+        };
+        if seen.iter().any(|b| b.premise == premise.node) {
+            self.err(Diagnostic::error(
+                s.span,
+                format!("`region {}` is given twice", premise.node),
+            ));
+            return None;
+        }
+        let Value::Range(lo, hi, None) = &s.value else {
+            self.err(Diagnostic::error(s.span, "`region` takes a range `lo .. hi`").with_help(hint));
+            return None;
+        };
+        let lo = self.scalar(lo, "a region bound")?;
+        let hi = self.scalar(hi, "a region bound")?;
+        if !(lo < 0.0 && hi > 0.0) {
+            self.err(
+                Diagnostic::error(
+                    s.span,
+                    format!("`region {}` needs lo < 0 < hi, found {} .. {}", premise.node, Num(lo), Num(hi)),
+                )
+                .with_help("the certified set is an ellipsoid around the equilibrium x = 0, so the box must contain 0 inside"),
+            );
+            return None;
+        }
+        Some(RegionBound {
+            premise: premise.node.clone(),
+            range: (lo, hi),
+            span: s.span,
+        })
+    }
+
+    /// The `region` bounds checked against the premises: each names a premise
+    /// variable and lies inside its range.
+    pub(super) fn trigger_region(
+        &mut self,
+        bounds: &[RegionBound],
+        premises: &[crate::spec::Premise],
+    ) -> Vec<RegionBound> {
+        let mut out = Vec::new();
+        for b in bounds {
+            let Some(p) = premises.iter().find(|p| p.name == b.premise) else {
+                let names: Vec<&str> = premises.iter().map(|p| p.name.as_str()).collect();
+                self.err(
+                    Diagnostic::error(b.span, format!("`region {}`: no premise variable `{}`", b.premise, b.premise))
+                        .with_help(if names.is_empty() {
+                            "the spec has no premise variable".to_string()
+                        } else {
+                            format!("premise variables: {}", names.join(", "))
+                        }),
+                );
+                continue;
+            };
+            if let Some((lo, hi)) = p.range {
+                if b.range.0 < lo || b.range.1 > hi {
+                    self.err(
+                        Diagnostic::error(
+                            b.span,
+                            format!(
+                                "`region {}` = {} .. {} leaves the premise range {} .. {}",
+                                b.premise,
+                                Num(b.range.0),
+                                Num(b.range.1),
+                                Num(lo),
+                                Num(hi)
+                            ),
+                        )
+                        .with_help("the rules' coverage is checked on the premise range only: shrink the region"),
+                    );
+                    continue;
+                }
+            }
+            out.push(b.clone());
+        }
+        out
     }
 
     /// `design = emulation | discrete` of a periodic trigger.
@@ -95,7 +186,7 @@ impl Checker<'_> {
         let allowed: &[&str] = match kind.node.as_str() {
             "continuous" => &[],
             "periodic" => &["every", "design"],
-            "aperiodic" => &["sampling", "threshold", "weight"],
+            "aperiodic" => &["sampling", "threshold", "weight", "region"],
             "mixed" => &["on", "beta", "rho", "monitor", "sampling"],
             other => {
                 let kinds = ["continuous", "periodic", "aperiodic", "mixed"];
@@ -121,6 +212,8 @@ impl Checker<'_> {
                     }),
                 );
                 ok = false;
+            } else if s.key.node == "region" {
+                // One per premise: checked by `region_setting`.
             } else if get.insert(s.key.node.as_str(), s).is_some() {
                 self.err(Diagnostic::error(
                     s.key.span,

@@ -159,6 +159,7 @@ pub fn build(
         reductions: relaxer.reductions,
         nonstrict: relaxer.nonstrict,
         fuzzy: Some(FuzzyVars { p, y, mu }),
+        given: None,
     })
 }
 
