@@ -694,7 +694,9 @@ fn region_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> Option<Reg
         })
         .collect();
     Some(RegionReport {
-        vertices: crate::synth::vertices::describe(model, &t.plan).ok().flatten(),
+        vertices: crate::synth::vertices::describe(model, &t.plan)
+            .ok()
+            .flatten(),
         premise_box,
         level,
         extents,

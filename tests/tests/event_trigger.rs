@@ -60,16 +60,28 @@ fn lambda_by_polarization(
     h: f64,
     r: u8,
 ) -> DMatrix<f64> {
-    let (n, m) = (model.n, model.m);
+    let plant = (&model.rules[i].a, &model.rules[i].b, &t.plan.d[i]);
+    lambda_at(t, nu, plant, (&t.plan.gains[j], &t.plan.sector[j]), h, r)
+}
+
+/// [`lambda_by_polarization`] for a plant (A, B, D) and a controller (F, G)
+/// given directly (a blended model of a regional certificate, say).
+pub(crate) fn lambda_at(
+    t: &TriggerDesign,
+    nu: f64,
+    (a, b, d): (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
+    (f, g): (&DMatrix<f64>, &DMatrix<f64>),
+    h: f64,
+    r: u8,
+) -> DMatrix<f64> {
+    let (n, m) = (a.nrows(), b.ncols());
     let plan = &t.plan;
-    let q = plan.d[i].ncols();
+    let q = d.ncols();
     let k = 3 * n + m + q;
     let (p, y, w) = (value(t, "Ptr"), value(t, "Ytr"), value(t, "Upsilon"));
     let (l1, l2) = (value(t, "L1"), value(t, "L2"));
     let tm = value(t, "T");
     let xi = value(t, "xi_tr")[(0, 0)];
-    let (a, b, d) = (&model.rules[i].a, &model.rules[i].b, &plan.d[i]);
-    let (f, g) = (&plan.gains[j], &plan.sector[j]);
     let y_inv = y.clone().try_inverse().expect("Y > 0");
     let h_max = plan.sampling.1;
     // psi = [x; x(s); e; dz; tau]
@@ -106,7 +118,7 @@ fn lambda_by_polarization(
     })
 }
 
-fn max_eig(m: &DMatrix<f64>) -> f64 {
+pub(crate) fn max_eig(m: &DMatrix<f64>) -> f64 {
     let s = 0.5 * (m + m.transpose());
     s.symmetric_eigen().eigenvalues.max()
 }

@@ -18,6 +18,7 @@ fn xu2020_checks_clean() {
     for name in [
         "xu2020_event_triggered.tsf",
         "xu2020_event_triggered_codesign.tsf",
+        "xu2020_regional.tsf",
     ] {
         let m = check(name);
         assert_eq!((m.n, m.m, m.r()), (6, 3, 7), "{name}");

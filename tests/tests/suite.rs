@@ -22,6 +22,7 @@ mod model_consistency;
 mod monte_carlo;
 mod objectives;
 mod plots;
+mod region;
 mod relaxation_map;
 mod rust_codegen;
 mod sampled_loop;

@@ -37,12 +37,12 @@ const TAU_BAR: f64 = 0.01;
 const PAPER_GAMMA: f64 = 0.1616;
 /// Impulse-response grid: step and horizon (s); the slowest closed-loop mode
 /// of both designs decays by more than e^-20 over the horizon (asserted).
-const DT: f64 = 0.01;
+pub(crate) const DT: f64 = 0.01;
 const T_IR: f64 = 200.0;
 /// x(0) = 0: the L-inf gain (14) is defined from rest.
-const REST: [f64; 6] = [0.0; 6];
+pub(crate) const REST: [f64; 6] = [0.0; 6];
 /// The paper's initial state (Section 4): omega = 0, q = (-0.3802, 0.2124, 0.5013).
-const PAPER_X0: [f64; 6] = [0.0, 0.0, 0.0, -0.3802, 0.2124, 0.5013];
+pub(crate) const PAPER_X0: [f64; 6] = [0.0, 0.0, 0.0, -0.3802, 0.2124, 0.5013];
 /// The paper's decay rate phi (Section 4): V' <= -phi V + xi tau' tau, (29).
 const PHI: f64 = 0.05;
 
@@ -78,17 +78,17 @@ pub(crate) fn appendix_a() -> (Vec<DMatrix<f64>>, DMatrix<f64>) {
 
 /// A design: PDC gains, trigger weight and the (fixed) threshold.
 #[derive(Clone)]
-struct Design {
-    gains: Vec<DMatrix<f64>>,
-    weight: DMatrix<f64>,
-    nu: f64,
+pub(crate) struct Design {
+    pub(crate) gains: Vec<DMatrix<f64>>,
+    pub(crate) weight: DMatrix<f64>,
+    pub(crate) nu: f64,
     /// The paper's adaptive law (mu1, mu2, mu3), unbounded; `None`: nu fixed.
-    adaptive: Option<(f64, f64, f64)>,
+    pub(crate) adaptive: Option<(f64, f64, f64)>,
     /// The certified region {x : x' U x <= 1} (tsfc's design), if any.
-    region: Option<DMatrix<f64>>,
+    pub(crate) region: Option<DMatrix<f64>>,
 }
 
-fn paper() -> Design {
+pub(crate) fn paper() -> Design {
     let (gains, weight) = appendix_a();
     Design {
         gains,
@@ -118,7 +118,7 @@ fn inertia() -> Matrix3<f64> {
 }
 
 /// Normalized memberships h_j(x) of the spec's rules.
-fn memberships(model: &TsModel, x: &[f64]) -> Vec<f64> {
+pub(crate) fn memberships(model: &TsModel, x: &[f64]) -> Vec<f64> {
     let z = premise_values(&model.spec, x).expect("premise values");
     let w: Vec<f64> = model.terms.iter().map(|t| rule_weight(t, &z)).collect();
     let s: f64 = w.iter().sum();
@@ -312,17 +312,17 @@ fn frequency_peak(lin: &Linearized) -> (f64, f64) {
 }
 
 /// What one closed-loop run measured.
-struct Run {
+pub(crate) struct Run {
     /// max_t |y(t)| (y = x), on the integration grid.
-    peak: f64,
+    pub(crate) peak: f64,
     /// |y| at the end.
-    last: f64,
-    transmissions: usize,
-    samples: usize,
+    pub(crate) last: f64,
+    pub(crate) transmissions: usize,
+    pub(crate) samples: usize,
     /// The threshold at the end (grows under the paper's law).
     final_nu: f64,
     /// max_t x' U x for the design's region (0 without one).
-    region_peak: f64,
+    pub(crate) region_peak: f64,
 }
 
 /// The nonlinear event-triggered loop: truth plant (2)-(3) with q0 =
@@ -331,7 +331,7 @@ struct Run {
 /// e' Upsilon e >= nu x(t_k)' Upsilon x(t_k), u = sum_j h_j(x(t_k)) F_j x(t_k)
 /// held between transmissions; RK4 with step DT, tau held on each step.
 /// `tau(k)` is the disturbance on step k (t in [k DT, (k + 1) DT)).
-fn closed_loop(
+pub(crate) fn closed_loop(
     model: &TsModel,
     d: &Design,
     x0: &[f64; 6],
@@ -740,7 +740,7 @@ fn norm(x: &[f64]) -> f64 {
 }
 
 /// The paper's disturbance (Section 4), N m.
-fn paper_tau(t: f64) -> Vector3<f64> {
+pub(crate) fn paper_tau(t: f64) -> Vector3<f64> {
     1e-3 * Vector3::new(
         -1.5 + 2.0 * (0.06 * t).cos() - 0.5 * (0.2 * t).cos(),
         2.0 + 1.5 * (0.06 * t).sin() - (0.2 * t).cos(),

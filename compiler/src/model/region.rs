@@ -209,7 +209,11 @@ fn term_bounds(t: &TermSpec, z: &[(f64, f64)]) -> (f64, f64) {
             for (k, p) in point.iter().enumerate() {
                 let (lo, hi) = z[first + k];
                 near.push(p.clamp(lo, hi));
-                far.push(if (p - lo).abs() >= (hi - p).abs() { lo } else { hi });
+                far.push(if (p - lo).abs() >= (hi - p).abs() {
+                    lo
+                } else {
+                    hi
+                });
             }
             (
                 about_degree(&far, point, *sigma),
@@ -223,7 +227,10 @@ fn term_bounds(t: &TermSpec, z: &[(f64, f64)]) -> (f64, f64) {
 /// w_i between the products of its conjuncts' bounds (all in [0, 1]), then
 /// h_i in [wlo_i / (wlo_i + sum_k!=i whi_k), whi_i / (whi_i + sum_k!=i wlo_k)],
 /// widened outward by [`WIDEN`].
-pub fn membership_bounds(terms: &[Vec<TermSpec>], z: &[(f64, f64)]) -> Result<Vec<(f64, f64)>, String> {
+pub fn membership_bounds(
+    terms: &[Vec<TermSpec>],
+    z: &[(f64, f64)],
+) -> Result<Vec<(f64, f64)>, String> {
     let w: Vec<(f64, f64)> = terms
         .iter()
         .map(|ts| {
@@ -292,7 +299,9 @@ pub fn polytope_vertices(bounds: &[(f64, f64)]) -> Vec<Vec<f64>> {
 
 /// Whether two points agree to 1e-13 in every coordinate (relative to 1).
 fn close(a: &[f64], b: &[f64]) -> bool {
-    a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-13 * (1.0 + x.abs()))
+    a.iter()
+        .zip(b)
+        .all(|(x, y)| (x - y).abs() <= 1e-13 * (1.0 + x.abs()))
 }
 
 /// A vertex set enclosing the convex hull of some points.
@@ -334,7 +343,9 @@ pub fn enclose(points: &[Vec<f64>]) -> Result<Enclosure, String> {
             how: "points",
         });
     }
-    let mean = DVector::from_fn(len, |c, _| distinct.iter().map(|p| p[c]).sum::<f64>() / k as f64);
+    let mean = DVector::from_fn(len, |c, _| {
+        distinct.iter().map(|p| p[c]).sum::<f64>() / k as f64
+    });
     let centred = DMatrix::from_fn(k, len, |r, c| distinct[r][c] - mean[c]);
     let svd = centred.clone().svd(false, true);
     let v_t = svd.v_t.ok_or("region: no singular vectors")?;
@@ -437,7 +448,8 @@ mod tests {
             let m = DMatrix::from_fn(4, 4, |r, c| if r < 3 { e.vertices[c][r] } else { 1.0 });
             let rhs = DVector::from_vec(vec![p[0], p[1], p[2], 1.0]);
             let lam = m.svd(true, true).solve(&rhs, 1e-12).unwrap();
-            let fit = DMatrix::from_fn(4, 4, |r, c| if r < 3 { e.vertices[c][r] } else { 1.0 }) * &lam;
+            let fit =
+                DMatrix::from_fn(4, 4, |r, c| if r < 3 { e.vertices[c][r] } else { 1.0 }) * &lam;
             assert!((fit - rhs).amax() < 1e-9);
             assert!(lam.min() > -1e-9, "{p:?} outside: {lam}");
         }

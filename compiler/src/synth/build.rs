@@ -133,8 +133,12 @@ pub fn build(
             None => 1.0,
         };
         for face in &region.faces {
-            let inside = Expr::constant(&DMatrix::from_element(1, 1, face.bound * face.bound / level))?
-                .sub(Expr::product(&face.row, x, &face.row.transpose())?)?;
+            let inside = Expr::constant(&DMatrix::from_element(
+                1,
+                1,
+                face.bound * face.bound / level,
+            ))?
+            .sub(Expr::product(&face.row, x, &face.row.transpose())?)?;
             lmis.nonstrict(&format!("premise region {}", face.name), inside)?;
         }
     }

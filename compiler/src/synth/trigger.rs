@@ -793,7 +793,6 @@ fn unscale_values(values: &mut [(String, DMatrix<f64>)], sigma: f64) {
 /// or gamma, the larger (the region level is computed with the bound).
 pub const XI_FACTOR: f64 = 4.0;
 
-
 impl Runner<'_> {
     /// Builds and solves the looped-functional problem of `plan` (reduced):
     /// the built problem and every variable's value, or None when not solved.

@@ -82,9 +82,6 @@ pub fn plant_vertices(
     };
     let data: Vec<Vec<f64>> = rules.iter().map(PlantVertex::data).collect();
     let e = enclose(&images(&region.h_vertices, &data)).map_err(region_error)?;
-    if std::env::var("TSFC_DBG_REGION").is_ok() {
-        eprintln!("DBG h_bounds {:?}\nDBG h_vertices {} plant {:?} dim {} residual {:e}", region.h_bounds, region.h_vertices.len(), e.vertex_count, e.dim, e.residual);
-    }
     let (n, m, q) = (model.n, model.m, rules[0].d.ncols());
     let vertices = e
         .vertices

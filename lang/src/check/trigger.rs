@@ -6,8 +6,8 @@ use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Expr, ExprKind, Ident, Item, Setting, Value};
 use crate::diag::Diagnostic;
 use crate::limits::{DEFAULT_CODESIGN_ROUNDS, MAX_CODESIGN_ROUNDS};
-use crate::span::Spanned;
 use crate::num::Num;
+use crate::span::Spanned;
 use crate::spec::{
     Monitor, PeriodicDesign, RegionBound, Threshold, Trigger, TriggerSynthesis, Weight,
 };
@@ -74,7 +74,9 @@ impl Checker<'_> {
     fn region_setting(&mut self, s: &Setting, seen: &[RegionBound]) -> Option<RegionBound> {
         let hint = "write `region z = lo .. hi;` with z a premise variable and lo < 0 < hi: the event-triggered certificate then holds on the states reached from rest, kept inside that premise box";
         let Some(premise) = &s.qualifier else {
-            self.err(Diagnostic::error(s.span, "`region` names a premise variable").with_help(hint));
+            self.err(
+                Diagnostic::error(s.span, "`region` names a premise variable").with_help(hint),
+            );
             return None;
         };
         if seen.iter().any(|b| b.premise == premise.node) {
@@ -85,7 +87,9 @@ impl Checker<'_> {
             return None;
         }
         let Value::Range(lo, hi, None) = &s.value else {
-            self.err(Diagnostic::error(s.span, "`region` takes a range `lo .. hi`").with_help(hint));
+            self.err(
+                Diagnostic::error(s.span, "`region` takes a range `lo .. hi`").with_help(hint),
+            );
             return None;
         };
         let lo = self.scalar(lo, "a region bound")?;
@@ -119,12 +123,18 @@ impl Checker<'_> {
             let Some(p) = premises.iter().find(|p| p.name == b.premise) else {
                 let names: Vec<&str> = premises.iter().map(|p| p.name.as_str()).collect();
                 self.err(
-                    Diagnostic::error(b.span, format!("`region {}`: no premise variable `{}`", b.premise, b.premise))
-                        .with_help(if names.is_empty() {
-                            "the spec has no premise variable".to_string()
-                        } else {
-                            format!("premise variables: {}", names.join(", "))
-                        }),
+                    Diagnostic::error(
+                        b.span,
+                        format!(
+                            "`region {}`: no premise variable `{}`",
+                            b.premise, b.premise
+                        ),
+                    )
+                    .with_help(if names.is_empty() {
+                        "the spec has no premise variable".to_string()
+                    } else {
+                        format!("premise variables: {}", names.join(", "))
+                    }),
                 );
                 continue;
             };
