@@ -442,17 +442,36 @@ mod tests {
         let e = enclose(&pts).unwrap();
         assert_eq!((e.dim, e.how, e.vertices.len()), (2, "box", 4));
         assert!(e.residual < 1e-12);
-        // Every point is a convex combination of the corners: inside the box
-        // in the corners' own coordinates (check by least squares on barycentric weights).
+        // Every point lies in the parallelogram of the corners (mask order:
+        // 0 = (lo, lo), 1 = (hi, lo), 2 = (lo, hi)): p = v0 + a e1 + b e2
+        // with a, b in [0, 1], solved from the corners alone.
+        let v = |k: usize| DVector::from_column_slice(&e.vertices[k]);
+        let edges = DMatrix::from_columns(&[v(1) - v(0), v(2) - v(0)]);
         for p in &pts {
-            let m = DMatrix::from_fn(4, 4, |r, c| if r < 3 { e.vertices[c][r] } else { 1.0 });
-            let rhs = DVector::from_vec(vec![p[0], p[1], p[2], 1.0]);
-            let lam = m.svd(true, true).solve(&rhs, 1e-12).unwrap();
-            let fit =
-                DMatrix::from_fn(4, 4, |r, c| if r < 3 { e.vertices[c][r] } else { 1.0 }) * &lam;
-            assert!((fit - rhs).amax() < 1e-9);
-            assert!(lam.min() > -1e-9, "{p:?} outside: {lam}");
+            let rhs = DVector::from_column_slice(p) - v(0);
+            let ab = edges.clone().svd(true, true).solve(&rhs, 1e-12).unwrap();
+            assert!((&edges * &ab - &rhs).amax() < 1e-9, "{p:?} off the plane");
+            assert!(
+                ab.iter().all(|c| (-1e-9..=1.0 + 1e-9).contains(c)),
+                "{p:?} outside: {ab}"
+            );
         }
+        // The fourth corner closes the parallelogram.
+        assert!((v(3) - v(0) - (v(1) - v(0)) - (v(2) - v(0))).amax() < 1e-9);
+    }
+
+    #[test]
+    fn enclosure_refuses_more_than_its_vertex_limit() {
+        // 200 points spanning 7 dimensions: neither they nor 2^7 corners fit.
+        let pts: Vec<Vec<f64>> = (0..200)
+            .map(|i| {
+                (0..7)
+                    .map(|k| (i as f64 * (k as f64 + 1.3)).sin())
+                    .collect()
+            })
+            .collect();
+        let err = enclose(&pts).expect_err("too many vertices");
+        assert!(err.contains("at most 64"), "{err}");
     }
 
     #[test]

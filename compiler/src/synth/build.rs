@@ -76,8 +76,8 @@ pub fn build(
     // With a premise region and one common given gain, the continuous loop
     // is certified on the box: the LMIs at the vertices of the blended model,
     // and E(P, c) inside the box (below).
-    let regional = crate::model::region::continuous_model(model)
-        .map_err(|what| BuildError::Lmi(tsf_lmi::LmiError::Dimension { what }))?;
+    let regional =
+        crate::model::region::continuous_model(model).map_err(BuildError::Unsupported)?;
     let given = regional.as_ref().and_then(|_| model.spec.given_gains());
     let model = regional.as_ref().map_or(model, |(m, _)| m);
     let (n, m, r) = (model.n, model.m, model.r());

@@ -383,6 +383,10 @@ impl Runner<'_> {
         for (rule, f) in given.spec.rules.iter_mut().zip(gains) {
             rule.gain = Some((f.clone(), Default::default()));
         }
+        // The certificate rebuilds the synthesis form on the spec's rules, so
+        // the re-analysis stays on the whole premise range even with a region
+        // (only the trigger step is regional for a co-design).
+        given.spec.trigger_region.clear();
         let mut sub = Runner {
             model: &given,
             settings: self.settings,

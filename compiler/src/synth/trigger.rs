@@ -694,7 +694,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     // for a smaller gamma, so the cap follows the larger of the two.
     let xi1 = design.achieved.get(Quantity::LinfXi).unwrap_or(0.0);
     let xi1 = xi1.max(design.achieved.get(Quantity::LinfGamma).unwrap_or(0.0));
-    Ok(TriggerPlan {
+    let plan = TriggerPlan {
         sampling: *sampling,
         event: true,
         linf: true,
@@ -714,7 +714,13 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         c: out.c.clone(),
         g: out.g.columns(sig.offset, sig.len).into_owned(),
         region,
-    })
+    };
+    // A region's vertex sets, checked before any SDP (too many is a refusal).
+    vertices::describe(model, &plan).map_err(|e| match e {
+        LmiError::Dimension { what } => SynthError::Unsupported(what),
+        e => SynthError::Internal(e.to_string()),
+    })?;
+    Ok(plan)
 }
 
 /// Duality-gap tolerance (relative and absolute) of the trigger step's SDP:
