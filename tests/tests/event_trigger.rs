@@ -22,15 +22,7 @@ const SPEC: &str = "xu2020_event_triggered.tsf";
 /// The spec compiled once per test binary (the trigger SDP takes ~25 s).
 pub(crate) fn compiled() -> &'static (TsModel, Compiled) {
     static CELL: OnceLock<(TsModel, Compiled)> = OnceLock::new();
-    CELL.get_or_init(|| {
-        let model = common::shipped(SPEC);
-        let info = SpecInfo {
-            path: SPEC.into(),
-            sha256: String::new(),
-        };
-        let c = compile(&model, info, &Settings::default(), Default::default());
-        (model, c)
-    })
+    CELL.get_or_init(|| common::compile_shipped(SPEC))
 }
 
 pub(crate) fn trigger() -> &'static TriggerDesign {

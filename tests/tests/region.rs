@@ -15,11 +15,10 @@ use crate::xu_paper_evidence::{
 };
 use nalgebra::DMatrix;
 use std::sync::OnceLock;
-use tsfc::compile::{compile, Compiled, Status};
+use tsfc::compile::{Compiled, Status};
 use tsfc::model::region::premise_box;
 use tsfc::model::TsModel;
-use tsfc::report::SpecInfo;
-use tsfc::synth::{Settings, TriggerDesign};
+use tsfc::synth::TriggerDesign;
 
 const SPEC: &str = "xu2020_regional.tsf";
 /// The paper's printed L-inf gain.
@@ -29,15 +28,7 @@ const BOX: f64 = 0.02;
 
 fn compiled() -> &'static (TsModel, Compiled) {
     static CELL: OnceLock<(TsModel, Compiled)> = OnceLock::new();
-    CELL.get_or_init(|| {
-        let model = common::shipped(SPEC);
-        let info = SpecInfo {
-            path: SPEC.into(),
-            sha256: String::new(),
-        };
-        let c = compile(&model, info, &Settings::default(), Default::default());
-        (model, c)
-    })
+    CELL.get_or_init(|| common::compile_shipped(SPEC))
 }
 
 fn trigger() -> &'static TriggerDesign {

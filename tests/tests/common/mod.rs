@@ -36,6 +36,22 @@ pub fn shipped(name: &str) -> TsModel {
     model_of(name, &text)
 }
 
+/// A shipped spec's model and its compile with the default settings.
+pub fn compile_shipped(name: &str) -> (TsModel, tsfc::compile::Compiled) {
+    let model = shipped(name);
+    let info = tsfc::report::SpecInfo {
+        path: name.into(),
+        sha256: String::new(),
+    };
+    let c = tsfc::compile::compile(
+        &model,
+        info,
+        &tsfc::synth::Settings::default(),
+        Default::default(),
+    );
+    (model, c)
+}
+
 /// The seeded generator of the simulator (SplitMix64), for random test points.
 pub use tsfc::sim::trigger::SplitMix64 as Rng;
 
