@@ -439,7 +439,7 @@ mod tests {
                 pts.push(vec![1.0 + a + b, 2.0 + a - b, 3.0 + 2.0 * a]);
             }
         }
-        let e = enclose(&pts).unwrap();
+        let e = enclose(&pts).unwrap(); // ok: test
         assert_eq!((e.dim, e.how, e.vertices.len()), (2, "box", 4));
         assert!(e.residual < 1e-12);
         // Every point lies in the parallelogram of the corners (mask order:
@@ -449,7 +449,7 @@ mod tests {
         let edges = DMatrix::from_columns(&[v(1) - v(0), v(2) - v(0)]);
         for p in &pts {
             let rhs = DVector::from_column_slice(p) - v(0);
-            let ab = edges.clone().svd(true, true).solve(&rhs, 1e-12).unwrap();
+            let ab = edges.clone().svd(true, true).solve(&rhs, 1e-12).unwrap(); // ok: test
             assert!((&edges * &ab - &rhs).amax() < 1e-9, "{p:?} off the plane");
             assert!(
                 ab.iter().all(|c| (-1e-9..=1.0 + 1e-9).contains(c)),

@@ -271,77 +271,6 @@ fn lambda(
     ])
 }
 
-/// Representatives of the plant vertices whose Lambda_{ij r}(h) differ: a
-/// vertex enters only through (A_i, B_i, D_i), so one with the same three as an
-/// earlier one repeats that vertex's conditions exactly.
-fn distinct_plant_rules(plant: &[PlantVertex]) -> Vec<usize> {
-    (0..plant.len())
-        .filter(|&i| (0..i).all(|e| plant[e] != plant[i]))
-        .collect()
-}
-
-/// Relative tolerance of [`on_segment`] (rounding of the rule matrices).
-const SEGMENT_TOL: f64 = 1e-12;
-
-/// Whether `x` lies on the segment from `a` to `b` (to rounding).
-fn on_segment(x: &[f64], a: &[f64], b: &[f64]) -> bool {
-    let dot = |u: &mut dyn Iterator<Item = (f64, f64)>| u.map(|(p, q)| p * q).sum::<f64>();
-    let d: Vec<f64> = b.iter().zip(a).map(|(p, q)| p - q).collect();
-    let xa: Vec<f64> = x.iter().zip(a).map(|(p, q)| p - q).collect();
-    let dd = dot(&mut d.iter().copied().zip(d.iter().copied()));
-    if dd == 0.0 {
-        return false;
-    }
-    let t = dot(&mut xa.iter().copied().zip(d.iter().copied())) / dd;
-    let scale = [x, a, b]
-        .iter()
-        .flat_map(|v| v.iter())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    let off = xa
-        .iter()
-        .zip(&d)
-        .fold(0.0f64, |m, (p, q)| m.max((p - t * q).abs()));
-    (-SEGMENT_TOL..=1.0 + SEGMENT_TOL).contains(&t) && off <= SEGMENT_TOL * scale.max(1.0)
-}
-
-/// The plant rules the solved trigger problem keeps: the representatives of
-/// [`distinct_plant_rules`] less every rule whose (A_i, B_i, D_i) lies on the
-/// segment between two rules still kept. x' = Phi_ij psi is affine in
-/// (A_i, B_i, D_i), Xi is affine in Phi and h Phi' Y Phi is matrix-convex in Phi
-/// (Y > 0), so Lambda_{ij r}(h) at a convex combination is at most the same
-/// combination of the kept ones: the left-out conditions are implied, with at
-/// least their margin. Removing one at a time keeps the convex hull of the
-/// kept rules (Xu & Huang: R1 is the midpoint of R4, R5 and R2 of R6, R7).
-fn kept_plant_rules(plant: &[PlantVertex]) -> Vec<usize> {
-    let mut kept = distinct_plant_rules(plant);
-    let points: Vec<Vec<f64>> = plant
-        .iter()
-        .map(|v| [v.a.as_slice(), v.b.as_slice(), v.d.as_slice()].concat())
-        .collect();
-    while let Some(at) = kept.iter().position(|&i| {
-        let others: Vec<usize> = kept.iter().copied().filter(|&k| k != i).collect();
-        others.iter().enumerate().any(|(u, &k)| {
-            others[u + 1..]
-                .iter()
-                .any(|&l| on_segment(&points[i], &points[k], &points[l]))
-        })
-    }) {
-        kept.remove(at);
-    }
-    kept
-}
-
-/// Representatives of the controller vertices whose gains (F_j, G_j) differ:
-/// known gains equal bit for bit, or the same unknown.
-fn distinct_controller_rules(ctrl: &[(Factor<'_>, Factor<'_>)]) -> Vec<usize> {
-    let same = |a: usize, b: usize| {
-        vertices::same(ctrl[a].0, ctrl[b].0) && vertices::same(ctrl[a].1, ctrl[b].1)
-    };
-    (0..ctrl.len())
-        .filter(|&j| (0..j).all(|e| !same(e, j)))
-        .collect()
-}
-
 /// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are
 /// left out (every Lambda_r(h) is Xi + h Pi_r with Pi_r >= 0, so h_max
 /// implies them), and so are the pairs of repeated plant rules and of
@@ -449,13 +378,16 @@ pub(super) fn impose(
         reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * pairs)));
     }
     let (kept, kept_ctrl) = if reduce {
-        (kept_plant_rules(&plant), distinct_controller_rules(&ctrl))
+        (
+            vertices::kept_plant_rules(&plant),
+            vertices::distinct_controller_rules(&ctrl),
+        )
     } else {
         ((0..plant.len()).collect(), (0..ctrl.len()).collect())
     };
     if kept.len() * kept_ctrl.len() < pairs {
         let distinct = if reduce {
-            distinct_plant_rules(&plant).len()
+            vertices::distinct_plant_rules(&plant).len()
         } else {
             plant.len()
         };
@@ -983,24 +915,4 @@ pub(super) fn named(
         .find(|(n, _)| n == name)
         .map(|(_, v)| v.clone())
         .ok_or_else(|| SynthError::Internal(format!("internal error: `{name}` has no value")))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::on_segment;
-
-    #[test]
-    fn on_segment_accepts_points_of_the_segment_only() {
-        let (a, b) = ([1.0, -2.0, 0.5], [3.0, 2.0, 0.5]);
-        assert!(on_segment(&[2.0, 0.0, 0.5], &a, &b));
-        assert!(on_segment(&a, &a, &b));
-        assert!(on_segment(&[2.5, 1.0, 0.5], &a, &b));
-        // on the line, outside the segment
-        assert!(!on_segment(&[4.0, 4.0, 0.5], &a, &b));
-        assert!(!on_segment(&[0.0, -4.0, 0.5], &a, &b));
-        // off the line by 1e-9 relative
-        assert!(!on_segment(&[2.0, 0.0, 0.5 + 1e-9], &a, &b));
-        // a degenerate segment
-        assert!(!on_segment(&a, &a, &a));
-    }
 }

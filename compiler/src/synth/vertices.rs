@@ -221,3 +221,92 @@ pub(super) fn same(a: Factor<'_>, b: Factor<'_>) -> bool {
 fn region_error(what: String) -> LmiError {
     LmiError::Dimension { what }
 }
+
+/// Representatives of the plant vertices whose Lambda_{ij r}(h) differ: a
+/// vertex enters only through (A_i, B_i, D_i), so one with the same three as an
+/// earlier one repeats that vertex's conditions exactly.
+pub(super) fn distinct_plant_rules(plant: &[PlantVertex]) -> Vec<usize> {
+    (0..plant.len())
+        .filter(|&i| (0..i).all(|e| plant[e] != plant[i]))
+        .collect()
+}
+
+/// Relative tolerance of [`on_segment`] (rounding of the rule matrices).
+const SEGMENT_TOL: f64 = 1e-12;
+
+/// Whether `x` lies on the segment from `a` to `b` (to rounding).
+fn on_segment(x: &[f64], a: &[f64], b: &[f64]) -> bool {
+    let dot = |u: &mut dyn Iterator<Item = (f64, f64)>| u.map(|(p, q)| p * q).sum::<f64>();
+    let d: Vec<f64> = b.iter().zip(a).map(|(p, q)| p - q).collect();
+    let xa: Vec<f64> = x.iter().zip(a).map(|(p, q)| p - q).collect();
+    let dd = dot(&mut d.iter().copied().zip(d.iter().copied()));
+    if dd == 0.0 {
+        return false;
+    }
+    let t = dot(&mut xa.iter().copied().zip(d.iter().copied())) / dd;
+    let scale = [x, a, b]
+        .iter()
+        .flat_map(|v| v.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let off = xa
+        .iter()
+        .zip(&d)
+        .fold(0.0f64, |m, (p, q)| m.max((p - t * q).abs()));
+    (-SEGMENT_TOL..=1.0 + SEGMENT_TOL).contains(&t) && off <= SEGMENT_TOL * scale.max(1.0)
+}
+
+/// The plant rules the solved trigger problem keeps: the representatives of
+/// [`distinct_plant_rules`] less every rule whose (A_i, B_i, D_i) lies on the
+/// segment between two rules still kept. x' = Phi_ij psi is affine in
+/// (A_i, B_i, D_i), Xi is affine in Phi and h Phi' Y Phi is matrix-convex in Phi
+/// (Y > 0), so Lambda_{ij r}(h) at a convex combination is at most the same
+/// combination of the kept ones: the left-out conditions are implied, with at
+/// least their margin. Removing one at a time keeps the convex hull of the
+/// kept rules (Xu & Huang: R1 is the midpoint of R4, R5 and R2 of R6, R7).
+pub(super) fn kept_plant_rules(plant: &[PlantVertex]) -> Vec<usize> {
+    let mut kept = distinct_plant_rules(plant);
+    let points: Vec<Vec<f64>> = plant
+        .iter()
+        .map(|v| [v.a.as_slice(), v.b.as_slice(), v.d.as_slice()].concat())
+        .collect();
+    while let Some(at) = kept.iter().position(|&i| {
+        let others: Vec<usize> = kept.iter().copied().filter(|&k| k != i).collect();
+        others.iter().enumerate().any(|(u, &k)| {
+            others[u + 1..]
+                .iter()
+                .any(|&l| on_segment(&points[i], &points[k], &points[l]))
+        })
+    }) {
+        kept.remove(at);
+    }
+    kept
+}
+
+/// Representatives of the controller vertices whose gains (F_j, G_j) differ:
+/// known gains equal bit for bit, or the same unknown.
+pub(super) fn distinct_controller_rules(ctrl: &[(Factor<'_>, Factor<'_>)]) -> Vec<usize> {
+    let same = |a: usize, b: usize| same(ctrl[a].0, ctrl[b].0) && same(ctrl[a].1, ctrl[b].1);
+    (0..ctrl.len())
+        .filter(|&j| (0..j).all(|e| !same(e, j)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::on_segment;
+
+    #[test]
+    fn on_segment_accepts_points_of_the_segment_only() {
+        let (a, b) = ([1.0, -2.0, 0.5], [3.0, 2.0, 0.5]);
+        assert!(on_segment(&[2.0, 0.0, 0.5], &a, &b));
+        assert!(on_segment(&a, &a, &b));
+        assert!(on_segment(&[2.5, 1.0, 0.5], &a, &b));
+        // on the line, outside the segment
+        assert!(!on_segment(&[4.0, 4.0, 0.5], &a, &b));
+        assert!(!on_segment(&[0.0, -4.0, 0.5], &a, &b));
+        // off the line by 1e-9 relative
+        assert!(!on_segment(&[2.0, 0.0, 0.5 + 1e-9], &a, &b));
+        // a degenerate segment
+        assert!(!on_segment(&a, &a, &a));
+    }
+}
