@@ -127,11 +127,15 @@ pub fn build(
     }
     if let Some((_, region)) = &regional {
         // E(P, c) inside |c_k x| <= b_k: c c_k X c_k' <= b_k^2 (X = P^{-1}),
-        // c the saturation objective's level (1 without one).
-        let level = match plan.get::<objectives::Saturation>() {
-            Some(sat) => sat.level(plan)?,
-            None => 1.0,
+        // c the saturation objective's level, max(1, xi tau_bar^2 / phi): the
+        // set the continuous claims speak of (a region comes with a
+        // synthesized trigger weight, which the checker pairs with it).
+        let Some(sat) = plan.get::<objectives::Saturation>() else {
+            return Err(BuildError::Unsupported(
+                "region: the regional continuous certificate needs `objective saturation region` (its level sizes E(P, c))".into(),
+            ));
         };
+        let level = sat.level(plan)?;
         for face in &region.faces {
             let inside = Expr::constant(&DMatrix::from_element(
                 1,
