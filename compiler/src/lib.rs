@@ -1,9 +1,13 @@
 //! tsfc: the compiler for Takagi-Sugeno fuzzy controllers.
 //!
 //! The pipeline flows one way, one module per stage, plain data between them:
-//! `tsf_lang` (parse, resolve, shape-check) → model (local models, premises,
-//! coverage) → synthesis → LMI solve → certificate → tables (the plain data of
-//! a certified design) → code generation / simulation / report.
+//! `tsf_lang` (parse, resolve, shape-check) → [`model`] (local models,
+//! premises, coverage) → [`synth`] (objectives, relaxations and loop laws →
+//! LMIs → Clarabel) → [`certify`] → [`tables`] (the plain data of a certified
+//! design) → [`codegen`] / [`sim`] / [`report`]. [`driver`] is the one place
+//! that sequences the stages (for `tsfc compile`, `tsfc simulate`, the
+//! build-script [`Builder`] and adaptive designs alike); [`util`] holds what
+//! every stage may use. `tests/tests/tidy.rs` keeps imports flowing that way.
 //!
 //! The API for build scripts and tools is small: [`Builder`] (prost-build
 //! style, for `build.rs`), [`pipeline`] (read → compile → tables / generated
@@ -15,25 +19,16 @@
 
 #![allow(clippy::result_large_err)] // diagnostics travel on the cold error path
 
-pub mod adaptive;
-pub mod builder;
 pub mod codegen;
-pub mod error;
-pub mod output;
-pub mod pipeline;
+pub mod driver;
 pub mod report;
 pub mod sim;
+pub mod util;
 
 #[doc(hidden)]
 pub mod certify;
 #[doc(hidden)]
-pub mod compile;
-#[doc(hidden)]
-pub mod frontend;
-#[doc(hidden)]
 pub mod model;
-#[doc(hidden)]
-pub mod summary;
 #[doc(hidden)]
 pub mod synth;
 #[doc(hidden)]
@@ -41,5 +36,5 @@ pub mod tables;
 #[doc(hidden)]
 pub mod tape;
 
-pub use builder::Builder;
-pub use error::{Error, ErrorKind};
+pub use driver::{pipeline, Builder};
+pub use util::error::{Error, ErrorKind};

@@ -6,8 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use tsf_lang::diag;
 use tsf_lang::spec::Emit;
-use tsfc::frontend;
-use tsfc::pipeline;
+use tsfc::driver::{adaptive, frontend, pipeline};
 
 /// Exit codes: 0 ok, 1 spec error, 2 usage or I/O error, 3 infeasible or refused.
 mod exit {
@@ -224,8 +223,8 @@ fn compile(
         .as_ref()
         .map_or_else(Vec::new, |m| m.spec.emit.clone());
     let targets = emit_targets(emit.as_deref(), &spec_emit);
-    if let Some(code) = tsfc::adaptive::cli::compile(&front, out, &targets) {
-        return ExitCode::from(code);
+    if let Some(done) = adaptive::compile(&front, out, &targets) {
+        return print_adaptive(done);
     }
     let run = match front.compile(&tsfc::synth::Settings::default()) {
         Ok(r) => r,
@@ -265,13 +264,13 @@ fn compile(
             }
         }
     }
-    if let Err(e) = tsfc::output::write_set(&files) {
+    if let Err(e) = tsfc::util::output::write_set(&files) {
         eprintln!("error: cannot write the outputs: {e}");
         return ExitCode::from(exit::IO);
     }
     eprint!(
         "{}",
-        tsfc::summary::summary(&run.model, &run.compiled, &report_path)
+        tsfc::driver::summary::summary(&run.model, &run.compiled, &report_path)
     );
     for (path, _) in files.iter().skip(1) {
         eprintln!("  wrote                {}", path.display());
@@ -306,12 +305,12 @@ fn simulate(
     let adaptive = std::fs::read_to_string(path).is_ok_and(|t| t.contains("adaptive"));
     if let Some(front) = adaptive.then(|| pipeline::read(path).ok()).flatten() {
         if front.checked.model.is_some() {
-            let opts = tsfc::adaptive::sim::Options {
+            let opts = tsfc::sim::adaptive::Options {
                 horizon,
                 x0: x0.clone(),
             };
-            if let Some(code) = tsfc::adaptive::cli::simulate(&front, out, &opts) {
-                return ExitCode::from(code);
+            if let Some(done) = adaptive::simulate(&front, out, &opts) {
+                return print_adaptive(done);
             }
         }
     }
@@ -392,14 +391,14 @@ fn prepare(
     report: Option<&std::path::Path>,
     out: &std::path::Path,
 ) -> Result<tsfc::sim::Prepared, tsfc::sim::SimError> {
-    let (prepared, reuse) = tsfc::sim::prepare_reusing(path, report, out)?;
+    let (prepared, reuse) = tsfc::driver::prepare_reusing(path, report, out)?;
     match reuse {
-        tsfc::sim::Reuse::Reused(r) => eprintln!(
+        tsfc::driver::Reuse::Reused(r) => eprintln!(
             "using the certified design of `{}` (same spec sha256; nothing solved)",
             r.display()
         ),
-        tsfc::sim::Reuse::Refused(why) => eprintln!("note: {why}; compiled the design"),
-        tsfc::sim::Reuse::NoReport => {}
+        tsfc::driver::Reuse::Refused(why) => eprintln!("note: {why}; compiled the design"),
+        tsfc::driver::Reuse::NoReport => {}
     }
     Ok(prepared)
 }
@@ -490,7 +489,7 @@ fn run_sweep(
             ..tsfc::sim::Options::default()
         };
         let started = std::time::Instant::now();
-        let (table, metrics) = sweep::run_sweep(&main, &others, &opts, cfg)?;
+        let (table, metrics) = sweep::run_sweep(&main, &others, &opts, cfg, &tsfc::driver::prepare::prepare_text)?;
         let files = sweep::write_sweep(&table, &metrics, out)?;
         let refused = table.rows.iter().filter(|r| !r.certified).count();
         let failed = table.rows.iter().filter(|r| r.failed).count();
@@ -597,4 +596,21 @@ fn check(specs: &[PathBuf], format: Format, explain: bool) -> ExitCode {
         }
     }
     ExitCode::from(worst)
+}
+
+/// Prints what an adaptive compile or simulation did (or its error) and
+/// returns its exit code.
+fn print_adaptive(done: Result<adaptive::Done, tsfc::Error>) -> ExitCode {
+    match done {
+        Ok(d) => {
+            for line in &d.lines {
+                eprintln!("{line}");
+            }
+            ExitCode::from(d.exit_code)
+        }
+        Err(e) => {
+            eprintln!("error: {}", e.message);
+            ExitCode::from(e.exit_code())
+        }
+    }
 }

@@ -15,7 +15,7 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tsf_lang::spec::{InitialSet, Objective, Relaxation, Target};
-use tsfc::compile::Status;
+use tsfc::driver::compile::Status;
 use tsfc::model::TsModel;
 use tsfc::pipeline::read;
 use tsfc::report::{rows, Report, Timings};

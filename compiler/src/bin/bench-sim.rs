@@ -66,9 +66,9 @@ fn main() -> ExitCode {
     };
     let t = Instant::now();
     let prepared = match &report {
-        None => tsfc::sim::prepare(&spec),
-        Some(r) => tsfc::sim::prepare_reusing(&spec, Some(r), Path::new(".")).map(|(p, reuse)| {
-            if let tsfc::sim::Reuse::Refused(why) = reuse {
+        None => tsfc::driver::prepare(&spec),
+        Some(r) => tsfc::driver::prepare_reusing(&spec, Some(r), Path::new(".")).map(|(p, reuse)| {
+            if let tsfc::driver::Reuse::Refused(why) = reuse {
                 eprintln!("note: {why}; compiled the design");
             }
             p

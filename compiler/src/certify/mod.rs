@@ -174,6 +174,12 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
     Ok(cert)
 }
 
+/// The certificate's verdict on `design` (what the driver hands synthesis as
+/// [`crate::synth::Settings::verifier`]).
+pub fn verdict(model: &TsModel, design: &Design) -> Result<bool, SynthError> {
+    certify(model, design).map(|c| c.ok)
+}
+
 /// Margins of every LMI of the design's sampled loops (event-triggered, or
 /// every sample transmitted), each rebuilt from `plan(loop plan)` with its
 /// solved values passed through `substitute`.

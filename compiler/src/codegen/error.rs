@@ -7,8 +7,6 @@ use tsf_lang::spec::Emit;
 /// What keeps a design from becoming code.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CodegenError {
-    /// The certificate was refused: no code is generated for such a design.
-    NotCertified,
     /// The tables of the design cannot be built.
     Tables(TablesError),
     /// No backend is registered for an `emit` target.
@@ -38,9 +36,6 @@ pub enum CodegenError {
 impl fmt::Display for CodegenError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            CodegenError::NotCertified => {
-                f.write_str("the certificate was refused: no code is generated")
-            }
             CodegenError::Tables(e) => e.fmt(f),
             CodegenError::NoBackend(target) => write!(
                 f,

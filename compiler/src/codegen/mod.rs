@@ -23,10 +23,7 @@ pub mod rust;
 pub use error::CodegenError;
 pub use header::{marker, sensor_name};
 
-use crate::certify::Certificate;
-use crate::model::TsModel;
-use crate::synth::Design;
-use crate::tables::{tables, Tables};
+use crate::tables::{AdaptiveTables, Tables};
 use tsf_lang::spec::Emit;
 
 /// One generated file: its name (in the output folder) and its text.
@@ -56,29 +53,25 @@ pub fn backend(target: Emit) -> Option<&'static dyn Backend> {
 }
 
 /// Generates the requested targets for a well-posed adaptive design
-/// (docs/adaptive.md): `<name>.rs`, or `<name>.h`, `<name>.c` and the C
-/// runtime. The law is generated in f64 only.
+/// (docs/adaptive.md) from its tables: `<name>.rs`, or `<name>.h`, `<name>.c`
+/// and the C runtime. The law is generated in f64 only.
 pub fn generate_adaptive(
-    model: &TsModel,
-    design: &crate::adaptive::Design,
-    spec_path: &str,
-    spec_sha256: &str,
+    at: &AdaptiveTables,
     targets: &[Emit],
 ) -> Result<Vec<GeneratedFile>, CodegenError> {
-    if model.spec.precision != tsf_lang::spec::Precision::F64 {
+    if at.base.precision != tsf_lang::spec::Precision::F64 {
         return Err(CodegenError::AdaptivePrecision);
     }
-    let at = crate::tables::adaptive_tables(model, design, spec_path, spec_sha256)?;
     let mut out = Vec::new();
     for &target in targets {
         match target {
             Emit::Rust => out.push(GeneratedFile {
                 name: format!("{}.rs", at.base.name),
-                text: rust::emit_rust_adaptive(&at)?,
+                text: rust::emit_rust_adaptive(at)?,
             }),
             Emit::C => {
                 c::check_name(&at.base.name)?;
-                let files = c::emit_c_adaptive(&at);
+                let files = c::emit_c_adaptive(at);
                 let (h, src) = c::c_file_names(&at.base);
                 out.push(GeneratedFile {
                     name: h,
@@ -95,23 +88,13 @@ pub fn generate_adaptive(
     Ok(out)
 }
 
-/// Generates the requested targets for a certified design.
-pub fn generate(
-    model: &TsModel,
-    design: &Design,
-    cert: &Certificate,
-    spec_path: &str,
-    spec_sha256: &str,
-    targets: &[Emit],
-) -> Result<Vec<GeneratedFile>, CodegenError> {
-    if !cert.ok {
-        return Err(CodegenError::NotCertified);
-    }
-    let t = tables(model, design, cert, spec_path, spec_sha256)?;
+/// Generates the requested targets from the tables of a certified design
+/// ([`crate::tables::tables`] refuses a design whose certificate failed).
+pub fn generate(t: &Tables, targets: &[Emit]) -> Result<Vec<GeneratedFile>, CodegenError> {
     let mut out = Vec::new();
     for &target in targets {
         let b = backend(target).ok_or(CodegenError::NoBackend(target))?;
-        out.extend(b.files(&t)?);
+        out.extend(b.files(t)?);
     }
     Ok(out)
 }

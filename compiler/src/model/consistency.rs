@@ -381,7 +381,7 @@ mod tests {
             .expect("the shipped spec checks"); // ok: unit test
         let a = spec.a.clone().expect("A(x)"); // ok: unit test
         let mut c = Compiled::new(&spec, &[&a]).expect("a tape"); // ok: unit test
-        let mut rng = crate::sim::trigger::SplitMix64::new(17);
+        let mut rng = crate::util::rng::SplitMix64::new(17);
         for _ in 0..200 {
             let x: Vec<f64> = (0..6)
                 .map(|k| {

@@ -14,12 +14,13 @@
 //! of a thinned trace ([`plot`]); memory does not grow with the run's length,
 //! and the run's size is bounded by [`limits`]. Samples outside the premise
 //! region ([`region`]) are counted; errors caused by a spec item point into
-//! the spec ([`source`]). A certified report of the same spec gives the
-//! design without solving again ([`reuse`]). Monte Carlo campaigns
+//! the spec ([`source`]). The design comes from the driver
+//! (`crate::driver::prepare`). Monte Carlo campaigns
 //! ([`campaign`]) and sweeps of triggering laws with a comparison table
 //! ([`sweep`]) run many scenarios on a worker pool. A spec with `modes`
 //! runs under a seeded Markov mode process ([`modes`]).
 
+pub mod adaptive;
 pub mod campaign;
 pub mod controller;
 pub mod csv;
@@ -31,7 +32,6 @@ pub mod plant;
 pub mod plot;
 pub mod premise;
 pub mod region;
-pub mod reuse;
 pub mod scenario;
 pub mod signal;
 pub mod source;
@@ -40,7 +40,6 @@ pub use crate::tape;
 pub mod trigger;
 
 pub use metrics::{Metrics, Trace};
-pub use reuse::{prepare_reusing, Reuse};
 pub use scenario::{run, run_truth, Outcome};
 
 use crate::model::TsModel;
@@ -52,8 +51,8 @@ use std::time::Instant;
 use tsf_lang::spec::{Integrator, Trigger};
 
 /// A simulation failure: the pipeline's error (its kind decides the exit code).
-pub type SimError = crate::error::Error;
-pub use crate::error::ErrorKind;
+pub type SimError = crate::util::error::Error;
+pub use crate::util::error::ErrorKind;
 
 /// How the plant, the disturbance signals and the premise vector are evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -123,35 +122,6 @@ pub struct Prepared {
     pub source: source::SpecSource,
 }
 
-/// Reads, checks and compiles the spec at `path`; the design must be certified.
-/// Spec diagnostics are rendered into the error message.
-pub fn prepare(path: &Path) -> Result<Prepared, SimError> {
-    let run = crate::pipeline::read(path)?.compile(&crate::synth::Settings::default())?;
-    prepare_run(&run)
-}
-
-/// The simulator's design of a compiled spec (it must be certified).
-pub fn prepare_run(run: &crate::pipeline::Run) -> Result<Prepared, SimError> {
-    let tables = run.tables()?;
-    let design = run.certified()?.0.clone();
-    let source = source::SpecSource {
-        name: run.source.name.clone(),
-        text: run.source.text.clone(),
-    };
-    let model = run.model.clone();
-    // The synthesized trigger weight Upsilon (two-step method); without one,
-    // `weight = synthesize` falls back to P / lambda_max(P) (see
-    // `trigger::trigger_weight`).
-    let trigger_weight = design.trigger.as_ref().map(|t| t.weight.clone());
-    Ok(Prepared {
-        model,
-        tables,
-        p: design.p,
-        trigger_weight,
-        source,
-    })
-}
-
 /// Runs the scenario of a prepared design (no CSV; the outcome's trace is
 /// thinned for plotting).
 pub fn simulate(prepared: &Prepared, opts: &Options) -> Result<Outcome, SimError> {
@@ -205,7 +175,7 @@ pub fn write_outputs(outcome: &Outcome, dir: &Path) -> Result<Vec<PathBuf>, SimE
     let mut written = Vec::new();
     for (file, bytes) in files {
         let path = dir.join(file);
-        crate::report::write_atomic(&path, &bytes)
+        crate::util::output::write_atomic(&path, &bytes)
             .map_err(|e| SimError::usage(format!("cannot write `{}`: {e}", path.display())))?;
         written.push(path);
     }

@@ -12,36 +12,7 @@ use nalgebra::DMatrix;
 use tsf_lang::spec::{Monitor, NamedSignal, Spec, Trigger, Weight};
 use tsf_runtime::{AdaptiveTrigger, MixedTrigger, PeriodicTrigger, RelativeTrigger};
 
-/// SplitMix64 (Steele, Lea & Flood 2014): a tiny deterministic PRNG, enough
-/// for a reproducible sampling pattern.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// Generator seeded with `seed`.
-    pub fn new(seed: u64) -> Self {
-        SplitMix64(seed)
-    }
-
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)` with 53 random bits.
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform in `[lo, hi]`.
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next_f64()
-    }
-}
+pub use crate::util::rng::SplitMix64;
 
 /// When the state is sampled.
 #[derive(Debug, Clone)]

@@ -6,6 +6,7 @@ use super::given::Verdict;
 use super::objective::BuildError;
 use super::plan::Plan;
 use super::reduction::Reduction;
+use crate::model::TsModel;
 use nalgebra::DMatrix;
 use std::time::Duration;
 use tsf_lmi::{ProblemStats, SolveSettings, SolveStatus};
@@ -24,7 +25,15 @@ pub struct Settings {
     /// The largest estimated solver memory of one SDP, in bytes; a larger
     /// problem is refused before solving ([`SynthError::TooLarge`]).
     pub memory_limit: u64,
+    /// The certificate's verdict on a candidate design, handed in by the
+    /// driver (`crate::certify`); synthesis asks it where a search must know
+    /// whether a candidate certifies (the per-objective verdicts of given
+    /// gains). `None`: such searches report that no verdict was available.
+    pub verifier: Option<Verifier>,
 }
+
+/// The certificate's verdict on a design: `Ok(true)` when every condition holds.
+pub type Verifier = fn(&TsModel, &Design) -> Result<bool, SynthError>;
 
 /// The default [`Settings::memory_limit`]: 8 GiB (a third of the 24 GiB
 /// machines tsfc is tested on; `TSFC_SDP_MEMORY_LIMIT_MB` overrides it).
@@ -47,6 +56,7 @@ impl Default for Settings {
                 .ok()
                 .and_then(|v| v.trim().parse::<u64>().ok())
                 .map_or(DEFAULT_MEMORY_LIMIT, |mb| mb << 20),
+            verifier: None,
         }
     }
 }

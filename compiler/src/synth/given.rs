@@ -250,7 +250,11 @@ impl Runner<'_> {
             Ok(None) | Err(SynthError::Solver { .. }) => return Ok(None),
             Err(e) => return Err(e),
         };
-        let cert = crate::certify::certify(self.model, &d)?;
-        Ok(cert.ok.then_some(d))
+        let verify = self.settings.verifier.ok_or_else(|| {
+            SynthError::Internal(
+                "internal error: the analysis of given gains needs the certificate's verdict (Settings::verifier)".into(),
+            )
+        })?;
+        Ok(verify(self.model, &d)?.then_some(d))
     }
 }

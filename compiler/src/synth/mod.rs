@@ -11,6 +11,7 @@
 //! `tsf_lmi`.
 
 pub mod achieved;
+pub mod adaptive;
 mod advice;
 mod blocks;
 pub mod build;
@@ -37,7 +38,7 @@ pub mod vertices;
 pub use achieved::{Achieved, Quantity};
 pub use blocks::common_b;
 pub use build::{build, Built};
-pub use design::{Design, SampledDesign, Settings, SolverLog, SynthError, TriggerDesign};
+pub use design::{Design, SampledDesign, Settings, SolverLog, SynthError, TriggerDesign, Verifier};
 pub use given::Verdict;
 pub use objective::BuildError;
 pub use plan::{Bound, Goal, Plan};

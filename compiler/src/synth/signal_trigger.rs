@@ -98,7 +98,7 @@ fn grid(model: &TsModel) -> Vec<Vec<f64>> {
         }
     }
     let mut out: Vec<Vec<f64>> = model.rules.iter().filter_map(|r| r.at.clone()).collect();
-    let mut rng = crate::sim::trigger::SplitMix64::new(0x5157_4d41);
+    let mut rng = crate::util::rng::SplitMix64::new(0x5157_4d41);
     for _ in 0..2000 {
         out.push(
             (0..n)

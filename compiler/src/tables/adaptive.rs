@@ -4,7 +4,7 @@
 //! law's tables and initial estimates, and the controller period.
 
 use super::{component_names, premise_code, FactoredTerms, Header, Tables, TablesError};
-use crate::adaptive::Design;
+use crate::synth::adaptive::Design;
 use crate::model::TsModel;
 
 /// Everything a generator needs for an adaptive controller.

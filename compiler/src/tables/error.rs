@@ -6,6 +6,8 @@ use std::fmt;
 /// What keeps a certified design from becoming tables (and so code).
 #[derive(Debug, Clone, PartialEq)]
 pub enum TablesError {
+    /// The certificate was refused: a design that failed it has no tables (and so no code).
+    NotCertified,
     /// A premise expression has no scalar form generated code can evaluate.
     Premise {
         /// Premise name.
@@ -48,6 +50,9 @@ pub enum TablesError {
 impl fmt::Display for TablesError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            TablesError::NotCertified => {
+                f.write_str("the certificate was refused: no code is generated")
+            }
             TablesError::Premise { name, reason } => write!(f, "premise `{name}`: {reason}"),
             TablesError::PremiseComponent { name, component } => {
                 write!(f, "premise `{name}`: component {component} missing")

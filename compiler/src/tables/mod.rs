@@ -187,7 +187,8 @@ pub(crate) fn premise_code(model: &TsModel) -> Result<PremiseCode, TablesError> 
     })
 }
 
-/// Builds the tables of a certified design. Errors say what cannot be generated.
+/// Builds the tables of a certified design (a refused certificate has none).
+/// Errors say what cannot be generated.
 pub fn tables(
     model: &TsModel,
     design: &Design,
@@ -195,6 +196,9 @@ pub fn tables(
     spec_path: &str,
     spec_sha256: &str,
 ) -> Result<Tables, TablesError> {
+    if !cert.ok {
+        return Err(TablesError::NotCertified);
+    }
     let spec = &model.spec;
     let premise = premise_code(model)?;
     Ok(Tables {

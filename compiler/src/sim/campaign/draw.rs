@@ -7,7 +7,7 @@ use tsf_lang::ast::{BinOp, Expr, ExprKind, Vary};
 use tsf_lang::spec::{McTarget, MonteCarlo};
 use tsf_lang::Spec;
 
-pub use crate::sim::trigger::SplitMix64;
+pub use crate::util::rng::SplitMix64;
 
 /// The seed of run `index` of a campaign seeded with `seed`.
 pub fn run_seed(seed: u64, index: u64) -> u64 {

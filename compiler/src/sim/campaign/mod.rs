@@ -278,7 +278,7 @@ fn one_run(
 /// Writes `bytes` to `dir/file` atomically.
 pub(crate) fn write(dir: &Path, file: String, bytes: &[u8]) -> Result<PathBuf, SimError> {
     let path = dir.join(file);
-    crate::report::write_atomic(&path, bytes)
+    crate::util::output::write_atomic(&path, bytes)
         .map_err(|e| SimError::usage(format!("cannot write `{}`: {e}", path.display())))?;
     Ok(path)
 }

@@ -17,9 +17,7 @@ pub mod table;
 use super::campaign::{json, pool, write};
 use super::metrics::WindowedNorms;
 use super::scenario::run_truth;
-use super::{prepare_run, Options, Prepared, SimError};
-use crate::frontend::Source;
-use crate::pipeline::Front;
+use super::{Options, Prepared, SimError};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use table::{Gains, Row, Table, TABLE_FORMAT};
@@ -94,22 +92,19 @@ fn short(message: &str, name: &str) -> String {
     format!("{cut}...")
 }
 
+/// Compiles a spec text into a certified design: `(source name, text,
+/// display name)`. The driver passes its pipeline
+/// (`crate::driver::prepare::prepare_text`); the simulator never compiles.
+pub type CompileLaw<'a> = &'a (dyn Fn(&str, String, String) -> Result<Prepared, SimError> + Sync);
+
 /// Compiles the spec of `p` with the scenario's law (the normal pipeline).
-fn compile_scenario(p: &Prepared, sc: &SweepScenario) -> Design {
+fn compile_scenario(p: &Prepared, sc: &SweepScenario, compile: CompileLaw<'_>) -> Design {
     let spec = &p.model.spec;
     let Some(text) = scenario_text(&p.source.text, spec, sc) else {
         return Design::Refused("the scenario's law could not be written into the spec".into());
     };
     let name = format!("{} [{}]", spec.controller.node, sc.name);
-    let source = Source {
-        name: p.source.name.clone(),
-        bytes: text.clone().into_bytes(),
-        text,
-    };
-    let run = Front::from_source(source, name.clone())
-        .compile(&crate::synth::Settings::default())
-        .and_then(|run| prepare_run(&run));
-    match run {
+    match compile(&p.source.name, text, name.clone()) {
         Ok(prepared) => Design::Own(Box::new(prepared)),
         Err(e) => Design::Refused(short(&e.message, &name)),
     }
@@ -130,12 +125,14 @@ fn group_at(spec: &Spec, group: &str) -> Option<(usize, usize)> {
 }
 
 /// Runs the sweep of `main` (its design, then its `sweep` scenarios) and of
-/// every spec of `compare`, with the table's columns and window from `main`.
+/// every spec of `compare`, with the table's columns and window from `main`;
+/// a scenario whose law differs from its spec's is compiled by `compile`.
 pub fn run_sweep(
     main: &Prepared,
     compare: &[Prepared],
     opts: &Options,
     cfg: &Config,
+    compile: CompileLaw<'_>,
 ) -> Result<(Table, Vec<serde_json::Value>), SimError> {
     let entries: Vec<&Prepared> = std::iter::once(main).chain(compare).collect();
     let spec = &main.model.spec;
@@ -207,7 +204,7 @@ pub fn run_sweep(
     }
     let designs: Vec<Design> = pool.install(|| {
         todo.par_iter()
-            .map(|(k, sc)| compile_scenario(entries[*k], sc))
+            .map(|(k, sc)| compile_scenario(entries[*k], sc, compile))
             .collect()
     });
     let design_of = |j: &Job| -> Option<&Design> {

@@ -61,7 +61,6 @@
 
 pub mod pairs;
 pub mod problem;
-pub mod report;
 pub mod sampled;
 
 use super::achieved::{Achieved, Quantity};

@@ -7,12 +7,10 @@
 //! projection boxes against the design model's values) and reports what the
 //! Lyapunov argument guarantees and what it does not. The verdict is its own
 //! status, `adaptive-well-posed` (exit 0) or `adaptive-refused` (exit 3); it
-//! is not an LMI certificate. [`sim`] runs the closed loop with the runtime's
+//! is not an LMI certificate. `crate::sim::adaptive` runs the closed loop with the runtime's
 //! [`tsf_runtime::AdaptiveLaw`].
 
-pub mod cli;
 pub mod lyapunov;
-pub mod sim;
 
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -134,7 +132,7 @@ fn row_major(m: &DMatrix<f64>) -> Vec<f64> {
 }
 
 /// Per state component: (min, max) over the rules' operating points.
-fn operating_range(model: &TsModel) -> Option<Vec<(f64, f64)>> {
+pub fn operating_range(model: &TsModel) -> Option<Vec<(f64, f64)>> {
     let mut range: Option<Vec<(f64, f64)>> = None;
     for at in model.rules.iter().filter_map(|r| r.at.as_ref()) {
         let r = range.get_or_insert_with(|| at.iter().map(|v| (*v, *v)).collect());

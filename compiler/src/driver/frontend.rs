@@ -25,7 +25,7 @@ pub struct IoFailure {
 
 /// Reads a spec file.
 pub fn read_source(path: &Path) -> Result<Source, IoFailure> {
-    let bytes = crate::output::read_limited(path).map_err(|e| IoFailure {
+    let bytes = crate::util::output::read_limited(path).map_err(|e| IoFailure {
         message: format!("cannot read `{}`: {e}", path.display()),
     })?;
     let text = String::from_utf8_lossy(&bytes).into_owned();

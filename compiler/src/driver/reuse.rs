@@ -9,10 +9,10 @@
 //! design is compiled again ([`Reuse::Refused`] says why). Gains of
 //! another version of the spec are never simulated.
 
-use super::{source, Prepared, SimError};
+use crate::sim::{source, Prepared, SimError};
 use crate::model::TsModel;
-use crate::pipeline::{self, Front};
-use crate::report::sha256_hex;
+use crate::driver::pipeline::{self, Front};
+use crate::util::hash::sha256_hex;
 use crate::tables::{Header, ModeTables, Tables};
 use nalgebra::DMatrix;
 use serde::Deserialize;

@@ -15,9 +15,9 @@
 //! module, next to the controller it feeds.
 
 use crate::codegen::GeneratedFile;
-use crate::error::Error;
-use crate::output::write_set;
-use crate::pipeline;
+use crate::util::error::Error;
+use crate::util::output::write_set;
+use crate::driver::pipeline;
 use crate::synth::Settings;
 use std::path::{Path, PathBuf};
 use tsf_lang::spec::Emit;
@@ -118,7 +118,7 @@ impl Builder {
 
     fn compile_one(&self, spec: &Path, targets: &[Emit]) -> Result<Vec<GeneratedFile>, Error> {
         let front = pipeline::read(spec)?;
-        if let Some(files) = crate::adaptive::cli::generated(&front, targets) {
+        if let Some(files) = super::adaptive::generated(&front, targets) {
             return files;
         }
         front.compile(&self.settings)?.generate(targets)

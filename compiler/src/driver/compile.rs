@@ -39,6 +39,7 @@ pub fn compile(
 ) -> Compiled {
     let t0 = Instant::now();
     let mut settings = settings.clone();
+    settings.verifier = Some(crate::certify::verdict);
     let (mut outcome, mut log) = run(model, &settings);
     if matches!(&outcome, Ok((_, c)) if !c.ok) {
         settings.eps *= 100.0;

@@ -1,6 +1,6 @@
 //! The short human summary `tsfc compile` prints.
 
-use crate::compile::{Compiled, Status};
+use crate::driver::compile::{Compiled, Status};
 use crate::model::TsModel;
 use std::fmt::Write;
 use std::path::Path;

@@ -3,7 +3,7 @@
 
 use crate::certify::Certificate;
 use crate::model::TsModel;
-use crate::report::{rows, Gain, SampledReport};
+use super::{rows, Gain, SampledReport};
 use crate::synth::markov::ModesDesign;
 use crate::synth::Design;
 use serde::Serialize;
@@ -140,7 +140,7 @@ pub fn sampled_loop(model: &TsModel, design: &Design) -> Option<SampledReport> {
     let modes = model.spec.modes.as_ref()?;
     Some(SampledReport {
         sampling: [s.sampling.0, s.sampling.1],
-        covers: super::sampled::covers(s.sampling),
+        covers: crate::synth::markov::sampled::covers(s.sampling),
         p: rows(s.p.first()?),
         y: Some(rows(&s.y)),
         modes: Some(

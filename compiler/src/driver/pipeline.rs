@@ -4,11 +4,12 @@
 
 use crate::certify::Certificate;
 use crate::codegen::{self, GeneratedFile};
-use crate::compile::{compile as compile_model, Compiled, Status};
-use crate::error::Error;
-use crate::frontend::{self, Checked, Source};
+use crate::driver::compile::{compile as compile_model, Compiled, Status};
+use crate::util::error::Error;
+use crate::driver::frontend::{self, Checked, Source};
 use crate::model::TsModel;
-use crate::report::{sha256_hex, SpecInfo};
+use crate::report::SpecInfo;
+use crate::util::hash::sha256_hex;
 use crate::synth::{Design, Settings};
 use crate::tables::{self, Tables};
 use std::path::Path;
@@ -148,8 +149,12 @@ impl Run {
     /// The generated files of the certified design for `targets`.
     pub fn generate(&self, targets: &[Emit]) -> Result<Vec<GeneratedFile>, Error> {
         let (design, cert) = self.certified()?;
-        codegen::generate(&self.model, design, cert, &self.name, &self.sha256, targets)
-            .map_err(|e| Error::not_certified(format!("code generation failed: {e}")))
+        let failed = |e: &dyn std::fmt::Display| {
+            Error::not_certified(format!("code generation failed: {e}"))
+        };
+        let t = tables::tables(&self.model, design, cert, &self.name, &self.sha256)
+            .map_err(|e| failed(&e))?;
+        codegen::generate(&t, targets).map_err(|e| failed(&e))
     }
 
     /// The exit code of the compile: 0 certified, 3 otherwise.

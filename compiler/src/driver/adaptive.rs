@@ -1,11 +1,13 @@
 //! `tsfc compile` and `tsfc simulate` on an adaptive spec: the design report
 //! (`<name>.adaptive.json`), and the run's metrics, CSV and estimates plot.
 
-use super::{design, sim, Design, Outcome};
+use crate::sim::adaptive as sim;
+use crate::synth::adaptive::{design, Design, Outcome};
 use crate::codegen::{generate_adaptive, GeneratedFile};
-use crate::error::Error;
-use crate::pipeline::Front;
-use crate::report::sha256_hex;
+use crate::tables::adaptive_tables;
+use crate::util::error::Error;
+use crate::driver::pipeline::Front;
+use crate::util::hash::sha256_hex;
 use crate::sim::source::SpecSource;
 use std::path::{Path, PathBuf};
 use tsf_lang::spec::Emit;
@@ -20,11 +22,9 @@ pub fn outcome(front: &Front) -> Option<Outcome> {
     Some(design(model))
 }
 
-fn write(files: &[(PathBuf, Vec<u8>)]) -> Result<(), u8> {
-    crate::output::write_set(files).map_err(|e| {
-        eprintln!("error: cannot write the outputs: {e}");
-        2
-    })
+fn write(files: &[(PathBuf, Vec<u8>)]) -> Result<(), Error> {
+    crate::util::output::write_set(files)
+        .map_err(|e| Error::usage(format!("cannot write the outputs: {e}")))
 }
 
 fn json<T: serde::Serialize>(v: &T) -> Vec<u8> {
@@ -46,8 +46,9 @@ pub fn generate(
         .as_ref()
         .ok_or_else(|| Error::spec(front.render(false)))?;
     let sha = sha256_hex(&front.source.bytes);
-    generate_adaptive(model, design, front.name(), &sha, targets)
-        .map_err(|e| Error::not_certified(format!("code generation failed: {e}")))
+    let failed = |e: &dyn std::fmt::Display| Error::not_certified(format!("code generation failed: {e}"));
+    let at = adaptive_tables(model, design, front.name(), &sha).map_err(|e| failed(&e))?;
+    generate_adaptive(&at, targets).map_err(|e| failed(&e))
 }
 
 /// The generated files of an adaptive spec for `targets`: `None` when the
@@ -64,93 +65,104 @@ pub fn generated(front: &Front, targets: &[Emit]) -> Option<Result<Vec<Generated
     })
 }
 
+/// What `tsfc compile` or `tsfc simulate` of an adaptive spec did: the
+/// lines the CLI prints, the files written and the exit code.
+#[derive(Debug, Clone)]
+pub struct Done {
+    /// The verdict and its details, one line each (the CLI prints them).
+    pub lines: Vec<String>,
+    /// Files written.
+    pub written: Vec<PathBuf>,
+    /// Exit code: 0 well posed (or the run held its claims), 3 refused, 4 the run failed.
+    pub exit_code: u8,
+}
+
 /// `tsfc compile` of an adaptive spec: writes the report and the generated
-/// files for `targets` (none when the design is refused), prints the
+/// files for `targets` (none when the design is refused) and says the
 /// verdict; `None` when the spec is not adaptive.
-pub fn compile(front: &Front, out: &Path, targets: &[Emit]) -> Option<u8> {
+pub fn compile(front: &Front, out: &Path, targets: &[Emit]) -> Option<Result<Done, Error>> {
     let outcome = outcome(front)?;
-    let name = &front.checked.model.as_ref()?.spec.controller.node;
+    let name = front.checked.model.as_ref()?.spec.controller.node.clone();
+    Some(compile_outcome(front, &outcome, &name, out, targets))
+}
+
+fn compile_outcome(
+    front: &Front,
+    outcome: &Outcome,
+    name: &str,
+    out: &Path,
+    targets: &[Emit],
+) -> Result<Done, Error> {
     let path = out.join(format!("{name}.adaptive.json"));
-    let mut files = vec![(path.clone(), json(&outcome.report))];
+    let mut files = vec![(path, json(&outcome.report))];
     if let (Some(design), false) = (&outcome.design, targets.is_empty()) {
-        match generate(front, design, targets) {
-            Ok(g) => files.extend(
-                g.into_iter()
-                    .map(|f| (out.join(&f.name), f.text.into_bytes())),
-            ),
-            Err(e) => {
-                eprintln!("error: {}", e.message);
-                return Some(e.exit_code());
-            }
-        }
-    }
-    if let Err(code) = write(&files) {
-        return Some(code);
-    }
-    let r = &outcome.report;
-    eprintln!(
-        "{name}: {} ({} adapted numbers; no LMI certificate: docs/adaptive.md)",
-        r.status, r.adapted
-    );
-    for why in &r.refusals {
-        eprintln!("  refused: {why}");
-    }
-    if !r.reference_eigenvalues_re.is_empty() {
-        eprintln!(
-            "  A_m eigenvalues (real parts) {:?}, P eigenvalues {:?}",
-            r.reference_eigenvalues_re, r.p_eigenvalues
+        let g = generate(front, design, targets)?;
+        files.extend(
+            g.into_iter()
+                .map(|f| (out.join(&f.name), f.text.into_bytes())),
         );
     }
-    for g in &r.guaranteed {
-        eprintln!("  guaranteed: {g}");
+    write(&files)?;
+    let r = &outcome.report;
+    let mut lines = vec![format!(
+        "{name}: {} ({} adapted numbers; no LMI certificate: docs/adaptive.md)",
+        r.status, r.adapted
+    )];
+    lines.extend(r.refusals.iter().map(|why| format!("  refused: {why}")));
+    if !r.reference_eigenvalues_re.is_empty() {
+        lines.push(format!(
+            "  A_m eigenvalues (real parts) {:?}, P eigenvalues {:?}",
+            r.reference_eigenvalues_re, r.p_eigenvalues
+        ));
     }
-    for g in &r.not_guaranteed {
-        eprintln!("  not guaranteed: {g}");
-    }
-    for x in &r.x0_outside_operating_range {
-        eprintln!("  note: x0 component {x} (the rules' operating range)");
-    }
+    lines.extend(r.guaranteed.iter().map(|g| format!("  guaranteed: {g}")));
+    lines.extend(r.not_guaranteed.iter().map(|g| format!("  not guaranteed: {g}")));
+    lines.extend(
+        r.x0_outside_operating_range
+            .iter()
+            .map(|x| format!("  note: x0 component {x} (the rules' operating range)")),
+    );
     if outcome.design.is_none() && !targets.is_empty() {
-        eprintln!("  no code generated: the design was refused");
+        lines.push("  no code generated: the design was refused".into());
     }
-    for (path, _) in &files {
-        eprintln!("  wrote                {}", path.display());
-    }
-    Some(outcome.exit_code())
+    let written: Vec<PathBuf> = files.into_iter().map(|(p, _)| p).collect();
+    lines.extend(written.iter().map(|p| format!("  wrote                {}", p.display())));
+    Ok(Done {
+        lines,
+        written,
+        exit_code: outcome.exit_code(),
+    })
 }
 
 /// `tsfc simulate` of an adaptive spec: writes `<name>.adaptive.csv`,
 /// `<name>.adaptive.metrics.json` and `<name>.estimates.{svg,png}`;
 /// `None` when the spec is not adaptive.
-pub fn simulate(front: &Front, out: &Path, opts: &sim::Options) -> Option<u8> {
+pub fn simulate(front: &Front, out: &Path, opts: &sim::Options) -> Option<Result<Done, Error>> {
     let outcome = outcome(front)?;
     let model = front.checked.model.as_ref()?;
-    let Some(design) = &outcome.design else {
-        eprintln!(
-            "error: the adaptive design was refused: {}",
+    Some(match &outcome.design {
+        Some(design) => simulate_design(front, model, design, out, opts),
+        None => Err(Error::not_certified(format!(
+            "the adaptive design was refused: {}",
             outcome.report.refusals.join("; ")
-        );
-        return Some(3);
-    };
+        ))),
+    })
+}
+
+fn simulate_design(
+    front: &Front,
+    model: &crate::model::TsModel,
+    design: &Design,
+    out: &Path,
+    opts: &sim::Options,
+) -> Result<Done, Error> {
     let source = SpecSource {
         name: front.source.name.clone(),
         text: front.source.text.clone(),
     };
-    let run = match sim::run(model, design, &source, opts) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: {}", e.message);
-            return Some(e.exit_code());
-        }
-    };
+    let run = sim::run(model, design, &source, opts)?;
     let name = &run.name;
-    let (svg, png) = match sim::plot(&run, design) {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {}", e.message);
-            return Some(e.exit_code());
-        }
-    };
+    let (svg, png) = sim::plot(&run, design)?;
     let files = vec![
         (
             out.join(format!("{name}.adaptive.csv")),
@@ -163,29 +175,30 @@ pub fn simulate(front: &Front, out: &Path, opts: &sim::Options) -> Option<u8> {
         (out.join(format!("{name}.estimates.svg")), svg),
         (out.join(format!("{name}.estimates.png")), png),
     ];
-    if let Err(code) = write(&files) {
-        return Some(code);
-    }
+    write(&files)?;
     let m = &run.metrics;
-    eprintln!(
+    let mut lines = vec![format!(
         "simulated `{name}` (adaptive): {} steps to t = {}, final ||x|| = {:.3e}, estimates within bounds: {}, {} steps outside the rules' operating range (last at {:?} s)",
         m.steps, m.t_end, m.final_state_norm, m.estimates_within_bounds, m.steps_outside_operating_range, m.last_outside_s
-    );
-    for c in &m.claims {
-        eprintln!(
+    )];
+    lines.extend(m.claims.iter().map(|c| {
+        format!(
             "  {} {} (largest after: {:.3e})",
             if c.held { "held:" } else { "FAILED:" },
             c.claim,
             c.max_after
-        );
-    }
-    for (path, _) in &files {
-        eprintln!("  wrote                {}", path.display());
-    }
+        )
+    }));
+    let written: Vec<PathBuf> = files.into_iter().map(|(p, _)| p).collect();
+    lines.extend(written.iter().map(|p| format!("  wrote                {}", p.display())));
     let failed =
         m.failure.is_some() || m.claims.iter().any(|c| !c.held) || !m.estimates_within_bounds;
     if let Some(f) = &m.failure {
-        eprintln!("error: {f}");
+        lines.push(format!("error: {f}"));
     }
-    Some(if failed { RUN_FAILED } else { 0 })
+    Ok(Done {
+        lines,
+        written,
+        exit_code: if failed { RUN_FAILED } else { 0 },
+    })
 }

@@ -7,7 +7,7 @@
 //! block's convergence claims, a CSV of states, inputs and every estimate
 //! (thinned to at most [`MAX_ROWS`] rows), and a plot of the estimates.
 
-use super::Design;
+use crate::synth::adaptive::Design;
 use crate::model::TsModel;
 use crate::model::{premise_values, rule_weight};
 use crate::sim::plant::Plant;
@@ -179,7 +179,7 @@ pub fn run(
     let steps = steps as usize;
     let mut x = opts.x0.clone().unwrap_or_else(|| scenario.x0.clone());
     x.resize(dim, 0.0);
-    let range = super::operating_range(model);
+    let range = crate::synth::adaptive::operating_range(model);
     let mut st_a = design.a0.clone();
     let mut st_b = design.b0.clone();
     let mut st_d = design.d0;

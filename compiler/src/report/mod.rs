@@ -1,11 +1,12 @@
-//! The JSON report of `tsfc compile` and the atomic file writer.
+//! The JSON report of `tsfc compile`: it reads the design and its certificate.
+
+pub mod markov;
 
 use crate::certify::Certificate;
 use crate::model::TsModel;
 use crate::synth::{Design, SolverLog, SynthError};
 use nalgebra::DMatrix;
 use serde::Serialize;
-use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 
 /// Rows of a matrix, for JSON.
@@ -15,13 +16,7 @@ pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Lower-case hex SHA-256 of `bytes`.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
+pub use crate::util::hash::sha256_hex;
 
 /// `spec` section.
 #[derive(Debug, Serialize)]
@@ -181,7 +176,7 @@ pub struct SampledReport {
     /// With modes: per mode P_a, L1_a, L2_a of the functional (`P` above is
     /// the first mode's).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub modes: Option<Vec<crate::synth::markov::report::ModeSampledReport>>,
+    pub modes: Option<Vec<markov::ModeSampledReport>>,
 }
 
 /// One objective's verdict for given gains (analysis mode).
@@ -295,7 +290,7 @@ pub struct Report {
     pub signal_trigger: Option<crate::synth::signal_trigger::SignalTrigger>,
     /// Markov-switching modes: per mode P, gains and verdict (specs with `modes`).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub modes: Option<Vec<crate::synth::markov::report::ModeReport>>,
+    pub modes: Option<Vec<markov::ModeReport>>,
     /// The transition-rate matrix Pi (specs with `modes`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub transition_rates: Option<Vec<Vec<f64>>>,
@@ -364,7 +359,7 @@ fn objectives(model: &TsModel, design: &Design) -> BTreeMap<String, serde_json::
     if let Some(ft) = design
         .modes
         .as_ref()
-        .and_then(|md| crate::synth::markov::report::finite_time(model, md))
+        .and_then(|md| markov::finite_time(model, md))
     {
         o.insert("finite_time".into(), ft);
     }
@@ -482,7 +477,7 @@ pub fn report(
         );
     }
     let (modes, transition_rates) =
-        crate::synth::markov::report::sections(model, design, cert.as_ref(), certified);
+        markov::sections(model, design, cert.as_ref(), certified);
     Report {
         modes,
         transition_rates,
@@ -599,7 +594,7 @@ pub fn report(
                     y: None,
                     modes: None,
                 })
-                .or_else(|| crate::synth::markov::report::sampled_loop(model, d))
+                .or_else(|| markov::sampled_loop(model, d))
         }),
         solver: SolverInfo {
             name: "clarabel",
@@ -703,4 +698,4 @@ fn region_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> Option<Reg
     })
 }
 
-pub use crate::output::write_atomic;
+
