@@ -489,7 +489,13 @@ fn run_sweep(
             ..tsfc::sim::Options::default()
         };
         let started = std::time::Instant::now();
-        let (table, metrics) = sweep::run_sweep(&main, &others, &opts, cfg, &tsfc::driver::prepare::prepare_text)?;
+        let (table, metrics) = sweep::run_sweep(
+            &main,
+            &others,
+            &opts,
+            cfg,
+            &tsfc::driver::prepare::prepare_text,
+        )?;
         let files = sweep::write_sweep(&table, &metrics, out)?;
         let refused = table.rows.iter().filter(|r| !r.certified).count();
         let failed = table.rows.iter().filter(|r| r.failed).count();

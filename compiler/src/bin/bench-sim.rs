@@ -67,12 +67,14 @@ fn main() -> ExitCode {
     let t = Instant::now();
     let prepared = match &report {
         None => tsfc::driver::prepare(&spec),
-        Some(r) => tsfc::driver::prepare_reusing(&spec, Some(r), Path::new(".")).map(|(p, reuse)| {
-            if let tsfc::driver::Reuse::Refused(why) = reuse {
-                eprintln!("note: {why}; compiled the design");
-            }
-            p
-        }),
+        Some(r) => {
+            tsfc::driver::prepare_reusing(&spec, Some(r), Path::new(".")).map(|(p, reuse)| {
+                if let tsfc::driver::Reuse::Refused(why) = reuse {
+                    eprintln!("note: {why}; compiled the design");
+                }
+                p
+            })
+        }
     };
     let prepared = match prepared {
         Ok(p) => p,

@@ -7,6 +7,7 @@ mod markov;
 pub mod stored;
 
 use crate::model::TsModel;
+use crate::synth::loops::{Condition, Rounding};
 use crate::synth::{build, Design, Reduction, SynthError};
 use serde::Serialize;
 use tsf_lmi::ConstraintKind;
@@ -149,18 +150,9 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
         &design.reductions,
         &|_| {},
     )?;
-    // The sampled loops (event-triggered, or every sample transmitted): the
-    // gains checked are the design's (the ones emitted), not a copy.
-    lmis.extend(loop_margins(
-        model,
-        design,
-        &|plan| crate::synth::TriggerPlan {
-            gains: design.gains.clone(),
-            ..plan
-        },
-        &|_| {},
-    )?);
-    lmis.extend(signal_margins(model, design, &design.gains, 1.0));
+    // The loop that ships (sampled, event-triggered, mixed): rebuilt with
+    // the design's gains (the ones emitted), not a copy.
+    lmis.extend(loop_margins(model, design, &design.gains, None)?);
     lmis.extend(fuzzy_region(design));
     let mut cert = summarize(lmis);
     if cert.ok {
@@ -180,66 +172,50 @@ pub fn verdict(model: &TsModel, design: &Design) -> Result<bool, SynthError> {
     certify(model, design).map(|c| c.ok)
 }
 
-/// Margins of every LMI of the design's sampled loops (event-triggered, or
-/// every sample transmitted), each rebuilt from `plan(loop plan)` with its
-/// solved values passed through `substitute`.
+/// Margins of every condition of the loop the design ships (its
+/// [`LoopCertificate`]), rebuilt with `gains`, rounded as stored with `stored`.
 fn loop_margins(
     model: &TsModel,
     design: &Design,
-    plan: &dyn Fn(crate::synth::TriggerPlan) -> crate::synth::TriggerPlan,
-    substitute: &dyn Fn(&mut Values),
+    gains: &[nalgebra::DMatrix<f64>],
+    stored: Option<Rounding<'_>>,
 ) -> Result<Vec<LmiMargin>, SynthError> {
-    let looped = design
-        .trigger
-        .iter()
-        .map(|t| (&t.plan, &t.values, &t.reductions))
-        .chain(
-            design
-                .sampled
-                .iter()
-                .map(|s| (&s.plan, &s.values, &s.reductions)),
-        );
+    let Some(law) = design.loop_design.certificate() else {
+        return Ok(Vec::new());
+    };
     let mut lmis = Vec::new();
-    for (p, values, reductions) in looped {
-        let tb = crate::synth::trigger::build(model, &plan(p.clone()), design.eps, false)?;
-        lmis.extend(margins_of(
-            &tb.problem,
-            &tb.nonstrict,
-            values,
-            reductions,
-            substitute,
-        )?);
+    for c in law.conditions(model, design.eps, gains, stored)? {
+        match c {
+            Condition::Problem {
+                problem,
+                nonstrict,
+                values,
+                reductions,
+            } => lmis.extend(margins_of(
+                &problem,
+                &nonstrict,
+                &values,
+                &reductions,
+                &|_| {},
+            )?),
+            Condition::Margin {
+                name,
+                margin,
+                error_bound,
+                size,
+                strict,
+                ok,
+            } => lmis.push(LmiMargin {
+                name,
+                margin,
+                error_bound,
+                strict,
+                size,
+                ok,
+            }),
+        }
     }
     Ok(lmis)
-}
-
-/// Margins of the mixed-trigger certificate of `design`, if it has one, rebuilt
-/// with `gains` (the emitted ones or their stored rounding) and b1 scaled by `beta_scale`.
-fn signal_margins(
-    model: &TsModel,
-    design: &Design,
-    gains: &[nalgebra::DMatrix<f64>],
-    beta_scale: f64,
-) -> Vec<LmiMargin> {
-    let Some(cert) = &design.signal_trigger else {
-        return Vec::new();
-    };
-    crate::synth::signal_trigger::margins(model, gains, cert, beta_scale)
-        .into_iter()
-        .map(|(name, margin, error_bound, size)| LmiMargin {
-            // The image identity is a tolerance check, not a strict LMI.
-            ok: if size > 1 || name.ends_with("tau > 0") {
-                margin > error_bound
-            } else {
-                margin >= 0.0
-            },
-            strict: size > 1 || name.ends_with("tau > 0"),
-            name,
-            margin,
-            error_bound,
-            size,
-        })
-        .collect()
 }
 
 /// The name of the certificate's entry for the region of a fuzzy Lyapunov function.

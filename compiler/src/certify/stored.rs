@@ -13,13 +13,13 @@
 //! nearest). Lyapunov matrices, multipliers and sector gains are proof
 //! artefacts, not stored: they keep their solved values.
 
-use super::{loop_margins, margins_of, signal_margins, summarize, Values};
+use super::{loop_margins, margins_of, summarize, Values};
 use crate::model::TsModel;
 use crate::synth::objectives::Saturation;
-use crate::synth::{build, Design, SynthError, TriggerPlan};
+use crate::synth::{build, Design, SynthError};
 use nalgebra::DMatrix;
 use serde::Serialize;
-use tsf_lang::spec::{Precision, Trigger};
+use tsf_lang::spec::Precision;
 
 /// The bound on membership normalization and blending in the stored
 /// precision, and the margin it asks of the continuous loop's LMIs.
@@ -219,51 +219,17 @@ pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthE
         membership.required_margin *= 1.0 + 0.5 * f.mu;
         membership.holds = membership.available_margin > membership.required_margin;
     }
-    // Sampled loops: gains, levels, threshold ceiling, sampling bounds of a
-    // sensor module and the trigger weight as stored.
-    let sensor = matches!(
-        model.spec.trigger.as_ref().map(|t| &t.node),
-        Some(Trigger::Aperiodic { .. })
-    );
-    let weight = design
-        .trigger
-        .as_ref()
-        .map(|t| stored_mat(&t.weight, precision));
+    // The loop that ships: gains, levels, threshold ceiling, sampling bounds
+    // of a sensor module and the trigger weight as stored.
     let max_relative_rounding = design
-        .trigger
-        .iter()
-        .map(|t| relative_rounding(&t.weight, precision))
+        .loop_design
+        .certificate()
+        .map_or_else(Vec::new, |l| l.stored_matrices())
+        .into_iter()
+        .map(|m| relative_rounding(m, precision))
         .fold(max_relative_rounding, f64::max);
-    lmis.extend(loop_margins(
-        model,
-        design,
-        &|p| {
-            let s = |v: f64| stored(v, precision);
-            TriggerPlan {
-                gains: gains.clone(),
-                levels: p.levels.iter().map(|v| s(*v)).collect(),
-                nu: s(p.nu),
-                sampling: if sensor {
-                    (s(p.sampling.0), s(p.sampling.1))
-                } else {
-                    p.sampling
-                },
-                ..p
-            }
-        },
-        &|values| {
-            if let Some(w) = &weight {
-                if let Some((_, v)) = values.iter_mut().find(|(n, _)| n == "Upsilon") {
-                    *v = w.clone();
-                }
-            }
-        },
-    )?);
-    let beta_scale = match model.spec.trigger.as_ref().map(|t| &t.node) {
-        Some(Trigger::Mixed { beta, .. }) if *beta > 0.0 => stored(*beta, precision) / beta,
-        _ => 1.0,
-    };
-    lmis.extend(signal_margins(&stored_model, design, &gains, beta_scale));
+    let round = |v: f64| stored(v, precision);
+    lmis.extend(loop_margins(&stored_model, design, &gains, Some(&round))?);
     let cert = summarize(lmis);
     let certified = cert.ok && membership.holds;
     let worst_lmi = if cert.ok && !membership.holds {

@@ -1,14 +1,14 @@
 //! `tsfc compile` and `tsfc simulate` on an adaptive spec: the design report
 //! (`<name>.adaptive.json`), and the run's metrics, CSV and estimates plot.
 
-use crate::sim::adaptive as sim;
-use crate::synth::adaptive::{design, Design, Outcome};
 use crate::codegen::{generate_adaptive, GeneratedFile};
+use crate::driver::pipeline::Front;
+use crate::sim::adaptive as sim;
+use crate::sim::source::SpecSource;
+use crate::synth::adaptive::{design, Design, Outcome};
 use crate::tables::adaptive_tables;
 use crate::util::error::Error;
-use crate::driver::pipeline::Front;
 use crate::util::hash::sha256_hex;
-use crate::sim::source::SpecSource;
 use std::path::{Path, PathBuf};
 use tsf_lang::spec::Emit;
 
@@ -46,7 +46,8 @@ pub fn generate(
         .as_ref()
         .ok_or_else(|| Error::spec(front.render(false)))?;
     let sha = sha256_hex(&front.source.bytes);
-    let failed = |e: &dyn std::fmt::Display| Error::not_certified(format!("code generation failed: {e}"));
+    let failed =
+        |e: &dyn std::fmt::Display| Error::not_certified(format!("code generation failed: {e}"));
     let at = adaptive_tables(model, design, front.name(), &sha).map_err(|e| failed(&e))?;
     generate_adaptive(&at, targets).map_err(|e| failed(&e))
 }
@@ -116,7 +117,11 @@ fn compile_outcome(
         ));
     }
     lines.extend(r.guaranteed.iter().map(|g| format!("  guaranteed: {g}")));
-    lines.extend(r.not_guaranteed.iter().map(|g| format!("  not guaranteed: {g}")));
+    lines.extend(
+        r.not_guaranteed
+            .iter()
+            .map(|g| format!("  not guaranteed: {g}")),
+    );
     lines.extend(
         r.x0_outside_operating_range
             .iter()
@@ -126,7 +131,11 @@ fn compile_outcome(
         lines.push("  no code generated: the design was refused".into());
     }
     let written: Vec<PathBuf> = files.into_iter().map(|(p, _)| p).collect();
-    lines.extend(written.iter().map(|p| format!("  wrote                {}", p.display())));
+    lines.extend(
+        written
+            .iter()
+            .map(|p| format!("  wrote                {}", p.display())),
+    );
     Ok(Done {
         lines,
         written,
@@ -190,7 +199,11 @@ fn simulate_design(
         )
     }));
     let written: Vec<PathBuf> = files.into_iter().map(|(p, _)| p).collect();
-    lines.extend(written.iter().map(|p| format!("  wrote                {}", p.display())));
+    lines.extend(
+        written
+            .iter()
+            .map(|p| format!("  wrote                {}", p.display())),
+    );
     let failed =
         m.failure.is_some() || m.claims.iter().any(|c| !c.held) || !m.estimates_within_bounds;
     if let Some(f) = &m.failure {

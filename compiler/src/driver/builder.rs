@@ -15,10 +15,10 @@
 //! module, next to the controller it feeds.
 
 use crate::codegen::GeneratedFile;
-use crate::util::error::Error;
-use crate::util::output::write_set;
 use crate::driver::pipeline;
 use crate::synth::Settings;
+use crate::util::error::Error;
+use crate::util::output::write_set;
 use std::path::{Path, PathBuf};
 use tsf_lang::spec::Emit;
 

@@ -5,13 +5,13 @@
 use crate::certify::Certificate;
 use crate::codegen::{self, GeneratedFile};
 use crate::driver::compile::{compile as compile_model, Compiled, Status};
-use crate::util::error::Error;
 use crate::driver::frontend::{self, Checked, Source};
 use crate::model::TsModel;
 use crate::report::SpecInfo;
-use crate::util::hash::sha256_hex;
 use crate::synth::{Design, Settings};
 use crate::tables::{self, Tables};
+use crate::util::error::Error;
+use crate::util::hash::sha256_hex;
 use std::path::Path;
 use tsf_lang::spec::Emit;
 

@@ -25,7 +25,8 @@ pub fn prepare_text(source_name: &str, text: String, name: String) -> Result<Pre
         bytes: text.clone().into_bytes(),
         text,
     };
-    let run = pipeline::Front::from_source(source, name).compile(&crate::synth::Settings::default())?;
+    let run =
+        pipeline::Front::from_source(source, name).compile(&crate::synth::Settings::default())?;
     prepare_run(&run)
 }
 
@@ -41,7 +42,7 @@ pub fn prepare_run(run: &Run) -> Result<Prepared, SimError> {
     // The synthesized trigger weight Upsilon (two-step method); without one,
     // `weight = synthesize` falls back to P / lambda_max(P) (see
     // `trigger::trigger_weight`).
-    let trigger_weight = design.trigger.as_ref().map(|t| t.weight.clone());
+    let trigger_weight = design.loop_design.event().map(|t| t.weight.clone());
     Ok(Prepared {
         model,
         tables,
@@ -50,4 +51,3 @@ pub fn prepare_run(run: &Run) -> Result<Prepared, SimError> {
         source,
     })
 }
-

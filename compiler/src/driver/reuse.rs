@@ -9,11 +9,11 @@
 //! design is compiled again ([`Reuse::Refused`] says why). Gains of
 //! another version of the spec are never simulated.
 
-use crate::sim::{source, Prepared, SimError};
-use crate::model::TsModel;
 use crate::driver::pipeline::{self, Front};
-use crate::util::hash::sha256_hex;
+use crate::model::TsModel;
+use crate::sim::{source, Prepared, SimError};
 use crate::tables::{Header, ModeTables, Tables};
+use crate::util::hash::sha256_hex;
 use nalgebra::DMatrix;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};

@@ -1,9 +1,9 @@
 //! The report sections of a design with modes: `modes` (per mode P, gains
 //! and the verdict of its conditions) and `transition_rates`.
 
+use super::{rows, Gain, SampledReport};
 use crate::certify::Certificate;
 use crate::model::TsModel;
-use super::{rows, Gain, SampledReport};
 use crate::synth::markov::ModesDesign;
 use crate::synth::Design;
 use serde::Serialize;

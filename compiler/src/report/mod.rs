@@ -5,16 +5,10 @@ pub mod markov;
 use crate::certify::Certificate;
 use crate::model::TsModel;
 use crate::synth::{Design, SolverLog, SynthError};
-use nalgebra::DMatrix;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Rows of a matrix, for JSON.
-pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows())
-        .map(|i| m.row(i).iter().copied().collect())
-        .collect()
-}
+pub use crate::util::matrix::rows;
 
 pub use crate::util::hash::sha256_hex;
 
@@ -90,49 +84,7 @@ pub struct RegionOfAttraction {
     pub contains_scenario_x0: Option<bool>,
 }
 
-/// The synthesized event trigger: transmit x(t_k^l) when
-/// e' Upsilon e >= nu x(t_k)' Upsilon x(t_k), e = x(t_k^l) - x(t_k).
-#[derive(Debug, Serialize)]
-pub struct TriggerReport {
-    /// Upsilon (n x n rows).
-    pub weight: Vec<Vec<f64>>,
-    /// Certified threshold: the loop is certified for every nu(t_k) <= nu (the
-    /// adaptive law's ceiling `max`, else the spec's nu).
-    pub nu: f64,
-    /// The spec's threshold (the adaptive law's lower bound and nu(0)), if any.
-    pub nu_min: Option<f64>,
-    /// Adaptive law (mu1, mu2, mu3), if any.
-    pub adaptive: Option<[f64; 3]>,
-    /// [h_min, h_max] in s.
-    pub sampling: [f64; 2],
-    /// Design method.
-    pub method: &'static str,
-    /// Certified L-inf bound of the event-triggered, sampled loop.
-    pub linf_gamma: f64,
-    /// Its xi.
-    pub linf_xi: f64,
-    /// Eigenvalues of Upsilon, ascending.
-    pub weight_eigenvalues: Vec<f64>,
-    /// The premise region the certificate is local to (`region z = lo .. hi;`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub region: Option<RegionReport>,
-}
-
-/// A local (regional) event-trigger certificate: the LMIs hold at vertices
-/// enclosing the model and gains the rules blend on the premise box, and the
-/// certified set E(P, c) (c = level) lies inside the box.
-#[derive(Debug, Serialize)]
-pub struct RegionReport {
-    /// The box, its memberships and the polytope of h.
-    pub premise_box: crate::model::region::PremiseBox,
-    /// The vertex sets (plant, controller).
-    pub vertices: Option<crate::synth::vertices::RegionVertices>,
-    /// The level c of E(P, c).
-    pub level: f64,
-    /// Per face, the extent max |c_k x| on E(P, c), sqrt(c c_k P^-1 c_k'),
-    /// recomputed from the solved P (at most the face's bound).
-    pub extents: Vec<f64>,
-}
+pub use crate::synth::loops::{RegionReport, TriggerReport};
 
 /// How far the model the rules blend, sum_i h_i(z(x)) M_i, is from the
 /// state-dependent M(x) (M = A, B) on a grid over the rules' operating points,
@@ -347,7 +299,7 @@ fn objectives(model: &TsModel, design: &Design) -> BTreeMap<String, serde_json::
             o.insert("linf_gamma_paper".into(), serde_json::json!(g));
         }
     }
-    if let Some(t) = &design.trigger {
+    if let Some(t) = design.loop_design.event() {
         o.insert(
             "linf_gamma_event_triggered".into(),
             serde_json::json!(t.gamma),
@@ -476,8 +428,7 @@ pub fn report(
             serde_json::json!(log.memory_estimate),
         );
     }
-    let (modes, transition_rates) =
-        markov::sections(model, design, cert.as_ref(), certified);
+    let (modes, transition_rates) = markov::sections(model, design, cert.as_ref(), certified);
     Report {
         modes,
         transition_rates,
@@ -526,12 +477,13 @@ pub fn report(
         certificate: cert,
         reductions: design
             .map(|d| {
-                let trigger = d.trigger.iter().flat_map(|t| &t.reductions);
-                let sampled = d.sampled.iter().flat_map(|s| &s.reductions);
+                let looped = d
+                    .loop_design
+                    .certificate()
+                    .map_or(&[][..], |l| l.reductions());
                 d.reductions
                     .iter()
-                    .chain(trigger)
-                    .chain(sampled)
+                    .chain(looped)
                     .map(|r| r.to_string())
                     .collect()
             })
@@ -552,10 +504,9 @@ pub fn report(
             let sat = d.plan.get::<crate::synth::objectives::Saturation>()?;
             // The region of the loop that ships: event-triggered, sampled
             // or continuous (no region when its level cannot be computed).
-            let (p, c) = match (&d.trigger, &d.sampled) {
-                (Some(t), _) => (&t.p, t.level()),
-                (None, Some(s)) => (&s.p, s.plan.region_level()),
-                (None, None) => (&d.p, sat.level(&d.plan).ok()?),
+            let (p, c) = match d.loop_design.certificate().and_then(|l| l.region()) {
+                Some(region) => region,
+                None => (&d.p, sat.level(&d.plan).ok()?),
             };
             // The certified region E(P, c) as E(U, 1).
             let u = p / c;
@@ -579,14 +530,17 @@ pub fn report(
         }),
         trigger: design
             .filter(|_| certified)
-            .and_then(|d| d.trigger.as_ref())
-            .map(|t| trigger_report(model, t)),
+            .and_then(|d| d.loop_design.event())
+            .map(|t| t.report(model)),
         signal_trigger: design
             .filter(|_| certified)
-            .and_then(|d| d.signal_trigger.clone()),
+            .and_then(|d| d.loop_design.mixed().cloned()),
         sampled_loop: design.filter(|_| certified).and_then(|d| {
-            d.sampled
-                .as_ref()
+            let every_sample = match &d.loop_design {
+                crate::synth::loops::LoopDesign::EverySample(s) => Some(s),
+                _ => None,
+            };
+            every_sample
                 .map(|s| SampledReport {
                     sampling: [s.plan.sampling.0, s.plan.sampling.1],
                     covers: crate::synth::sampling::covers(&s.plan),
@@ -643,59 +597,3 @@ impl FuzzyLyapunovReport {
         }
     }
 }
-
-fn trigger_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> TriggerReport {
-    let threshold = match model.spec.trigger.as_ref().map(|t| &t.node) {
-        Some(tsf_lang::spec::Trigger::Aperiodic { threshold, .. }) => threshold.as_ref(),
-        _ => None,
-    };
-    let mut eig: Vec<f64> = t
-        .weight
-        .clone()
-        .symmetric_eigen()
-        .eigenvalues
-        .iter()
-        .copied()
-        .collect();
-    eig.sort_by(f64::total_cmp);
-    TriggerReport {
-        weight: rows(&t.weight),
-        nu: t.plan.nu,
-        nu_min: threshold.map(|th| th.nu),
-        adaptive: threshold
-            .and_then(|th| th.adaptive)
-            .map(|(a, b, c)| [a, b, c]),
-        sampling: [t.plan.sampling.0, t.plan.sampling.1],
-        method: t.method,
-        linf_gamma: t.gamma,
-        linf_xi: t.xi,
-        weight_eigenvalues: eig,
-        region: region_report(model, t),
-    }
-}
-
-/// The regional part of the trigger report (`None` without a region).
-fn region_report(model: &TsModel, t: &crate::synth::TriggerDesign) -> Option<RegionReport> {
-    let premise_box = t.plan.region.clone()?;
-    let level = t.level();
-    let p_inv = t.p.clone().try_inverse();
-    let extents = premise_box
-        .faces
-        .iter()
-        .map(|f| {
-            p_inv.as_ref().map_or(f64::INFINITY, |pi| {
-                (level * (&f.row * pi * f.row.transpose())[(0, 0)]).sqrt()
-            })
-        })
-        .collect();
-    Some(RegionReport {
-        vertices: crate::synth::vertices::describe(model, &t.plan)
-            .ok()
-            .flatten(),
-        premise_box,
-        level,
-        extents,
-    })
-}
-
-

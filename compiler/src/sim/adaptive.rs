@@ -7,7 +7,6 @@
 //! block's convergence claims, a CSV of states, inputs and every estimate
 //! (thinned to at most [`MAX_ROWS`] rows), and a plot of the estimates.
 
-use crate::synth::adaptive::Design;
 use crate::model::TsModel;
 use crate::model::{premise_values, rule_weight};
 use crate::sim::plant::Plant;
@@ -15,6 +14,7 @@ use crate::sim::plot::chart::{self, colour, Figure, Mark, Panel, Shape, YAxis};
 use crate::sim::signal::Signals;
 use crate::sim::source::SpecSource;
 use crate::sim::{Evaluator, SimError};
+use crate::synth::adaptive::Design;
 use serde::Serialize;
 use tsf_lang::eval::{Mat, Mode};
 use tsf_runtime::AdaptiveState;

@@ -126,13 +126,9 @@ pub struct Design {
     /// Whether the solver reached only reduced accuracy (`AlmostSolved`):
     /// such a solution is used only to explain infeasibility, never emitted.
     pub approximate: bool,
-    /// The synthesized event trigger (aperiodic trigger with `weight = synthesize`).
-    pub trigger: Option<TriggerDesign>,
-    /// The sampled-loop certificate (periodic trigger, or aperiodic sampling
-    /// without a threshold).
-    pub sampled: Option<SampledDesign>,
-    /// The certified mixed trigger on a named signal (`trigger mixed { on = ..; monitor = ..; }`).
-    pub signal_trigger: Option<super::signal_trigger::SignalTrigger>,
+    /// The loop that ships, as its law designed it ([`super::loops`]):
+    /// continuous, every sample transmitted, event-triggered or mixed.
+    pub loop_design: super::loops::LoopDesign,
     /// Per-objective verdicts when the rules give their gains (analysis);
     /// empty when the gains were synthesized.
     pub verdicts: Vec<Verdict>,
@@ -148,7 +144,8 @@ impl Design {
     /// The sampling intervals [h_min, h_max] of the certified sampled loop
     /// (fault-free or with Markov modes), if the design ships one.
     pub fn sampling(&self) -> Option<(f64, f64)> {
-        self.sampled.as_ref().map(|s| s.plan.sampling).or_else(|| {
+        let law = self.loop_design.certificate();
+        law.and_then(|l| l.every_sample()).or_else(|| {
             self.modes
                 .as_ref()
                 .and_then(|m| m.sampled.as_ref())

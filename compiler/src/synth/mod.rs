@@ -20,6 +20,7 @@ mod design;
 mod diagnose;
 pub mod experimental;
 pub mod given;
+pub mod loops;
 pub mod lyapunov;
 pub mod markov;
 pub mod objective;
@@ -35,6 +36,7 @@ pub mod signal_trigger;
 pub mod trigger;
 pub mod vertices;
 
+pub use crate::util::matrix::rows;
 pub use achieved::{Achieved, Quantity};
 pub use blocks::common_b;
 pub use build::{build, Built};
@@ -47,7 +49,7 @@ pub use sampled::Block12;
 pub use trigger::{TriggerBuilt, TriggerPlan};
 
 use crate::model::TsModel;
-use search::Runner;
+pub use search::Runner;
 
 /// Synthesizes gains for `model`'s objectives.
 pub fn synthesize(model: &TsModel, settings: &Settings) -> Result<Design, SynthError> {
@@ -85,8 +87,8 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
     if let Some(modes) = &model.spec.modes {
         return markov::synthesize(runner, modes);
     }
-    if let Some(e) = experimental::theorem2::synthesize(model, settings) {
-        return Err(e);
+    if let Some(x) = experimental::experiment_of(model) {
+        return Err(x.run(model, settings));
     }
     if let Some(why) = sampling::uncovered(model) {
         return Err(SynthError::Unsupported(why));
@@ -118,42 +120,8 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
             if analysis {
                 d.verdicts = given::together(&d);
             }
-            if let Some(rounds) = trigger::codesign_rounds(model) {
-                // The gains change: the continuous loop is re-analyzed for
-                // the co-designed ones, so every certificate speaks of them.
-                let (t, notes) = runner.codesign(&d, rounds)?;
-                let mut again = runner.reanalyze(&plan, goal, &t.plan.gains)?;
-                again.notes.splice(0..0, d.notes.drain(..));
-                again.notes.push(format!(
-                    "continuous design before co-design: {}",
-                    d.achieved
-                        .get(Quantity::LinfGamma)
-                        .map_or("-".into(), |g| format!("L-inf gamma = {g:.6}"))
-                ));
-                again.notes.extend(notes);
-                d = again;
-                d.trigger = Some(t);
-            } else if trigger::wanted(model) {
-                let out = runner.trigger(&d);
-                let (t, notes) = given::looped(model, &mut d, given::EVENT_LOOP, out)?;
-                d.notes.extend(notes);
-                d.trigger = Some(t);
-            }
-            if signal_trigger::wanted(model).is_some() {
-                let gains = d.gains.clone();
-                let cert = signal_trigger::certify_loop(runner, model, &gains)?;
-                d.notes.push(format!(
-                    "mixed trigger on `{}`: certified with lambda = {:.4e}, tau = {:.4e}, eps = {}, ultimate bound ||x|| <= {:.4e}",
-                    cert.signal, cert.lambda, cert.tau, cert.eps, cert.x_bound
-                ));
-                d.signal_trigger = Some(cert);
-            }
-            if let Some(h) = sampling::wanted(model) {
-                let out = runner.sampled(&d, h);
-                let (s, note) = given::looped(model, &mut d, &given::sampled_loop(h), out)?;
-                d.notes.push(note);
-                d.sampled = Some(s);
-            }
+            let start = loops::Start { plan, goal };
+            d.loop_design = loops::law_of(model).design(runner, &mut d, &start)?;
             Ok(d)
         }
         Ok(None) | Err(SynthError::Solver { .. }) if analysis => Err(runner.alone(&plan)),

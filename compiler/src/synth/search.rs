@@ -34,10 +34,13 @@ pub(super) enum Attempt {
     Trouble(SolveStatus),
 }
 
-/// Runs SDPs for one model and keeps the solver log.
-pub(super) struct Runner<'a> {
+/// Runs SDPs for one model and keeps the solver log (what loop laws design with).
+pub struct Runner<'a> {
+    /// The model.
     pub model: &'a TsModel,
+    /// Synthesis settings.
     pub settings: &'a Settings,
+    /// Solver bookkeeping of every SDP run.
     pub log: SolverLog,
     /// Accept `AlmostSolved` iterates (only while diagnosing).
     pub accept_almost: bool,
@@ -45,7 +48,7 @@ pub(super) struct Runner<'a> {
 
 impl Runner<'_> {
     /// Builds and solves `plan` once.
-    pub fn attempt(&mut self, plan: &Plan) -> Result<Attempt, SynthError> {
+    pub(super) fn attempt(&mut self, plan: &Plan) -> Result<Attempt, SynthError> {
         let relaxation = self.model.spec.relaxation.node;
         self.check_floor()?;
         let t0 = Instant::now();
@@ -126,9 +129,7 @@ impl Runner<'_> {
             log: SolverLog::default(),
             certify_time: Duration::ZERO,
             approximate,
-            trigger: None,
-            sampled: None,
-            signal_trigger: None,
+            loop_design: Default::default(),
             verdicts: Vec::new(),
             modes: None,
             fuzzy,

@@ -4,8 +4,8 @@
 //! law's tables and initial estimates, and the controller period.
 
 use super::{component_names, premise_code, FactoredTerms, Header, Tables, TablesError};
-use crate::synth::adaptive::Design;
 use crate::model::TsModel;
+use crate::synth::adaptive::Design;
 
 /// Everything a generator needs for an adaptive controller.
 #[derive(Debug, Clone)]

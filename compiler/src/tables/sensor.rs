@@ -72,7 +72,7 @@ pub(super) fn sensor_tables(
             None,
         ),
         Weight::Synthesize => {
-            let Some(td) = design.trigger.as_ref() else {
+            let Some(td) = design.loop_design.event() else {
                 return Err(TablesError::TriggerWeightMissing);
             };
             (

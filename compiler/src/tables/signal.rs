@@ -43,7 +43,7 @@ pub(super) fn signal_sensor_tables(
     if monitor.sampling().is_some() {
         return Ok(None);
     }
-    let Some(cert) = &design.signal_trigger else {
+    let Some(cert) = design.loop_design.mixed() else {
         return Err(TablesError::TriggerWeightMissing);
     };
     let (signal, exprs) = match on {

@@ -4,5 +4,6 @@
 
 pub mod error;
 pub mod hash;
+pub mod matrix;
 pub mod output;
 pub mod rng;

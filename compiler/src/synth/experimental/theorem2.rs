@@ -305,6 +305,25 @@ pub fn solve(
     })
 }
 
+/// Xu & Huang's Theorem 2 (`weight = synthesize theorem2(..)`), as an experiment.
+#[derive(Debug, Clone, Copy)]
+pub struct Theorem2;
+
+impl super::Experiment for Theorem2 {
+    fn claims(&self, model: &TsModel) -> bool {
+        matches!(
+            model.spec.trigger_synthesis,
+            Some(TriggerSynthesis::Theorem2 { .. })
+        )
+    }
+
+    fn run(&self, model: &TsModel, settings: &Settings) -> SynthError {
+        synthesize(model, settings).unwrap_or_else(|| {
+            SynthError::Internal("internal error: Theorem 2 was not selected".into())
+        })
+    }
+}
+
 /// Runs Theorem 2 for a spec that selects it: a solved problem is reported but
 /// not emitted (its gains are not certified by tsfc), any other status is a
 /// diagnosis (exit 3).
