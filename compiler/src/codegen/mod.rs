@@ -35,13 +35,30 @@ pub struct GeneratedFile {
     pub text: String,
 }
 
-/// A code generator for one output language.
+/// A code generator for one output language: one method per networked
+/// role of the generated loop.
 pub trait Backend: Sync {
     /// The `emit` target this backend serves.
     fn target(&self) -> Emit;
-    /// Every file of the design in this language (the controller module,
-    /// the sensor module of an aperiodic trigger, support files).
-    fn files(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError>;
+    /// The controller module (PDC on the received state, saturation).
+    fn controller(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError>;
+    /// The sensor module of the loop's law ([`crate::tables::Sensor`]):
+    /// none for a continuous or periodic loop.
+    fn sensor(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError>;
+    /// The module of an adaptive design (docs/adaptive.md).
+    fn adaptive(&self, at: &AdaptiveTables) -> Result<Vec<GeneratedFile>, CodegenError>;
+    /// Files every module of this language includes (the C runtime).
+    fn support(&self) -> Vec<GeneratedFile> {
+        Vec::new()
+    }
+    /// Every file of a certified PDC design in this language: the controller,
+    /// the sensor module, support files.
+    fn files(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        let mut out = self.controller(t)?;
+        out.extend(self.sensor(t)?);
+        out.extend(self.support());
+        Ok(out)
+    }
 }
 
 /// Every backend; [`generate`] picks them by [`Backend::target`].
@@ -64,26 +81,9 @@ pub fn generate_adaptive(
     }
     let mut out = Vec::new();
     for &target in targets {
-        match target {
-            Emit::Rust => out.push(GeneratedFile {
-                name: format!("{}.rs", at.base.name),
-                text: rust::emit_rust_adaptive(at)?,
-            }),
-            Emit::C => {
-                c::check_name(&at.base.name)?;
-                let files = c::emit_c_adaptive(at);
-                let (h, src) = c::c_file_names(&at.base);
-                out.push(GeneratedFile {
-                    name: h,
-                    text: files.header,
-                });
-                out.push(GeneratedFile {
-                    name: src,
-                    text: files.source,
-                });
-                out.extend(c::runtime::files());
-            }
-        }
+        let b = backend(target).ok_or(CodegenError::NoBackend(target))?;
+        out.extend(b.adaptive(at)?);
+        out.extend(b.support());
     }
     Ok(out)
 }

@@ -202,8 +202,7 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
             .clone()
             .unwrap_or_else(|| vec![f64::INFINITY; m]),
         precision: spec.precision,
-        trigger: None,
-        signal_trigger: None,
+        sensor: crate::tables::Sensor::None,
         modes,
     };
     Ok(Prepared {

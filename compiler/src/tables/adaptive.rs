@@ -63,8 +63,7 @@ pub fn adaptive_tables(
         gains: Vec::new(),
         u_max: vec![f64::INFINITY; model.m],
         precision: spec.precision,
-        trigger: None,
-        signal_trigger: None,
+        sensor: crate::tables::Sensor::None,
         modes: None,
     };
     let mut design = design.clone();

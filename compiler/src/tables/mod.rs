@@ -95,17 +95,51 @@ pub struct Tables {
     pub u_max: Vec<f64>,
     /// Floating-point type of generated code.
     pub precision: Precision,
-    /// The sensor-side event trigger (`trigger aperiodic { .. }` only): the
-    /// networked loop is generated as a sensor module (this trigger) and the
-    /// controller module (fed the transmitted state x(t_k)).
-    pub trigger: Option<SensorTables>,
-    /// The sensor-side mixed trigger on a named signal (`trigger mixed { on = ..; }`).
-    pub signal_trigger: Option<SignalSensorTables>,
+    /// The sensor-side module of the loop's law, if it has one.
+    pub sensor: Sensor,
     /// Per-mode gains of a mode-dependent design (`modes { design =
     /// mode_dependent; }`): generated code takes the active mode each step.
     /// `None` without modes and for fault-blind (mode-independent) gains,
     /// which are `gains` in every mode.
     pub modes: Option<ModeTables>,
+}
+
+/// The sensor-side module of a networked loop: one variant per loop law
+/// that has one. The loop is generated as this sensor module and the
+/// controller module (fed what the sensor transmits).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Sensor {
+    /// No sensor module (continuous or periodic loop, or a loop with modes).
+    #[default]
+    None,
+    /// An aperiodic trigger (`trigger aperiodic { .. }`): every sample, or
+    /// an event condition with a weight and a threshold.
+    Aperiodic(SensorTables),
+    /// The mixed trigger on a signal (`trigger mixed { on = ..; }`).
+    Mixed(SignalSensorTables),
+}
+
+impl Sensor {
+    /// The aperiodic trigger's tables, if the loop has one.
+    pub fn aperiodic(&self) -> Option<&SensorTables> {
+        match self {
+            Sensor::Aperiodic(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The mixed trigger's tables, if the loop has one.
+    pub fn mixed(&self) -> Option<&SignalSensorTables> {
+        match self {
+            Sensor::Mixed(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// Whether the loop has a sensor module.
+    pub fn is_some(&self) -> bool {
+        !matches!(self, Sensor::None)
+    }
 }
 
 /// The gain sets of a mode-dependent design.
@@ -248,8 +282,14 @@ pub fn tables(
             .clone()
             .unwrap_or_else(|| vec![f64::INFINITY; model.m]),
         precision: spec.precision,
-        trigger: sensor::sensor_tables(model, design)?,
-        signal_trigger: signal::signal_sensor_tables(model, design)?,
+        sensor: match (
+            sensor::sensor_tables(model, design)?,
+            signal::signal_sensor_tables(model, design)?,
+        ) {
+            (Some(s), _) => Sensor::Aperiodic(s),
+            (None, Some(s)) => Sensor::Mixed(s),
+            (None, None) => Sensor::None,
+        },
         modes: mode_tables(model, design),
     })
 }

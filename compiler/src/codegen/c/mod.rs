@@ -29,7 +29,7 @@
 
 use super::header::marker;
 use super::{Backend, CodegenError, GeneratedFile};
-use crate::tables::Tables;
+use crate::tables::{AdaptiveTables, Sensor, Tables};
 use std::fmt::Write as _;
 use tsf_lang::spec::Emit;
 
@@ -56,17 +56,27 @@ impl Backend for CBackend {
         Emit::C
     }
 
-    fn files(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+    fn controller(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
         check_name(&t.name)?;
-        let mut out = emit_c(t).named(c_file_names(t));
-        if t.trigger.is_some() {
-            out.extend(emit_c_sensor(t)?.named(c_sensor_file_names(t)));
-        }
-        if t.signal_trigger.is_some() {
-            out.extend(emit_c_signal_sensor(t)?.named(c_sensor_file_names(t)));
-        }
-        out.extend(runtime::files());
-        Ok(out)
+        Ok(emit_c(t).named(c_file_names(t)))
+    }
+
+    fn sensor(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        let files = match &t.sensor {
+            Sensor::None => return Ok(Vec::new()),
+            Sensor::Aperiodic(_) => emit_c_sensor(t)?,
+            Sensor::Mixed(_) => emit_c_signal_sensor(t)?,
+        };
+        Ok(files.named(c_sensor_file_names(t)))
+    }
+
+    fn adaptive(&self, at: &AdaptiveTables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        check_name(&at.base.name)?;
+        Ok(emit_c_adaptive(at).named(c_file_names(&at.base)))
+    }
+
+    fn support(&self) -> Vec<GeneratedFile> {
+        runtime::files()
     }
 }
 
@@ -202,7 +212,7 @@ impl<'a> Gen<'a> {
             "// {what} of the T-S PDC controller `{}`: {} states, {} inputs, {} premise components, {} rules.",
             t.name, t.n, t.m, t.p, t.r
         );
-        if t.trigger.is_some() {
+        if t.sensor.aperiodic().is_some() {
             let _ = writeln!(
                 s,
                 "// Controller-side role of the event-triggered loop: {p}step is fed the received x(t_k),\n// the last state transmitted by the sensor module `{p}sensor` (.h/.c); memberships and\n// feedback are evaluated at x(t_k) and the command is held between transmissions.",

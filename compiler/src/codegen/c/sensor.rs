@@ -27,7 +27,7 @@ pub fn c_sensor_file_names(t: &Tables) -> (String, String) {
 /// Generates the sensor module's header and source; errors if the design
 /// has no aperiodic trigger.
 pub fn emit_c_sensor(t: &Tables) -> Result<CFiles, CodegenError> {
-    let s = t.trigger.as_ref().ok_or(CodegenError::NoSensor)?;
+    let s = t.sensor.aperiodic().ok_or(CodegenError::NoSensor)?;
     let g = Gen::sensor(t);
     Ok(CFiles {
         header: sensor_header(&g, s),

@@ -14,7 +14,7 @@ use tsf_lang::spec::Precision;
 
 /// Generates the header and source; errors if the design has no such trigger.
 pub fn emit_c_signal_sensor(t: &Tables) -> Result<CFiles, CodegenError> {
-    let s = t.signal_trigger.as_ref().ok_or(CodegenError::NoSensor)?;
+    let s = t.sensor.mixed().ok_or(CodegenError::NoSensor)?;
     let g = Gen::sensor(t);
     Ok(CFiles {
         header: header(&g, s),

@@ -18,7 +18,7 @@ pub use signal_sensor::emit_rust_signal_sensor;
 use super::header::{marker, modal_sampling_note, sensor_name};
 use super::{Backend, CodegenError, GeneratedFile};
 use crate::model::TermSpec;
-use crate::tables::{PremiseCode, Tables};
+use crate::tables::{AdaptiveTables, PremiseCode, Sensor, Tables};
 use proc_macro2::{Literal, TokenStream};
 use quote::{format_ident, quote};
 use tokens::{array, float, matrix, membership, real_ty, sym};
@@ -34,24 +34,30 @@ impl Backend for RustBackend {
         Emit::Rust
     }
 
-    fn files(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
-        let mut out = vec![GeneratedFile {
+    fn controller(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        Ok(vec![GeneratedFile {
             name: format!("{}.rs", t.name),
             text: emit_rust(t)?,
-        }];
-        if t.trigger.is_some() {
-            out.push(GeneratedFile {
-                name: format!("{}.rs", sensor_name(t)),
-                text: emit_rust_sensor(t)?,
-            });
-        }
-        if t.signal_trigger.is_some() {
-            out.push(GeneratedFile {
-                name: format!("{}.rs", sensor_name(t)),
-                text: emit_rust_signal_sensor(t)?,
-            });
-        }
-        Ok(out)
+        }])
+    }
+
+    fn sensor(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        let text = match &t.sensor {
+            Sensor::None => return Ok(Vec::new()),
+            Sensor::Aperiodic(_) => emit_rust_sensor(t)?,
+            Sensor::Mixed(_) => emit_rust_signal_sensor(t)?,
+        };
+        Ok(vec![GeneratedFile {
+            name: format!("{}.rs", sensor_name(t)),
+            text,
+        }])
+    }
+
+    fn adaptive(&self, at: &AdaptiveTables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        Ok(vec![GeneratedFile {
+            name: format!("{}.rs", at.base.name),
+            text: emit_rust_adaptive(at)?,
+        }])
     }
 }
 
@@ -424,7 +430,7 @@ fn header(t: &Tables) -> String {
             s.push_str(&format!("// {note}\n"));
         }
     }
-    if t.trigger.is_some() {
+    if t.sensor.aperiodic().is_some() {
         s.push_str(&format!(
             "// Controller-side role of the event-triggered loop: `step` is fed the received x(t_k),\n// the last state transmitted by the sensor module `{}`; memberships\n// and feedback are evaluated at x(t_k), and the command is held between transmissions.\n",
             sensor_name(t)

@@ -14,7 +14,7 @@ use quote::quote;
 /// sampling instant whether to transmit the state, holds the last transmitted
 /// state and the threshold. Errors if the design has no trigger.
 pub fn emit_rust_sensor(t: &Tables) -> Result<String, CodegenError> {
-    let s = t.trigger.as_ref().ok_or(CodegenError::NoSensor)?;
+    let s = t.sensor.aperiodic().ok_or(CodegenError::NoSensor)?;
     let prec = t.precision;
     let ty = real_ty(prec);
     let n = Literal::usize_unsuffixed(t.n);

@@ -13,7 +13,7 @@ use quote::quote;
 
 /// The sensor module of a mixed trigger on a signal; errors if the design has none.
 pub fn emit_rust_signal_sensor(t: &Tables) -> Result<String, CodegenError> {
-    let s = t.signal_trigger.as_ref().ok_or(CodegenError::NoSensor)?;
+    let s = t.sensor.mixed().ok_or(CodegenError::NoSensor)?;
     let prec = t.precision;
     let ty = real_ty(prec);
     let n = Literal::usize_unsuffixed(t.n);
