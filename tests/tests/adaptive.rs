@@ -4,10 +4,10 @@
 //! converging with the time-varying inertia.
 
 use crate::common;
-use tsfc::adaptive::sim::{self, Options, Run};
-use tsfc::adaptive::{design, Design, Outcome};
 use tsfc::model::TsModel;
+use tsfc::sim::adaptive::{self as sim, Options, Run};
 use tsfc::sim::source::SpecSource;
+use tsfc::synth::adaptive::{design, Design, Outcome};
 
 /// Plant x' = a x + b u with a = 1, b = 1 (b known), reference model
 /// a_m = -2, Q = 2 (so p = 1/2), a_hat(0) = 0, gamma = 4, x(0) = 1, r = 0.
@@ -131,7 +131,7 @@ fn an_unstable_reference_model_is_refused() {
     let o = design(&model);
     assert!(o.design.is_none());
     assert_eq!(o.exit_code(), 3);
-    assert_eq!(o.report.status, tsfc::adaptive::REFUSED);
+    assert_eq!(o.report.status, tsfc::synth::adaptive::REFUSED);
     assert!(
         o.report.refusals[0].contains("not Hurwitz"),
         "{:?}",
@@ -183,7 +183,12 @@ fn wang2013_is_well_posed_and_says_what_it_does_not_guarantee() {
     let model = common::shipped("wang2013_adaptive_mrac.tsf");
     let o = design(&model);
     let r = &o.report;
-    assert_eq!(r.status, tsfc::adaptive::WELL_POSED, "{:?}", r.refusals);
+    assert_eq!(
+        r.status,
+        tsfc::synth::adaptive::WELL_POSED,
+        "{:?}",
+        r.refusals
+    );
     // Independent check: A_m = -I, Q = I gives P = I / 2.
     for (k, v) in r.p.iter().enumerate() {
         let want = if k % 4 == 0 { 0.5 } else { 0.0 };

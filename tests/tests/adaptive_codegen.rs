@@ -20,9 +20,10 @@ use crate::c_codegen::{
 use crate::common;
 use tsf_lang::spec::Emit;
 use tsf_runtime::{AdaptiveController, AdaptiveLaw, AdaptiveState, Flags, Term};
-use tsfc::adaptive::{design, sim::strengths};
 use tsfc::codegen::GeneratedFile;
 use tsfc::pipeline;
+use tsfc::sim::adaptive::strengths;
+use tsfc::synth::adaptive::design;
 use tsfc::tables::{adaptive_tables, AdaptiveTables, PremiseCode};
 
 const WANG: &str = "wang2013_adaptive_mrac.tsf";
@@ -34,7 +35,7 @@ const D: usize = 6;
 
 fn generated(targets: &[Emit]) -> Vec<GeneratedFile> {
     let front = pipeline::read(&common::spec_path(WANG)).expect("readable");
-    tsfc::adaptive::cli::generated(&front, targets)
+    tsfc::driver::adaptive::generated(&front, targets)
         .expect("an adaptive spec")
         .expect("generates")
 }
@@ -86,19 +87,30 @@ fn generated_adaptive_snapshots() {
 }
 
 /// `precision f32` and a missing `simulate` step: no code, a clear reason.
+/// The generated files of an adaptive design: its tables, then the backends.
+fn generate_adaptive(
+    model: &tsfc::model::TsModel,
+    d: &tsfc::synth::adaptive::Design,
+    shown: &str,
+    sha: &str,
+    targets: &[Emit],
+) -> Result<Vec<tsfc::codegen::GeneratedFile>, tsfc::codegen::CodegenError> {
+    let at = tsfc::tables::adaptive_tables(model, d, shown, sha)?;
+    tsfc::codegen::generate_adaptive(&at, targets)
+}
+
 #[test]
 fn adaptive_generation_refusals() {
     let text = std::fs::read_to_string(common::spec_path(WANG)).expect("spec");
     let f32 = common::model_of("f32.tsf", &format!("{text}\nprecision f32;"));
     let d = design(&f32).design.expect("well posed");
-    let e = tsfc::codegen::generate_adaptive(&f32, &d, "f32.tsf", "sha", &[Emit::C])
-        .expect_err("f64 only");
+    let e = generate_adaptive(&f32, &d, "f32.tsf", "sha", &[Emit::C]).expect_err("f64 only");
     assert!(e.to_string().contains("f64 only"), "{e}");
     let start = text.find("\nsimulate {").expect("a simulate block");
     let model = common::model_of("nosim.tsf", &text[..start]);
     let d = design(&model).design.expect("well posed");
-    let e = tsfc::codegen::generate_adaptive(&model, &d, "nosim.tsf", "sha", &[Emit::Rust])
-        .expect_err("no period");
+    let e =
+        generate_adaptive(&model, &d, "nosim.tsf", "sha", &[Emit::Rust]).expect_err("no period");
     assert!(e.to_string().contains("`simulate` block's step"), "{e}");
 }
 
@@ -448,9 +460,8 @@ simulate { x0 = 1; time = 0 .. 1 step 1e-3; }
 ",
     );
     let d = design(&model).design.expect("well posed");
-    let files =
-        tsfc::codegen::generate_adaptive(&model, &d, "mrac_nl.tsf", "sha", &[Emit::Rust, Emit::C])
-            .expect("generates");
+    let files = generate_adaptive(&model, &d, "mrac_nl.tsf", "sha", &[Emit::Rust, Emit::C])
+        .expect("generates");
     let rust = &files[0].text;
     assert!(syn::parse_file(rust).is_ok(), "parses:\n{rust}");
     assert!(rust.contains("pub fn premises(x: &[f64; N]) -> [f64; P]"));

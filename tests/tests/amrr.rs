@@ -13,9 +13,10 @@ use common::Rng;
 use common::{model_of, spec_path};
 use std::sync::OnceLock;
 use tsf_lang::spec::Trigger;
-use tsfc::compile::{compile, Status};
+use tsfc::driver::compile::{compile, Status};
+use tsfc::driver::prepare_run;
 use tsfc::report::SpecInfo;
-use tsfc::sim::{prepare_run, simulate_csv, Options, Outcome, Prepared};
+use tsfc::sim::{simulate_csv, Options, Outcome, Prepared};
 use tsfc::synth::Settings;
 
 const SPEC: &str = "amrr2019_flexible_mixed_trigger.tsf";
@@ -328,7 +329,7 @@ const SPEC_TRIGGER: &str =
     "trigger mixed { on = sigma; beta = 0.461; rho = 1e-6; monitor = continuous; }";
 
 /// The spec with its trigger item replaced by `law`, compiled.
-fn analyze_with(law: &str) -> tsfc::compile::Compiled {
+fn analyze_with(law: &str) -> tsfc::driver::compile::Compiled {
     let text = text();
     assert!(text.contains(SPEC_TRIGGER), "the spec's trigger changed");
     let text = text.replacen(SPEC_TRIGGER, law, 1);
@@ -340,7 +341,7 @@ fn analyze_with(law: &str) -> tsfc::compile::Compiled {
     compile(&model, info, &Settings::default(), Default::default())
 }
 
-fn analyze_with_period(every: &str) -> tsfc::compile::Compiled {
+fn analyze_with_period(every: &str) -> tsfc::driver::compile::Compiled {
     analyze_with(&format!("trigger periodic {{ every = {every}; }}"))
 }
 

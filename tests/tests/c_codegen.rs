@@ -56,12 +56,12 @@ fn tables_of(file: &str) -> Result<Tables, String> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../specs")
         .join(file);
-    let src = tsfc::frontend::read_source(&path).map_err(|e| format!("{e:?}"))?;
+    let src = tsfc::driver::frontend::read_source(&path).map_err(|e| format!("{e:?}"))?;
     let sha = tsfc::report::sha256_hex(&src.bytes);
-    let checked = tsfc::frontend::check(&src);
+    let checked = tsfc::driver::frontend::check(&src);
     let model = checked.model.ok_or("the spec does not check")?;
     let spec_path = format!("specs/{file}");
-    let c = tsfc::compile::compile(
+    let c = tsfc::driver::compile::compile(
         &model,
         tsfc::report::SpecInfo {
             path: spec_path.clone(),
@@ -119,11 +119,11 @@ fn generated_c_is_deterministic_and_snapshotted() {
         assert_eq!(
             a.source
                 .contains("Controller-side role of the event-triggered loop"),
-            t.trigger.is_some(),
+            t.sensor.aperiodic().is_some(),
             "{}: the controller-side note is for the event-triggered loop only",
             t.name
         );
-        if t.trigger.is_none() {
+        if t.sensor.aperiodic().is_none() {
             assert!(emit_c_sensor(t).is_err(), "{}: no sensor module", t.name);
             continue;
         }
@@ -158,7 +158,9 @@ fn generated_c_is_deterministic_and_snapshotted() {
         insta::assert_snapshot!(c, s1.source);
     }
     assert!(
-        shipped_tables().iter().any(|t| t.trigger.is_some()),
+        shipped_tables()
+            .iter()
+            .any(|t| t.sensor.aperiodic().is_some()),
         "the event-triggered spec must have a sensor module"
     );
 }
@@ -193,7 +195,7 @@ fn emitted_runtime_files_are_the_checked_in_ones() {
         let mut names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
         let (h, c) = c_file_names(t);
         let mut expected = vec![h, c];
-        if t.trigger.is_some() {
+        if t.sensor.aperiodic().is_some() {
             let (sh, sc) = c_sensor_file_names(t);
             expected.extend([sh, sc]);
         }
@@ -760,7 +762,7 @@ fn generated_c_links_together_and_builds_as_float_and_cpp() {
     for t in tables {
         sources.push(write_files(&dir, t, &emit_c(t)));
         let _ = writeln!(main, "#include \"{}.h\"", t.name);
-        if t.trigger.is_some() {
+        if t.sensor.aperiodic().is_some() {
             sources.push(write_sensor_files(
                 &dir,
                 t,
@@ -776,7 +778,7 @@ fn generated_c_links_together_and_builds_as_float_and_cpp() {
             main,
             "    {{\n        {p}_t s;\n        {up}_REAL x[{up}_N] = {{0}}, u[{up}_M];\n        {p}_init(&s);\n        {p}_step(&s, x, u);\n        bad |= {p}_flags(&s) != 0 || u[0] != 0;\n    }}\n"
         );
-        if t.trigger.is_some() {
+        if t.sensor.aperiodic().is_some() {
             // The networked loop: the sensor decides, the controller steps on
             // the transmitted state (the first sample is always transmitted).
             let _ = write!(
@@ -923,7 +925,7 @@ enum RefTrigger<T, const N: usize> {
 /// The runtime's decisions and thresholds (as f64 bits) for every command:
 /// `(transmitted, nu)`; a reset reports the initial nu and `false`.
 fn sensor_reference<T: Real, const N: usize>(t: &Tables, cmds: &[Cmd]) -> Vec<(bool, u64)> {
-    let s = t.trigger.as_ref().expect("sensor tables");
+    let s = t.sensor.aperiodic().expect("sensor tables");
     let weight: [[T; N]; N] =
         std::array::from_fn(|i| std::array::from_fn(|j| T::from_f64(s.weight[i][j])));
     let r = T::from_f64;
@@ -977,7 +979,7 @@ fn sensor_driver(t: &Tables) -> String {
     let p = format!("{}_sensor_", t.name);
     let u = p.to_ascii_uppercase();
     let adaptive = matches!(
-        t.trigger.as_ref().map(|s| s.law),
+        t.sensor.aperiodic().map(|s| s.law),
         Some(SensorLaw::Adaptive(..))
     );
     let atan = if adaptive {
@@ -1175,7 +1177,7 @@ fn nu_motion(cmds: &[Cmd], rows: &[(bool, u64)], nu_min: f64, nu_max: f64) -> [u
 fn xu_tables() -> &'static Tables {
     shipped_tables()
         .iter()
-        .find(|t| t.trigger.is_some())
+        .find(|t| t.sensor.aperiodic().is_some())
         .expect("the event-triggered spec compiles and has a sensor module")
 }
 
@@ -1187,7 +1189,7 @@ fn xu_tables() -> &'static Tables {
 fn generated_sensor_c_matches_the_runtime_bit_for_bit() {
     let cc = c_compiler();
     let t = xu_tables();
-    let s = t.trigger.as_ref().expect("sensor tables");
+    let s = t.sensor.aperiodic().expect("sensor tables");
     let SensorLaw::Adaptive(..) = s.law else {
         panic!("{}: the shipped sensor is adaptive ({:?})", t.name, s.law);
     };
@@ -1245,11 +1247,11 @@ fn generated_sensor_c_variants_match_the_runtime() {
     let cases = [
         ("relative", SensorLaw::Relative, false),
         ("every", SensorLaw::EverySample, false),
-        ("f32", base.trigger.as_ref().expect("sensor").law, true),
+        ("f32", base.sensor.aperiodic().expect("sensor").law, true),
     ];
     for (tag, law, f32_spec) in cases {
         let mut t = base.clone();
-        if let Some(s) = t.trigger.as_mut() {
+        if let Some(s) = t.sensor.aperiodic_mut() {
             // As `tables()` fills them: a static threshold is its own
             // ceiling; no threshold is nu = 0.
             match law {

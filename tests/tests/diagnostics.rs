@@ -3,7 +3,7 @@
 
 use std::path::Path;
 use tsf_lang::diag;
-use tsfc::frontend;
+use tsfc::driver::frontend;
 
 fn render(path: &Path) -> (String, usize) {
     let mut source = frontend::read_source(path).expect("fixture is readable");

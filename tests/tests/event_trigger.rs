@@ -11,7 +11,7 @@ use crate::common;
 use nalgebra::{DMatrix, DVector};
 use std::sync::OnceLock;
 use tsf_lang::spec::{Threshold, Trigger, Weight};
-use tsfc::compile::{compile, Compiled, Status};
+use tsfc::driver::compile::{compile, Compiled, Status};
 use tsfc::model::TsModel;
 use tsfc::report::SpecInfo;
 use tsfc::sim::{simulate, Options, Outcome, Prepared};
@@ -29,7 +29,7 @@ pub(crate) fn trigger() -> &'static TriggerDesign {
     let (_, c) = compiled();
     assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
     let (design, _) = c.outcome.as_ref().expect("certified");
-    design.trigger.as_ref().expect("a synthesized trigger")
+    design.loop_design.event().expect("a synthesized trigger")
 }
 
 fn value<'a>(t: &'a TriggerDesign, name: &str) -> &'a DMatrix<f64> {
@@ -287,7 +287,7 @@ pub(crate) fn prepared() -> &'static Prepared {
             model: model.clone(),
             tables: tsfc::tables::tables(model, design, cert, SPEC, "").expect("tables"),
             p: design.p.clone(),
-            trigger_weight: design.trigger.as_ref().map(|t| t.weight.clone()),
+            trigger_weight: design.loop_design.event().map(|t| t.weight.clone()),
             source: tsfc::sim::source::SpecSource {
                 name: SPEC.into(),
                 text,
@@ -490,7 +490,7 @@ fn codesigned_trigger() -> &'static TriggerDesign {
     let run = codesigned();
     let (design, cert) = run.certified().unwrap_or_else(|e| panic!("{e}"));
     assert!(cert.ok);
-    let t = design.trigger.as_ref().expect("a co-designed trigger");
+    let t = design.loop_design.event().expect("a co-designed trigger");
     assert_eq!(t.method, "codesign");
     t
 }
@@ -550,7 +550,7 @@ fn codesign_gamma_does_not_increase_over_rounds_at_the_threshold() {
 #[test]
 fn codesign_and_papers_design_transmissions_in_300_s() {
     let run = codesigned();
-    let ours = tsfc::sim::prepare_run(run).unwrap_or_else(|e| panic!("{e}"));
+    let ours = tsfc::driver::prepare_run(run).unwrap_or_else(|e| panic!("{e}"));
     let long = Options {
         horizon: Some(300.0),
         ..Options::default()
@@ -626,7 +626,7 @@ fn unbalanced_step_one_still_certifies_the_trigger() {
         gamma1 > 10.0 * xi1,
         "step 1 balanced: xi {xi1}, gamma {gamma1}"
     );
-    let t = design.trigger.as_ref().expect("a trigger design");
+    let t = design.loop_design.event().expect("a trigger design");
     // The certified point needs xi above the old cap 4 xi1.
     let xi = value(t, "xi_tr")[(0, 0)];
     assert!(xi > 4.0 * xi1, "xi {xi} vs step 1 {xi1}");

@@ -6,7 +6,7 @@
 use proptest::prelude::*;
 use std::path::Path;
 use tsf_lang::limits::{MAX_EXPR_DEPTH, MAX_NESTING};
-use tsfc::frontend::{self, Source};
+use tsfc::driver::frontend::{self, Source};
 
 fn corpus() -> Vec<String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -152,7 +152,7 @@ fn run(case: &Case, dir: &std::path::Path) -> Result<&'static str, TestCaseError
         .generate(&[Emit::Rust, Emit::C])
         .map_err(|e| TestCaseError::fail(format!("certified but not generated: {e}")))?;
     prop_assert!(files.iter().all(|f| !f.text.is_empty()));
-    match tsfc::sim::prepare(&path)
+    match tsfc::driver::prepare(&path)
         .and_then(|p| tsfc::sim::simulate(&p, &tsfc::sim::Options::default()))
     {
         Ok(o) => {

@@ -9,7 +9,7 @@
 use crate::common;
 use common::Rng;
 use nalgebra::DMatrix;
-use tsfc::compile::{compile, Compiled, Status};
+use tsfc::driver::compile::{compile, Compiled, Status};
 use tsfc::report::SpecInfo;
 use tsfc::synth::Settings;
 
@@ -241,7 +241,7 @@ fn simulate_measures_the_membership_rates_and_flags_samples_above_phi() {
         let sim =
             format!("simulate {{ x0 = {x0}; time = 0 .. 10 step 0.001; integrator = rk4; }}\n");
         std::fs::write(&path, spec(&sim)).expect("write spec");
-        let prepared = tsfc::sim::prepare(&path).expect("certified");
+        let prepared = tsfc::driver::prepare(&path).expect("certified");
         let o = tsfc::sim::simulate(&prepared, &Default::default()).expect("simulate");
         let m = &o.metrics;
         assert_eq!(m.certified_phi, Some(vec![PHI; 3]));

@@ -11,7 +11,7 @@ use crate::common;
 use common::{model_of, spec_path};
 use nalgebra::{Complex, DMatrix};
 use tsf_lang::spec::Emit;
-use tsfc::compile::{compile, Compiled, Status};
+use tsfc::driver::compile::{compile, Compiled, Status};
 use tsfc::report::SpecInfo;
 use tsfc::synth::{Quantity, Settings};
 

@@ -7,7 +7,7 @@ use crate::common;
 
 use nalgebra::DMatrix;
 use serde_json::Value;
-use tsfc::compile::{compile, Status};
+use tsfc::driver::compile::{compile, Status};
 use tsfc::report::SpecInfo;
 use tsfc::synth::Settings;
 

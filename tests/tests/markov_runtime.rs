@@ -17,10 +17,11 @@ use std::sync::OnceLock;
 use tsf_runtime::{Flags, ModalController, Term};
 use tsfc::codegen::c::{emit_c, runtime};
 use tsfc::codegen::rust::emit_rust;
-use tsfc::compile::{compile, Status};
+use tsfc::driver::compile::{compile, Status};
+use tsfc::driver::prepare;
 use tsfc::report::SpecInfo;
 use tsfc::sim::modes::ModeProcess;
-use tsfc::sim::{prepare, simulate, simulate_csv, Options, Outcome};
+use tsfc::sim::{simulate, simulate_csv, Options, Outcome};
 use tsfc::synth::Settings;
 use tsfc::tables::{PremiseCode, Tables};
 

@@ -11,7 +11,8 @@ use crate::markov::{compiled, input_matrix, matrix, three_modes};
 
 use nalgebra::DMatrix;
 use serde_json::Value;
-use tsfc::sim::{prepare, simulate_csv, Options};
+use tsfc::driver::prepare;
+use tsfc::sim::{simulate_csv, Options};
 
 fn max_eig(m: &DMatrix<f64>) -> f64 {
     let s = (m + m.transpose()) * 0.5;
@@ -384,7 +385,7 @@ fn xue2024_fault_blind_sampled_is_co_designed_certified_rechecked_and_converges(
         .replace("design = mode_dependent;", "design = mode_independent;");
     assert!(text.contains("design = mode_independent;"));
     let name = "xue_fault_blind_sampled.tsf".to_string();
-    let source = tsfc::frontend::Source {
+    let source = tsfc::driver::frontend::Source {
         name: name.clone(),
         text,
         bytes: Vec::new(),
@@ -415,7 +416,7 @@ fn xue2024_fault_blind_sampled_is_co_designed_certified_rechecked_and_converges(
     // too: every condition of the certificate is met.
     assert_eq!(json["certificate"]["ok"], true);
     // The closed loop converges under the seeded mode process, sampled.
-    let p = tsfc::sim::prepare_run(&run).expect("certified");
+    let p = tsfc::driver::prepare_run(&run).expect("certified");
     let o = simulate_csv(&p, &Options::default(), &mut Vec::new()).expect("runs");
     let mm = o.metrics.modes.as_ref().expect("modes");
     println!(

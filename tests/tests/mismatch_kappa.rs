@@ -12,7 +12,7 @@ use common::{kim_lee_rules, Rng};
 
 use nalgebra::DMatrix;
 use tsf_lmi::{Expr, Problem, SolveSettings, SolveStatus};
-use tsfc::compile::{compile, Compiled, Status};
+use tsfc::driver::compile::{compile, Compiled, Status};
 use tsfc::report::SpecInfo;
 use tsfc::synth::Settings;
 
@@ -237,7 +237,7 @@ fn the_simulation_measures_the_mismatch_and_counts_samples_above_kappa() {
             opposite(&format!("membership_mismatch(kappa = {kappa})")),
         )
         .expect("write spec");
-        let prepared = tsfc::sim::prepare(&path).expect("certified");
+        let prepared = tsfc::driver::prepare(&path).expect("certified");
         // The generated headers state the bound the certificate relies on.
         assert!(
             prepared.tables.header.relaxation.ends_with(&format!(

@@ -12,7 +12,7 @@ use std::process::Command;
 use tsf_runtime::SignalTrigger;
 use tsfc::codegen::c::{c_sensor_file_names, emit_c_signal_sensor, runtime};
 use tsfc::codegen::rust::emit_rust_signal_sensor;
-use tsfc::compile::{compile, Compiled};
+use tsfc::driver::compile::{compile, Compiled};
 use tsfc::report::SpecInfo;
 use tsfc::synth::signal_trigger::SignalTrigger as Cert;
 use tsfc::synth::Settings;
@@ -56,8 +56,9 @@ fn certificate(c: &Compiled) -> Cert {
     let (design, cert) = c.outcome.as_ref().expect("certified");
     assert!(cert.ok, "{}", cert.worst);
     design
-        .signal_trigger
-        .clone()
+        .loop_design
+        .mixed()
+        .cloned()
         .expect("a mixed-trigger certificate")
 }
 
@@ -181,14 +182,14 @@ fn refusals_name_the_cause() {
     let e = c.outcome.expect_err("refused").to_string();
     assert!(e.contains("saturation"), "{e}");
     // Negative beta is a check error.
-    let source = tsfc::frontend::Source {
+    let source = tsfc::driver::frontend::Source {
         name: "am.tsf".into(),
         text: format!(
             "{TWO_RULES}trigger mixed {{ on = s; beta = -0.3; rho = 1e-4; monitor = step; }}\n"
         ),
         bytes: Vec::new(),
     };
-    let checked = tsfc::frontend::check(&source);
+    let checked = tsfc::driver::frontend::check(&source);
     assert!(checked
         .diagnostics
         .iter()
@@ -232,7 +233,7 @@ fn runtime_rust_and_c_sensors_decide_alike() {
         format!("{TWO_RULES}trigger mixed {{ on = s; beta = 0.3; rho = 1e-4; monitor = step; }}\n");
     let c = compiled("am.tsf", &text);
     let t = tables(&c, "am.tsf", &text);
-    let s = t.signal_trigger.as_ref().expect("signal sensor tables");
+    let s = t.sensor.mixed().expect("signal sensor tables");
     // The generated Rust evaluates exactly these expressions with the runtime's trigger.
     let rust = emit_rust_signal_sensor(&t).expect("rust");
     assert!(rust.contains("SignalTrigger::new(BETA, RHO)"));
@@ -325,7 +326,7 @@ fn per_step_monitoring_counts_replay_from_the_trace() {
         "{TWO_RULES}trigger mixed {{ on = s; beta = 0.3; rho = 1e-4; monitor = step; }}\n\
          simulate {{ time = 0 .. 20 step 0.01; x0 = [0.5, 0]; }}\n"
     );
-    let prepared = tsfc::sim::prepare(&spec_file("step", &text)).expect("prepared");
+    let prepared = tsfc::driver::prepare(&spec_file("step", &text)).expect("prepared");
     let mut csv = Vec::new();
     let o = tsfc::sim::simulate_csv(&prepared, &tsfc::sim::Options::default(), &mut csv)
         .expect("simulated");
@@ -355,7 +356,7 @@ fn per_step_monitoring_counts_replay_from_the_trace() {
     assert!(replayed > 5 && replayed < 500, "{replayed}");
     assert!(o.metrics.energy > 0.0 && o.metrics.mean_inter_event_s.is_some());
     // Continuous monitoring locates crossings inside the steps: at least as many events.
-    let cont = tsfc::sim::prepare(&spec_file(
+    let cont = tsfc::driver::prepare(&spec_file(
         "cont",
         &text.replace("monitor = step", "monitor = continuous"),
     ))

@@ -5,7 +5,7 @@
 use crate::common;
 
 use nalgebra::DMatrix;
-use tsfc::frontend::{self, Source};
+use tsfc::driver::frontend::{self, Source};
 
 /// The Lorenz system by sector nonlinearity on x1 in [-25, 25]: A(x) is affine
 /// in x1 and the two sets are linear in x1, so the blend equals A(x).

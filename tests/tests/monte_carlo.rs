@@ -5,9 +5,10 @@
 
 use std::path::PathBuf;
 use std::sync::OnceLock;
+use tsfc::driver::prepare;
 use tsfc::sim::campaign::summary::{summarize, Partial};
 use tsfc::sim::campaign::{merge_dirs, run_campaign, write_campaign, write_shard, Config};
-use tsfc::sim::{prepare, Options, Prepared};
+use tsfc::sim::{Options, Prepared};
 
 /// An unstable scalar plant `x' = k x + u + d` stabilized by a certified gain;
 /// the campaign scales `k` (up to `k_hi`), the initial state and the disturbance.

@@ -5,10 +5,11 @@
 //! deterministic (same run, same bytes).
 
 use std::path::PathBuf;
+use tsfc::driver::prepare;
 use tsfc::sim::campaign::plot::plots as campaign_plots;
 use tsfc::sim::campaign::{run_campaign, Config};
 use tsfc::sim::plot::plots;
-use tsfc::sim::{prepare, simulate, Options, Outcome};
+use tsfc::sim::{simulate, Options, Outcome};
 
 fn pendulum() -> Outcome {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../specs/inverted_pendulum.tsf");

@@ -15,7 +15,7 @@ use crate::xu_paper_evidence::{
 };
 use nalgebra::DMatrix;
 use std::sync::OnceLock;
-use tsfc::compile::{Compiled, Status};
+use tsfc::driver::compile::{Compiled, Status};
 use tsfc::model::region::premise_box;
 use tsfc::model::TsModel;
 use tsfc::synth::TriggerDesign;
@@ -35,7 +35,7 @@ fn trigger() -> &'static TriggerDesign {
     let (_, c) = compiled();
     assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
     let (design, _) = c.outcome.as_ref().expect("certified");
-    design.trigger.as_ref().expect("a synthesized trigger")
+    design.loop_design.event().expect("a synthesized trigger")
 }
 
 /// States of the box: its 64 corners, then pseudo-random points.

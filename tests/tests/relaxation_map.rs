@@ -12,7 +12,7 @@ use common::kim_lee_rules;
 
 use nalgebra::DMatrix;
 use tsf_lmi::{Expr, Problem, SolveSettings, SolveStatus};
-use tsfc::compile::{compile, Status};
+use tsfc::driver::compile::{compile, Status};
 use tsfc::report::SpecInfo;
 use tsfc::synth::Settings;
 

@@ -7,9 +7,9 @@ use std::sync::OnceLock;
 use tsf_lang::spec::{Emit, Precision};
 use tsfc::certify::Certificate;
 use tsfc::codegen::rust::emit_rust_sensor;
-use tsfc::codegen::{generate, sensor_name, CodegenError, GeneratedFile};
-use tsfc::compile::{compile, Status};
-use tsfc::frontend;
+use tsfc::codegen::{sensor_name, CodegenError, GeneratedFile};
+use tsfc::driver::compile::{compile, Status};
+use tsfc::driver::frontend;
 use tsfc::model::TsModel;
 use tsfc::report::{sha256_hex, SpecInfo};
 use tsfc::synth::{Design, Settings};
@@ -73,6 +73,19 @@ fn compiled(name: &'static str) -> &'static Compiled {
         other => panic!("no cache for {other}"),
     };
     cell.get_or_init(|| compile_spec(name))
+}
+
+/// The generated files of a design: its tables, then the backends.
+fn generate(
+    model: &tsfc::model::TsModel,
+    design: &tsfc::synth::Design,
+    cert: &tsfc::certify::Certificate,
+    shown: &str,
+    sha: &str,
+    targets: &[Emit],
+) -> Result<Vec<GeneratedFile>, CodegenError> {
+    let t = tsfc::tables::tables(model, design, cert, shown, sha)?;
+    tsfc::codegen::generate(&t, targets)
 }
 
 fn generate_rust(c: &Compiled) -> Result<Vec<GeneratedFile>, CodegenError> {
@@ -153,10 +166,10 @@ fn sensor_module_needs_the_synthesized_weight() {
     let xu = compiled(XU);
     let mut design = xu.design.clone();
     assert!(
-        design.trigger.is_some(),
+        design.loop_design.event().is_some(),
         "the xu design co-designs its weight"
     );
-    design.trigger = None;
+    design.loop_design = tsfc::synth::loops::LoopDesign::Continuous;
     for targets in [[Emit::Rust], [Emit::C]] {
         let err = generate(&xu.model, &design, &xu.cert, &xu.shown, &xu.sha, &targets)
             .expect_err("no weight, no code");
@@ -171,7 +184,11 @@ fn sensor_module_variants_parse() {
     let xu = compiled(XU);
     let t =
         tsfc::tables::tables(&xu.model, &xu.design, &xu.cert, &xu.shown, &xu.sha).expect("tables");
-    let s = t.trigger.clone().expect("xu has an aperiodic trigger");
+    let s = t
+        .sensor
+        .aperiodic()
+        .cloned()
+        .expect("xu has an aperiodic trigger");
     assert!(matches!(s.law, SensorLaw::Adaptive(..)), "{:?}", s.law);
     assert_eq!(sensor_name(&t), "xu_event_triggered_sensor");
     let cases = [
@@ -186,7 +203,7 @@ fn sensor_module_variants_parse() {
     for (law, precision, needle) in cases {
         let mut v = t.clone();
         v.precision = precision;
-        if let Some(tr) = v.trigger.as_mut() {
+        if let Some(tr) = v.sensor.aperiodic_mut() {
             tr.law = law;
         }
         let text = emit_rust_sensor(&v).expect("generates");
@@ -197,6 +214,6 @@ fn sensor_module_variants_parse() {
         );
     }
     let mut none = t.clone();
-    none.trigger = None;
+    none.sensor = tsfc::tables::Sensor::None;
     assert!(emit_rust_sensor(&none).is_err());
 }

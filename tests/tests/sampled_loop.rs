@@ -82,7 +82,10 @@ fn a_period_outside_the_certificate_is_refused_with_a_period_that_certifies() {
     let text = msd(&format!("trigger periodic {{ every = {h}; }}"));
     let model = common::model_of("msd.tsf", &text);
     let d = synth::synthesize(&model, &Settings::default()).expect("the advised period certifies");
-    let sampled = d.sampled.as_ref().expect("a sampled-loop certificate");
+    let sampled = d
+        .loop_design
+        .every_sample()
+        .expect("a sampled-loop certificate");
     assert_eq!(sampled.plan.sampling, (h, h));
     let cert = tsfc::certify::certify(&model, &d).expect("certify");
     assert!(cert.ok, "{}", cert.worst);
@@ -125,7 +128,7 @@ fn the_certified_period_ships_in_the_generated_code_and_the_loop_converges() {
     let rho = worst_frozen_radius(&run.model, &design.gains, 0.25);
     assert!(rho < 1.0, "{rho}");
     // The simulated loop holds the command for the same 0.25 s and converges.
-    let prepared = tsfc::sim::prepare(&path).expect("prepare");
+    let prepared = tsfc::driver::prepare(&path).expect("prepare");
     let out = tsfc::sim::simulate(&prepared, &tsfc::sim::Options::default()).expect("simulate");
     assert!(out.metrics.converged && !out.metrics.failed);
     assert_eq!(
@@ -138,7 +141,7 @@ fn the_certified_period_ships_in_the_generated_code_and_the_loop_converges() {
 #[test]
 fn a_period_that_is_not_a_whole_number_of_steps_is_not_simulated() {
     let (dir, path) = spec_file("every-0.0125", &msd("trigger periodic { every = 0.0125; }"));
-    let prepared = tsfc::sim::prepare(&path).expect("prepare");
+    let prepared = tsfc::driver::prepare(&path).expect("prepare");
     let err = tsfc::sim::simulate(&prepared, &tsfc::sim::Options::default())
         .expect_err("0.0125 s is 12.5 steps of 1 ms");
     assert!(
@@ -207,7 +210,7 @@ fn a_discrete_time_design_certifies_a_period_the_emulated_design_does_not() {
         "the certificate re-checks the discrete-time conditions"
     );
     assert!(
-        d.sampled.is_some(),
+        d.loop_design.every_sample().is_some(),
         "the shipped loop (continuous plant, held command) is certified too"
     );
     // Independent: with the ZOH model integrated numerically, every blend of
@@ -242,7 +245,7 @@ fn a_discrete_time_design_certifies_a_period_the_emulated_design_does_not() {
     assert!(files
         .iter()
         .any(|f| f.text.contains("pub const SAMPLE_PERIOD: f64 = 0.55;")));
-    let prepared = tsfc::sim::prepare(&path).expect("prepare");
+    let prepared = tsfc::driver::prepare(&path).expect("prepare");
     let out = tsfc::sim::simulate(&prepared, &tsfc::sim::Options::default()).expect("simulate");
     assert!(out.metrics.converged && !out.metrics.failed);
     assert_eq!(out.metrics.transmissions, 37, "t = 0, 0.55, .., 19.8 s");

@@ -6,9 +6,10 @@
 use crate::common;
 
 use nalgebra::DMatrix;
-use tsfc::frontend::{self, Source};
+use tsfc::driver::frontend::{self, Source};
+use tsfc::driver::prepare;
 use tsfc::model::{rule_weight, TsModel};
-use tsfc::sim::{prepare, simulate, Options};
+use tsfc::sim::{simulate, Options};
 
 /// Lorenz: sigma = 10, r = 28, b = 8/3, d = 25 (Tanaka & Wang 2001, Section 2.2).
 fn lorenz_a(x1: f64) -> DMatrix<f64> {

@@ -6,9 +6,8 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
-use tsfc::sim::{
-    prepare_reusing, prepare_run, simulate_csv, ErrorKind, Evaluator, Options, Prepared, Reuse,
-};
+use tsfc::driver::{prepare_reusing, prepare_run, Reuse};
+use tsfc::sim::{simulate_csv, ErrorKind, Evaluator, Options, Prepared};
 
 fn specs_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../specs")

@@ -10,10 +10,11 @@ use nalgebra::DMatrix;
 use std::path::PathBuf;
 use std::sync::OnceLock;
 use tsf_lang::spec::{Threshold, Trigger, Weight};
+use tsfc::driver::prepare;
 use tsfc::sim::integrator::{Dopri5, Rk4};
 use tsfc::sim::limits::{MAX_ADAPTIVE_STEPS, MAX_PLOT_POINTS, MAX_STEPS};
 use tsfc::sim::{
-    prepare, simulate, simulate_csv, simulate_to, ErrorKind, Options, Outcome, Prepared, SimError,
+    simulate, simulate_csv, simulate_to, ErrorKind, Options, Outcome, Prepared, SimError,
 };
 
 fn spec(name: &str) -> PathBuf {

@@ -10,7 +10,7 @@ use common::{model_of, shipped, spec_path};
 use nalgebra::DMatrix;
 use tsf_lang::spec::Precision;
 use tsfc::certify::StoredPrecision;
-use tsfc::compile::{compile, Compiled, Status};
+use tsfc::driver::compile::{compile, Compiled, Status};
 use tsfc::report::SpecInfo;
 use tsfc::synth::Settings;
 

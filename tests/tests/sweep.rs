@@ -5,9 +5,10 @@
 
 use std::path::PathBuf;
 use std::sync::OnceLock;
+use tsfc::driver::prepare;
 use tsfc::sim::sweep::table::{Gains, Table};
 use tsfc::sim::sweep::{run_sweep, write_sweep, Config};
-use tsfc::sim::{prepare, Options, Prepared};
+use tsfc::sim::{Options, Prepared};
 
 /// The plant `x' = A x + u` with `x(0) = X0`, sampled with zero-order hold.
 const A: f64 = 0.5;
@@ -66,6 +67,7 @@ fn sweep(main: &Prepared, compare: &[Prepared], jobs: usize) -> Table {
         compare,
         &Options::default(),
         &Config { jobs: Some(jobs) },
+        &tsfc::driver::prepare::prepare_text,
     )
     .unwrap_or_else(|e| panic!("{e}"))
     .0
@@ -161,6 +163,7 @@ fn the_table_does_not_depend_on_the_thread_count() {
             &[],
             &Options::default(),
             &Config { jobs: Some(jobs) },
+            &tsfc::driver::prepare::prepare_text,
         )
         .unwrap_or_else(|e| panic!("{e}"));
         let files = write_sweep(&t, &m, &d).unwrap_or_else(|e| panic!("{e}"));

@@ -5,7 +5,7 @@ use nalgebra::DMatrix;
 use std::path::Path;
 
 use crate::common;
-use tsfc::compile::{compile, Status};
+use tsfc::driver::compile::{compile, Status};
 use tsfc::model::TsModel;
 use tsfc::report::SpecInfo;
 use tsfc::synth::{self, Quantity, Settings, SynthError};

@@ -128,6 +128,14 @@ impl Sensor {
         }
     }
 
+    /// The aperiodic trigger's tables, mutable.
+    pub fn aperiodic_mut(&mut self) -> Option<&mut SensorTables> {
+        match self {
+            Sensor::Aperiodic(s) => Some(s),
+            _ => None,
+        }
+    }
+
     /// The mixed trigger's tables, if the loop has one.
     pub fn mixed(&self) -> Option<&SignalSensorTables> {
         match self {

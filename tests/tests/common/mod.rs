@@ -2,7 +2,7 @@
 #![allow(dead_code)] // each test crate uses a subset
 
 use std::path::{Path, PathBuf};
-use tsfc::frontend::{self, Source};
+use tsfc::driver::frontend::{self, Source};
 use tsfc::model::TsModel;
 
 /// Path of a shipped spec.
@@ -37,13 +37,13 @@ pub fn shipped(name: &str) -> TsModel {
 }
 
 /// A shipped spec's model and its compile with the default settings.
-pub fn compile_shipped(name: &str) -> (TsModel, tsfc::compile::Compiled) {
+pub fn compile_shipped(name: &str) -> (TsModel, tsfc::driver::compile::Compiled) {
     let model = shipped(name);
     let info = tsfc::report::SpecInfo {
         path: name.into(),
         sha256: String::new(),
     };
-    let c = tsfc::compile::compile(
+    let c = tsfc::driver::compile::compile(
         &model,
         info,
         &tsfc::synth::Settings::default(),
@@ -93,7 +93,7 @@ pub fn spacecraft_local_model(w: f64, q: f64) -> (nalgebra::DMatrix<f64>, nalgeb
 /// (nalgebra's uncapped `complex_eigenvalues` does not return on some
 /// matrices with repeated eigenvalues).
 pub fn abscissa(m: &nalgebra::DMatrix<f64>) -> f64 {
-    tsfc::adaptive::lyapunov::eigenvalue_real_parts(m)
+    tsfc::synth::adaptive::lyapunov::eigenvalue_real_parts(m)
         .and_then(|re| re.last().copied())
         .expect("the Schur form converges")
 }

@@ -81,7 +81,7 @@ pub(super) fn looped_conditions(
 ) -> Result<Vec<Condition>, SynthError> {
     let tb = trigger::build(model, plan, eps, false)?;
     Ok(vec![Condition::Problem {
-        problem: tb.problem,
+        problem: Box::new(tb.problem),
         nonstrict: tb.nonstrict,
         values,
         reductions: reductions.to_vec(),

@@ -110,6 +110,14 @@ impl LoopDesign {
         }
     }
 
+    /// The sampled loop's design, if every sample is transmitted.
+    pub fn every_sample(&self) -> Option<&super::design::SampledDesign> {
+        match self {
+            LoopDesign::EverySample(s) => Some(s),
+            _ => None,
+        }
+    }
+
     /// The mixed trigger's design, if the loop has one.
     pub fn mixed(&self) -> Option<&super::signal_trigger::SignalTrigger> {
         match self {
@@ -125,7 +133,7 @@ pub enum Condition {
     /// A problem re-checked at its solved values (reductions inverted first).
     Problem {
         /// The unreduced problem, rebuilt.
-        problem: tsf_lmi::Problem,
+        problem: Box<tsf_lmi::Problem>,
         /// Names of its constraints that are not strict.
         nonstrict: Vec<String>,
         /// The solved values, by variable name.
