@@ -4,6 +4,14 @@
 use super::items::{functions, length_violations, undocumented};
 use super::stages::stage_violations;
 
+/// Asserts that violation `k` of `v` starts with `prefix`.
+fn starts(v: &[String], k: usize, prefix: &str) {
+    assert!(
+        v.get(k).is_some_and(|m| m.starts_with(prefix)),
+        "violation {k} should start with {prefix:?}: {v:#?}"
+    );
+}
+
 /// A small crate: (path under compiler/src, text).
 fn krate(files: &[(&str, &str)]) -> Vec<(String, String)> {
     let mut base = vec![
@@ -28,13 +36,14 @@ fn tidy_stage_checker_accepts_paths_down_the_order() {
 fn tidy_stage_checker_flags_a_crate_path_up_the_order() {
     let files = krate(&[("synth/a.rs", "//! A.\n\nuse crate::certify;\n")]);
     let v = stage_violations(&files);
-    assert!(v[0].starts_with("compiler/src/synth/a.rs:3: synth (rank 2) uses certify (rank 3"));
+    starts(
+        &v,
+        0,
+        "compiler/src/synth/a.rs:3: synth (rank 2) uses certify (rank 3",
+    );
     assert!(v[0].ends_with("`use crate::certify;`"), "{v:?}");
     // synth -> certify -> synth closes a cycle.
-    assert!(
-        v[1].starts_with("cycle certify -> synth -> certify: "),
-        "{v:?}"
-    );
+    starts(&v, 1, "cycle certify -> synth -> certify: ");
     assert!(
         v[1].contains("synth -> certify at compiler/src/synth/a.rs:3"),
         "{v:?}"
@@ -46,9 +55,10 @@ fn tidy_stage_checker_flags_a_crate_path_up_the_order() {
 fn tidy_stage_checker_flags_one_member_of_a_group() {
     let src = "use crate::{\n    model::TsModel,\n    certify::{self, Certificate},\n};\n";
     let v = stage_violations(&krate(&[("synth/a.rs", src)]));
-    assert!(
-        v[0].starts_with("compiler/src/synth/a.rs:3: synth (rank 2) uses certify"),
-        "{v:?}"
+    starts(
+        &v,
+        0,
+        "compiler/src/synth/a.rs:3: synth (rank 2) uses certify",
     );
     assert!(!v.iter().any(|m| m.contains("uses model")), "{v:?}");
 }
@@ -56,9 +66,10 @@ fn tidy_stage_checker_flags_one_member_of_a_group() {
 #[test]
 fn tidy_stage_checker_follows_re_exports_of_the_crate_root() {
     let v = stage_violations(&krate(&[("model/a.rs", "fn f(_: crate::V) {}\n")]));
-    assert!(
-        v[0].starts_with("compiler/src/model/a.rs:1: model (rank 1) uses certify"),
-        "{v:?}"
+    starts(
+        &v,
+        0,
+        "compiler/src/model/a.rs:1: model (rank 1) uses certify",
     );
     let v = stage_violations(&krate(&[("model/a.rs", "use crate::helper;\n")]));
     assert!(
@@ -71,16 +82,18 @@ fn tidy_stage_checker_follows_re_exports_of_the_crate_root() {
 fn tidy_stage_checker_flags_super_paths_that_leave_the_stage() {
     // From synth/a.rs (module synth::a), super::super is the crate root.
     let v = stage_violations(&krate(&[("synth/a.rs", "use super::super::certify::X;\n")]));
-    assert!(
-        v[0].starts_with("compiler/src/synth/a.rs:1: synth (rank 2) uses certify"),
-        "{v:?}"
+    starts(
+        &v,
+        0,
+        "compiler/src/synth/a.rs:1: synth (rank 2) uses certify",
     );
     // From synth/a/b.rs (synth::a::b) it takes three; two stay in synth.
     let three = "use super::super::super::{certify, model};\n";
     let v = stage_violations(&krate(&[("synth/a/b.rs", three)]));
-    assert!(
-        v[0].starts_with("compiler/src/synth/a/b.rs:1: synth (rank 2) uses certify"),
-        "{v:?}"
+    starts(
+        &v,
+        0,
+        "compiler/src/synth/a/b.rs:1: synth (rank 2) uses certify",
     );
     let two = "use super::super::certify;\n";
     assert_eq!(
@@ -90,11 +103,12 @@ fn tidy_stage_checker_flags_super_paths_that_leave_the_stage() {
     // An inline module is one more level.
     let inline = "mod inner {\n    use super::super::super::certify;\n}\nuse super::super::y;\n";
     let v = stage_violations(&krate(&[("synth/a.rs", inline)]));
-    assert!(
-        v[0].starts_with("compiler/src/synth/a.rs:2: synth"),
-        "{v:?}"
+    starts(&v, 0, "compiler/src/synth/a.rs:2: synth");
+    starts(
+        &v,
+        1,
+        "compiler/src/synth/a.rs:4: synth (rank 2) uses (crate root)",
     );
-    assert!(v[1].starts_with("compiler/src/synth/a.rs:4: synth (rank 2) uses (crate root)"));
 }
 
 #[test]
@@ -121,19 +135,34 @@ use crate::certify;
 }
 
 #[test]
+fn tidy_stage_checker_keeps_code_compiled_outside_tests() {
+    let src =
+        "#[cfg(any(test, unix))]\nuse crate::certify;\n#[cfg(not(test))]\nuse crate::certify::X;\n";
+    let v = stage_violations(&krate(&[("synth/a.rs", src)]));
+    starts(
+        &v,
+        0,
+        "compiler/src/synth/a.rs:2: synth (rank 2) uses certify",
+    );
+    starts(
+        &v,
+        1,
+        "compiler/src/synth/a.rs:4: synth (rank 2) uses certify",
+    );
+}
+
+#[test]
 fn tidy_stage_checker_requires_every_stage_in_the_table() {
     let v = stage_violations(&krate(&[
         ("helpers.rs", "use crate::model;\n"),
         ("gui/mod.rs", ""),
     ]));
-    assert!(
-        v[0].starts_with("compiler/src/gui/: stage `gui` is not in the rank table"),
-        "{v:?}"
+    starts(
+        &v,
+        0,
+        "compiler/src/gui/: stage `gui` is not in the rank table",
     );
-    assert!(
-        v[1].starts_with("compiler/src/helpers.rs: stage `helpers`"),
-        "{v:?}"
-    );
+    starts(&v, 1, "compiler/src/helpers.rs: stage `helpers`");
     assert_eq!(v.len(), 2, "{v:?}");
 }
 

@@ -268,11 +268,11 @@ pub(super) fn matching(tokens: &[Token], open: usize) -> usize {
 }
 
 /// Whether the attribute between `[` and `]` is `cfg(test)` (or a `cfg`
-/// that requires `test`, like `cfg(all(test, unix))`).
+/// that requires `test`, like `cfg(all(test, unix))`; not `any` or `not`).
 fn is_cfg_test(attr: &[Token]) -> bool {
     attr.first().is_some_and(|t| t.is_ident("cfg"))
         && attr.iter().any(|t| t.is_ident("test"))
-        && !attr.iter().any(|t| t.is_ident("not"))
+        && !attr.iter().any(|t| t.is_ident("not") || t.is_ident("any"))
 }
 
 /// Index just past the item starting at `start`: its `;`, or the brace that

@@ -230,13 +230,13 @@ struct StepTokens {
 /// The [`StepTokens`] of `t`, with `modal` its mode constants if it has modes.
 fn step_tokens(t: &Tables, modal: Option<&Modal>) -> StepTokens {
     let ty = real_ty(t.precision);
-    let (table_ty, table_ctor, mode_consts, step_sig, step_doc, mode_accessor) = match modal {
-        Some(md) => (
-            quote!(ModalController<'static, #ty, N, M, P, R, D, K>),
-            quote!(ModalController),
-            md.consts.clone(),
-            quote!(pub fn step(&mut self, mode: u8, x: &[#ty; N]) -> [#ty; M]),
-            {
+    match modal {
+        Some(md) => StepTokens {
+            table_ty: quote!(ModalController<'static, #ty, N, M, P, R, D, K>),
+            table_ctor: quote!(ModalController),
+            mode_consts: md.consts.clone(),
+            step_sig: quote!(pub fn step(&mut self, mode: u8, x: &[#ty; N]) -> [#ty; M]),
+            step_doc: {
                 let note = modal_sampling_note(t).map(|n| {
                     let n = format!(" {n}");
                     quote!(#[doc = ""] #[doc = #n])
@@ -250,32 +250,24 @@ fn step_tokens(t: &Tables, modal: Option<&Modal>) -> StepTokens {
                     #note
                 }
             },
-            quote! {
+            mode_accessor: quote! {
                 /// Whether the last step was given a mode `>= K` (mode 0's gains used).
                 pub fn mode_out_of_range(&self) -> bool {
                     self.flags.contains(Flags::MODE_OUT_OF_RANGE)
                 }
             },
-        ),
-        None => (
-            quote!(FactoredController<'static, #ty, N, M, P, R, D>),
-            quote!(FactoredController),
-            quote!(),
-            quote!(pub fn step(&mut self, x: &[#ty; N]) -> [#ty; M]),
-            quote! {
+        },
+        None => StepTokens {
+            table_ty: quote!(FactoredController<'static, #ty, N, M, P, R, D>),
+            table_ctor: quote!(FactoredController),
+            mode_consts: quote!(),
+            step_sig: quote!(pub fn step(&mut self, x: &[#ty; N]) -> [#ty; M]),
+            step_doc: quote! {
                 /// One control update: the saturated command for state `x`.
                 /// Never panics; NaN or infinite states give a zero command and a fault flag.
             },
-            quote!(),
-        ),
-    };
-    StepTokens {
-        table_ty,
-        table_ctor,
-        mode_consts,
-        step_sig,
-        step_doc,
-        mode_accessor,
+            mode_accessor: quote!(),
+        },
     }
 }
 
