@@ -34,4 +34,5 @@ mod solver_scaling;
 mod stored_precision;
 mod sweep;
 mod synthesis;
+mod tidy;
 mod xu_paper_evidence;

@@ -339,67 +339,7 @@ pub fn report(
     log: &SolverLog,
     timings: Timings,
 ) -> Report {
-    let (status, design, cert, diagnosis) = match outcome {
-        Ok((d, c)) if c.ok => ("certified", Some(d), Some(c.clone()), None),
-        Ok((d, c)) => (
-            "refused",
-            Some(d),
-            Some(c.clone()),
-            Some(Diagnosis {
-                message: match c.stored.as_ref().filter(|s| !s.certified) {
-                    Some(s) => format!(
-                        "certificate refused in stored precision {}: `{}` fails with the tables as generated code stores them (margin {:.3e})",
-                        s.precision, s.worst_lmi, s.worst_margin
-                    ),
-                    None => format!("certificate refused: the worst condition is `{}`", c.worst),
-                },
-                achievable: Vec::new(),
-            }),
-        ),
-        Err(SynthError::Infeasible {
-            message,
-            achievable,
-        }) => (
-            "infeasible",
-            None,
-            None,
-            Some(Diagnosis {
-                message: message.clone(),
-                achievable: achievable.clone(),
-            }),
-        ),
-        Err(SynthError::Solver {
-            message,
-            achievable,
-            status,
-        }) => (
-            "refused",
-            None,
-            None,
-            Some(Diagnosis {
-                message: format!("{message} (solver status: {status})"),
-                achievable: achievable.clone(),
-            }),
-        ),
-        Err(SynthError::NotCertified { message, verdicts }) => (
-            "refused",
-            None,
-            None,
-            Some(Diagnosis {
-                message: message.clone(),
-                achievable: verdicts.iter().map(|v| v.to_string()).collect(),
-            }),
-        ),
-        Err(e) => (
-            "refused",
-            None,
-            None,
-            Some(Diagnosis {
-                message: e.to_string(),
-                achievable: Vec::new(),
-            }),
-        ),
-    };
+    let (status, design, cert, diagnosis) = status_of(outcome);
     let verdicts = match outcome {
         Ok((d, _)) => d.verdicts.iter().map(VerdictReport::from).collect(),
         Err(SynthError::NotCertified { verdicts, .. }) => {
@@ -408,27 +348,9 @@ pub fn report(
         Err(_) => Vec::new(),
     };
     let certified = status == "certified";
-    let mut problem = BTreeMap::new();
-    if let Some(s) = &log.stats {
-        let largest = s.psd_cones.iter().copied().max().unwrap_or(0);
-        for (k, v) in [
-            ("variables", s.variables),
-            ("scalar_unknowns", s.scalar_unknowns),
-            ("lmis", s.lmis),
-            ("scalar_constraints", s.scalar_constraints),
-            ("psd_cones", s.psd_cones.len()),
-            ("largest_psd_cone", largest),
-            ("rows", s.rows),
-            ("nnz", s.nnz),
-        ] {
-            problem.insert(k.to_string(), serde_json::json!(v));
-        }
-        problem.insert(
-            "memory_estimate_bytes".into(),
-            serde_json::json!(log.memory_estimate),
-        );
-    }
-    let (modes, transition_rates) = markov::sections(model, design, cert.as_ref(), certified);
+    let problem = problem_stats(log);
+    let (modes, transition_rates) =
+        markov::sections(model, design, cert.as_ref(), certified);
     Report {
         modes,
         transition_rates,
@@ -500,34 +422,9 @@ pub fn report(
             tolerance: crate::model::MISMATCH_TOLERANCE,
             within_tolerance: c.worst <= crate::model::MISMATCH_TOLERANCE,
         }),
-        region_of_attraction: design.filter(|_| certified).and_then(|d| {
-            let sat = d.plan.get::<crate::synth::objectives::Saturation>()?;
-            // The region of the loop that ships: event-triggered, sampled
-            // or continuous (no region when its level cannot be computed).
-            let (p, c) = match d.loop_design.certificate().and_then(|l| l.region()) {
-                Some(region) => region,
-                None => (&d.p, sat.level(&d.plan).ok()?),
-            };
-            // The certified region E(P, c) as E(U, 1).
-            let u = p / c;
-            let p = &u;
-            let level = |x0: &[f64]| {
-                let x0 = nalgebra::DVector::from_column_slice(x0);
-                (x0.transpose() * p * &x0)[(0, 0)]
-            };
-            let objective_x0 = match &sat.contain {
-                Some(tsf_lang::spec::InitialSet::Point(x0)) => Some(level(x0)),
-                _ => None,
-            };
-            let scenario = model.spec.simulate.as_ref().map(|sim| level(&sim.x0));
-            Some(RegionOfAttraction {
-                u: rows(p),
-                x0_level: objective_x0,
-                contains_x0: objective_x0.map(|l| l <= 1.0),
-                scenario_x0_level: scenario,
-                contains_scenario_x0: scenario.map(|l| l <= 1.0),
-            })
-        }),
+        region_of_attraction: design
+            .filter(|_| certified)
+            .and_then(|d| region_of_attraction(model, d)),
         trigger: design
             .filter(|_| certified)
             .and_then(|d| d.loop_design.event())
@@ -566,6 +463,135 @@ pub fn report(
         },
         timings_s: timings,
     }
+}
+
+/// The outcome's status (`certified`, `refused`, `infeasible`), its design
+/// and certificate, and the diagnosis of a refusal.
+fn status_of(
+    outcome: &Result<(Design, Certificate), SynthError>,
+) -> (
+    &'static str,
+    Option<&Design>,
+    Option<Certificate>,
+    Option<Diagnosis>,
+) {
+    match outcome {
+        Ok((d, c)) if c.ok => ("certified", Some(d), Some(c.clone()), None),
+        Ok((d, c)) => (
+            "refused",
+            Some(d),
+            Some(c.clone()),
+            Some(Diagnosis {
+                message: match c.stored.as_ref().filter(|s| !s.certified) {
+                    Some(s) => format!(
+                        "certificate refused in stored precision {}: `{}` fails with the tables as generated code stores them (margin {:.3e})",
+                        s.precision, s.worst_lmi, s.worst_margin
+                    ),
+                    None => format!("certificate refused: the worst condition is `{}`", c.worst),
+                },
+                achievable: Vec::new(),
+            }),
+        ),
+        Err(SynthError::Infeasible {
+            message,
+            achievable,
+        }) => (
+            "infeasible",
+            None,
+            None,
+            Some(Diagnosis {
+                message: message.clone(),
+                achievable: achievable.clone(),
+            }),
+        ),
+        Err(SynthError::Solver {
+            message,
+            achievable,
+            status,
+        }) => (
+            "refused",
+            None,
+            None,
+            Some(Diagnosis {
+                message: format!("{message} (solver status: {status})"),
+                achievable: achievable.clone(),
+            }),
+        ),
+        Err(SynthError::NotCertified { message, verdicts }) => (
+            "refused",
+            None,
+            None,
+            Some(Diagnosis {
+                message: message.clone(),
+                achievable: verdicts.iter().map(|v| v.to_string()).collect(),
+            }),
+        ),
+        Err(e) => (
+            "refused",
+            None,
+            None,
+            Some(Diagnosis {
+                message: e.to_string(),
+                achievable: Vec::new(),
+            }),
+        ),
+    }
+}
+
+/// The size of the last solved problem, and the memory estimate.
+fn problem_stats(log: &SolverLog) -> BTreeMap<String, serde_json::Value> {
+    let mut problem = BTreeMap::new();
+    if let Some(s) = &log.stats {
+        let largest = s.psd_cones.iter().copied().max().unwrap_or(0);
+        for (k, v) in [
+            ("variables", s.variables),
+            ("scalar_unknowns", s.scalar_unknowns),
+            ("lmis", s.lmis),
+            ("scalar_constraints", s.scalar_constraints),
+            ("psd_cones", s.psd_cones.len()),
+            ("largest_psd_cone", largest),
+            ("rows", s.rows),
+            ("nnz", s.nnz),
+        ] {
+            problem.insert(k.to_string(), serde_json::json!(v));
+        }
+        problem.insert(
+            "memory_estimate_bytes".into(),
+            serde_json::json!(log.memory_estimate),
+        );
+    }
+    problem
+}
+
+/// The certified region of attraction of design `d`'s shipped loop, and
+/// whether it contains the initial states of the objective and the scenario.
+fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttraction> {
+    let sat = d.plan.get::<crate::synth::objectives::Saturation>()?;
+    // The region of the loop that ships: event-triggered, sampled
+    // or continuous (no region when its level cannot be computed).
+    let (p, c) = match d.loop_design.certificate().and_then(|l| l.region()) {
+        Some(region) => region,
+        None => (&d.p, sat.level(&d.plan).ok()?),
+    };
+    // The certified region E(P, c) as E(U, 1).
+    let u = p / c;
+    let p = &u;
+    let level = |x0: &[f64]| {
+        let x0 = nalgebra::DVector::from_column_slice(x0);
+        (x0.transpose() * p * &x0)[(0, 0)]
+    };
+    let objective_x0 = match &sat.contain {
+        Some(tsf_lang::spec::InitialSet::Point(x0)) => Some(level(x0)),
+        _ => None,
+    };
+    let scenario = model.spec.simulate.as_ref().map(|sim| level(&sim.x0));
+    Some(RegionOfAttraction {
+        u: rows(p),
+        x0_level: objective_x0,
+        contains_x0: objective_x0.map(|l| l <= 1.0),
+        scenario_x0_level: scenario,
+        contains_scenario_x0: scenario.map(|l| l <= 1.0),
+    })
 }
 
 /// A fuzzy Lyapunov function V = x' (sum_k h_k P_k) x and what its

@@ -151,6 +151,144 @@ fn widen(r: &mut (f64, f64), v: &[f64]) {
     }
 }
 
+/// What a run tallies step by step for its [`Metrics`].
+struct Tally {
+    /// Smallest and largest a_ik, b_ik, d so far.
+    a_range: (f64, f64),
+    b_range: (f64, f64),
+    d_range: (f64, f64),
+    /// Steps outside the rules' operating range, and the last of them.
+    outside: usize,
+    last_outside: Option<f64>,
+    /// Steps where no rule fired.
+    no_rule: usize,
+    /// Largest |u_k| per input.
+    max_u: Vec<f64>,
+    /// Per claim, the largest norm from its time on.
+    claims_max: Vec<f64>,
+    /// Why the run stopped early, if it did.
+    failure: Option<String>,
+}
+
+impl Tally {
+    /// The tally before the first step: the ranges hold the initial estimates.
+    fn new(design: &Design, claims: usize) -> Self {
+        let mut tally = Tally {
+            a_range: (f64::INFINITY, f64::NEG_INFINITY),
+            b_range: (f64::INFINITY, f64::NEG_INFINITY),
+            d_range: (design.d0, design.d0),
+            outside: 0,
+            last_outside: None,
+            no_rule: 0,
+            max_u: vec![0.0_f64; design.m],
+            claims_max: vec![0.0_f64; claims],
+            failure: None,
+        };
+        widen(&mut tally.a_range, &design.a0);
+        widen(&mut tally.b_range, &design.b0);
+        tally
+    }
+
+    /// The metrics of a run that ended after step `k_done` at `t_end` in
+    /// state `x`, with its recorded `trace`.
+    fn metrics(
+        self,
+        spec: &tsf_lang::Spec,
+        design: &Design,
+        x: &[f64],
+        trace: &[Sample],
+        k_done: usize,
+        t_end: f64,
+    ) -> Metrics {
+        let n = design.n;
+        let converged = spec.adaptive.as_ref().map_or(&[][..], |a| &a.converged);
+        let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
+        let last = trace.last().cloned();
+        let in_bounds = |r: (f64, f64), lo: f64, hi: f64| r.0 >= lo && r.1 <= hi;
+        let estimates_within_bounds = in_bounds(self.a_range, design.a.lo, design.a.hi)
+            && in_bounds(self.b_range, design.b.lo, design.b.hi)
+            && in_bounds(self.d_range, design.d.lo, design.d.hi);
+        let failure = self.failure;
+        let claims = converged
+            .iter()
+            .zip(&self.claims_max)
+            .map(|(c, mx)| Claim {
+                claim: format!("|{}| <= {} by {}", c.name, c.tol, c.by),
+                held: failure.is_none() && t_end >= c.by && *mx <= c.tol,
+                max_after: *mx,
+            })
+            .collect();
+        let final_norms = spec
+            .states
+            .iter()
+            .map(|s| (s.name.clone(), norm(&x[s.offset..s.offset + s.len])))
+            .collect();
+        Metrics {
+            steps: k_done,
+            t_end,
+            final_state_norm: norm(&x[..n]),
+            final_norms,
+            final_error_norm: last.as_ref().map_or(f64::NAN, |s| norm(&s.s)),
+            claims,
+            a_range: self.a_range,
+            b_range: self.b_range,
+            d_range: self.d_range,
+            estimates_within_bounds,
+            steps_outside_operating_range: self.outside,
+            last_outside_s: self.last_outside,
+            steps_no_rule_fired: self.no_rule,
+            max_abs_u: self.max_u,
+            failure,
+        }
+    }
+}
+
+/// The start, the step and the step count of a scenario's `time = t0 .. t1
+/// step h` (the end moved by a `horizon` override); at most [`MAX_STEPS`].
+fn time_grid(time: (f64, f64, f64), horizon: Option<f64>) -> Result<(f64, f64, usize), SimError> {
+    let (t0, mut t1, h) = time;
+    if let Some(hz) = horizon {
+        t1 = t0 + hz;
+    }
+    let steps = ((t1 - t0) / h).round();
+    if !(1.0..=MAX_STEPS as f64).contains(&steps) {
+        return Err(SimError::spec(format!(
+            "the run has {steps} steps; at most {MAX_STEPS} (docs/limits.md)"
+        )));
+    }
+    Ok((t0, h, steps as usize))
+}
+
+/// One RK4 step of `x' = f(t, x)` from `t` over `h`, in the scratch vectors
+/// `work` (k1, k2, k3, k4 and the stage state, each as long as `x`).
+fn rk4_step(
+    f: &mut impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), SimError>,
+    t: f64,
+    h: f64,
+    x: &mut [f64],
+    work: &mut [Vec<f64>; 5],
+) -> Result<(), SimError> {
+    let [k1, k2, k3, k4, tmp] = work;
+    let dim = x.len();
+    f(t, x, k1)?;
+    for i in 0..dim {
+        tmp[i] = x[i] + 0.5 * h * k1[i];
+    }
+    f(t + 0.5 * h, tmp, k2)?;
+    for i in 0..dim {
+        tmp[i] = x[i] + 0.5 * h * k2[i];
+    }
+    f(t + 0.5 * h, tmp, k3)?;
+    for i in 0..dim {
+        tmp[i] = x[i] + h * k3[i];
+    }
+    f(t + h, tmp, k4)?;
+    for i in 0..dim {
+        x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+    Ok(())
+}
+
 /// Runs the scenario of `model` with `design`.
 pub fn run(
     model: &TsModel,
@@ -166,17 +304,7 @@ pub fn run(
     let mut plant = Plant::new(spec, source, Evaluator::Compiled)?;
     let dim = plant.dim();
     let mut signals = Signals::new(spec, source, Evaluator::Compiled);
-    let (t0, mut t1, h) = scenario.time;
-    if let Some(hz) = opts.horizon {
-        t1 = t0 + hz;
-    }
-    let steps = ((t1 - t0) / h).round();
-    if !(1.0..=MAX_STEPS as f64).contains(&steps) {
-        return Err(SimError::spec(format!(
-            "the run has {steps} steps; at most {MAX_STEPS} (docs/limits.md)"
-        )));
-    }
-    let steps = steps as usize;
+    let (t0, h, steps) = time_grid(scenario.time, opts.horizon)?;
     let mut x = opts.x0.clone().unwrap_or_else(|| scenario.x0.clone());
     x.resize(dim, 0.0);
     let range = crate::synth::adaptive::operating_range(model);
@@ -190,31 +318,15 @@ pub fn run(
     let law = design.law();
     let r_env = spec.state_env(&[], Mode::Exact);
     let stride = steps.div_ceil(MAX_ROWS).max(1);
-    let (mut a_range, mut b_range, mut d_range) = (
-        (f64::INFINITY, f64::NEG_INFINITY),
-        (f64::INFINITY, f64::NEG_INFINITY),
-        (st_d, st_d),
-    );
-    widen(&mut a_range, &st_a);
-    widen(&mut b_range, &st_b);
-    let (mut outside, mut last_outside, mut no_rule) = (0, None, 0);
-    let mut max_u = vec![0.0_f64; m];
+    let mut tally = Tally::new(design, ad.converged.len());
     let mut trace = Vec::new();
-    let mut failure = None;
-    let mut claims_max = vec![0.0_f64; ad.converged.len()];
     let mut k_done = 0;
-    let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (
-        vec![0.0; dim],
-        vec![0.0; dim],
-        vec![0.0; dim],
-        vec![0.0; dim],
-        vec![0.0; dim],
-    );
+    let mut work: [Vec<f64>; 5] = std::array::from_fn(|_| vec![0.0; dim]);
     let mut w = vec![0.0; spec.q()];
     for k in 0..=steps {
         let t = t0 + k as f64 * h;
         if !strengths(model, &x[..n], &mut hw)? {
-            no_rule += 1;
+            tally.no_rule += 1;
         }
         if let Some(rg) = &range {
             if x[..n]
@@ -222,8 +334,8 @@ pub fn run(
                 .zip(rg)
                 .any(|(v, (lo, hi))| *v < *lo || *v > *hi)
             {
-                outside += 1;
-                last_outside = Some(t);
+                tally.outside += 1;
+                tally.last_outside = Some(t);
             }
         }
         if let Some(e) = &ad.r {
@@ -244,18 +356,18 @@ pub fn run(
         // The last sample is recorded, not stepped.
         let dt = if k == steps { 0.0 } else { h };
         if let Err(e) = law.step(&mut st, &x[..n], &hw, &r, dt, &mut u) {
-            failure = Some(format!(
+            tally.failure = Some(format!(
                 "the adaptive law refused the step at t = {t}: {e:?}"
             ));
             break;
         }
-        widen(&mut a_range, &st_a);
-        widen(&mut b_range, &st_b);
-        widen(&mut d_range, &[st_d]);
-        for (mu, uk) in max_u.iter_mut().zip(&u) {
+        widen(&mut tally.a_range, &st_a);
+        widen(&mut tally.b_range, &st_b);
+        widen(&mut tally.d_range, &[st_d]);
+        for (mu, uk) in tally.max_u.iter_mut().zip(&u) {
             *mu = mu.max(uk.abs());
         }
-        for (c, mx) in ad.converged.iter().zip(claims_max.iter_mut()) {
+        for (c, mx) in ad.converged.iter().zip(tally.claims_max.iter_mut()) {
             if t >= c.by {
                 let (off, len) = c.signal;
                 *mx = mx.max(x[off..off + len].iter().map(|v| v * v).sum::<f64>().sqrt());
@@ -286,69 +398,17 @@ pub fn run(
             signals.eval(tt, &mut w)?;
             plant.rhs(tt, xs, &u, &w, out)
         };
-        f(t, &x, &mut k1)?;
-        for i in 0..dim {
-            tmp[i] = x[i] + 0.5 * h * k1[i];
-        }
-        f(t + 0.5 * h, &tmp, &mut k2)?;
-        for i in 0..dim {
-            tmp[i] = x[i] + 0.5 * h * k2[i];
-        }
-        f(t + 0.5 * h, &tmp, &mut k3)?;
-        for i in 0..dim {
-            tmp[i] = x[i] + h * k3[i];
-        }
-        f(t + h, &tmp, &mut k4)?;
-        for i in 0..dim {
-            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-        }
+        rk4_step(&mut f, t, h, &mut x, &mut work)?;
         let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
         if norm.is_nan() || norm >= DIVERGED_NORM {
-            failure = Some(format!(
+            tally.failure = Some(format!(
                 "the state diverged at t = {} (||x|| = {norm:.3e})",
                 t + h
             ));
             break;
         }
     }
-    let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
-    let last = trace.last().cloned();
-    let in_bounds = |r: (f64, f64), lo: f64, hi: f64| r.0 >= lo && r.1 <= hi;
-    let estimates_within_bounds = in_bounds(a_range, design.a.lo, design.a.hi)
-        && in_bounds(b_range, design.b.lo, design.b.hi)
-        && in_bounds(d_range, design.d.lo, design.d.hi);
-    let claims = ad
-        .converged
-        .iter()
-        .zip(&claims_max)
-        .map(|(c, mx)| Claim {
-            claim: format!("|{}| <= {} by {}", c.name, c.tol, c.by),
-            held: failure.is_none() && t0 + k_done as f64 * h >= c.by && *mx <= c.tol,
-            max_after: *mx,
-        })
-        .collect();
-    let final_norms = spec
-        .states
-        .iter()
-        .map(|s| (s.name.clone(), norm(&x[s.offset..s.offset + s.len])))
-        .collect();
-    let metrics = Metrics {
-        steps: k_done,
-        t_end: t0 + k_done as f64 * h,
-        final_state_norm: norm(&x[..n]),
-        final_norms,
-        final_error_norm: last.as_ref().map_or(f64::NAN, |s| norm(&s.s)),
-        claims,
-        a_range,
-        b_range,
-        d_range,
-        estimates_within_bounds,
-        steps_outside_operating_range: outside,
-        last_outside_s: last_outside,
-        steps_no_rule_fired: no_rule,
-        max_abs_u: max_u,
-        failure,
-    };
+    let metrics = tally.metrics(spec, design, &x, &trace, k_done, t0 + k_done as f64 * h);
     Ok(Run {
         trace,
         metrics,

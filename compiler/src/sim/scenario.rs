@@ -1,7 +1,7 @@
 //! The closed loop: sample, decide, update the held command, integrate to the
 //! next sampling instant.
 
-use super::controller::{law, runtime_terms};
+use super::controller::{law, runtime_terms, Law};
 use super::integrator::{Dopri5, Rk4, Stepper};
 use super::limits::step_count;
 use super::metrics::{Metrics, MismatchTally, RateTally, RunFacts, Sample, Tally, Trace};
@@ -11,14 +11,14 @@ use super::premise::Premises;
 use super::region::Region;
 use super::signal::Signals;
 use super::source::{head, SpecSource};
-use super::trigger::sampler;
+use super::trigger::{sampler, Sampler};
 use super::{Options, Prepared, Progress, SimError};
 use crate::tables::Tables;
 use std::io::Write;
 use std::time::Instant;
 use tsf_lang::spec::{Integrator, Monitor, Trigger};
 use tsf_lang::Span;
-use tsf_runtime::Flags;
+use tsf_runtime::{Flags, Term};
 
 /// The Markov mode process of a run and its bookkeeping.
 struct Chain {
@@ -284,35 +284,56 @@ pub fn run_truth(
     mut observer: Option<Observer<'_>>,
 ) -> Result<Outcome, SimError> {
     let started = Instant::now();
-    let (model, tables) = (&prepared.model, &prepared.tables);
-    let spec = &model.spec;
-    let n = spec.n();
-    let m = spec.m();
-    let mut plant = Plant::new(truth, &prepared.source, opts.evaluator)?;
-    let dim = plant.dim();
-    let plan = plan(prepared, opts, dim)?;
-    let (t0, t1, h) = (plan.t0, plan.t1, plan.h);
-    let mut x = plan.x0.clone();
-    let mut sampler = sampler(
-        spec,
-        plan.trigger,
-        n,
-        t0,
-        h,
-        plan.seed,
-        prepared.trigger_weight.as_ref(),
-        &prepared.p,
-    )?;
-    let (rtol, atol) = opts.tolerances;
-    let mut stepper = match plan.integrator {
-        Integrator::Rk4 => Stepper::Rk4(Rk4::new(dim, h)),
-        Integrator::Dopri5 => Stepper::Dopri5(Dopri5::new(dim, rtol, atol, h)),
-    };
+    let tables = &prepared.tables;
+    let plant = Plant::new(truth, &prepared.source, opts.evaluator)?;
+    let plan = plan(prepared, opts, plant.dim())?;
     let terms = runtime_terms(tables);
-    let controller = law(tables, &terms)?;
-    // Markov modes: the chain, what each mode does to the input, and the
-    // controller of each mode (mode-dependent gains) or one for all (fault-blind).
-    let mode_tables: Vec<Tables> = tables.modes.as_ref().map_or(Vec::new(), |mt| {
+    let mode_tables = mode_tables(tables);
+    let mut run = Run::new(prepared, truth, opts, plant, &plan, &terms, &mode_tables)?;
+    let trace = Trace {
+        state_names: tables
+            .state_names
+            .iter()
+            .cloned()
+            .chain(run.plant.extra_names())
+            .collect(),
+        input_names: tables.input_names.clone(),
+        ..Trace::default()
+    };
+    let write_err = |e: std::io::Error| SimError::usage(format!("cannot write the CSV trace: {e}"));
+    if let Some(out) = csv.as_mut() {
+        super::csv::header(
+            *out,
+            &trace.state_names,
+            &trace.input_names,
+            run.chain.is_some(),
+        )
+        .map_err(write_err)?;
+    }
+    let last_sent = loop {
+        let (sent, mode) = run.sample();
+        if let Some(obs) = observer.as_mut() {
+            obs(run.t, &run.x, &run.u);
+        }
+        if let Some(out) = csv.as_mut() {
+            super::csv::row(*out, run.t, &run.x, &run.u, sent, mode).map_err(write_err)?;
+        }
+        if run.t >= plan.t1 || run.nonfinite_at.is_some() {
+            break sent;
+        }
+        run.advance(mode)?;
+    };
+    run.progress.finish();
+    if let Some(out) = csv.as_mut() {
+        out.flush().map_err(write_err)?;
+    }
+    Ok(run.finish(prepared, opts, last_sent, trace, started))
+}
+
+/// Markov modes with mode-dependent gains: the tables of each mode's
+/// controller (empty without modes, or with one gain set for all).
+fn mode_tables(tables: &Tables) -> Vec<Tables> {
+    tables.modes.as_ref().map_or(Vec::new(), |mt| {
         mt.gains
             .iter()
             .map(|g| Tables {
@@ -321,12 +342,19 @@ pub fn run_truth(
                 ..tables.clone()
             })
             .collect()
-    });
-    let mode_laws = mode_tables
-        .iter()
-        .map(|t| law(t, &terms))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut chain = match &spec.modes {
+    })
+}
+
+/// The Markov mode chain of a run of `spec` (what each mode does to the
+/// input: from `truth`), if the spec has `modes`; refused for a trigger
+/// other than continuous, periodic or threshold-free aperiodic.
+fn mode_chain(
+    spec: &tsf_lang::Spec,
+    truth: &tsf_lang::Spec,
+    plan: &Plan,
+) -> Result<Option<Chain>, SimError> {
+    let (t0, t1, m) = (plan.t0, plan.t1, spec.m());
+    Ok(match &spec.modes {
         Some(modes) => {
             if !plan.trigger.is_none_or(|t| {
                 matches!(
@@ -358,54 +386,138 @@ pub fn run_truth(
             })
         }
         None => None,
-    };
-    let region = Region::new(model, tables);
-    let mut premises = Premises::new(tables, opts.evaluator);
-    let mut z = vec![0.0; tables.p];
-    let mut signals = Signals::new(truth, &prepared.source, opts.evaluator);
-    let mut u = vec![0.0; m];
-    let trace = Trace {
-        state_names: tables
-            .state_names
+    })
+}
+
+/// A run between two sampling instants: the plant and its integrator, the
+/// controllers, the sampler, the mode chain, the state, and the tallies of
+/// the metrics.
+struct Run<'a> {
+    plan: &'a Plan<'a>,
+    /// Controller states (the first `n` of the plant's).
+    n: usize,
+    plant: Plant<'a>,
+    signals: Signals<'a>,
+    stepper: Stepper,
+    sampler: Sampler,
+    controller: Box<dyn Law + 'a>,
+    /// The controller of each mode (mode-dependent gains); empty: `controller`.
+    mode_laws: Vec<Box<dyn Law + 'a>>,
+    chain: Option<Chain>,
+    region: Region<'a>,
+    premises: Option<Premises>,
+    /// Plant state.
+    x: Vec<f64>,
+    /// Premise vector z(x).
+    z: Vec<f64>,
+    /// Held command.
+    u: Vec<f64>,
+    /// Firing strengths at the sample.
+    h_now: Vec<f64>,
+    tally: Tally,
+    mismatch: MismatchTally,
+    rates: RateTally,
+    saturated: u64,
+    nonfinite_at: Option<f64>,
+    progress: Progress,
+    t: f64,
+    /// Grid index of the sampling schedule.
+    k: u64,
+    /// A sampled loop with modes: a mode jump between samples is not a
+    /// sample; the command is re-blended from the held sample with the new
+    /// mode's gains (the mode is known continuously, docs/xue2024.md).
+    sampled_modes: bool,
+    /// The held sample (state, premise vector).
+    held: (Vec<f64>, Vec<f64>),
+    /// Whether the last step ended at a mode jump.
+    at_jump: bool,
+    /// The sampling instant a jump cut the step short of, still ahead.
+    pending: Option<f64>,
+    /// Continuous monitoring: each crossing is located to this time tolerance.
+    monitor_tol: f64,
+}
+
+impl<'a> Run<'a> {
+    /// The run of `prepared` with the `plant` of `truth` at the start of `plan`.
+    fn new(
+        prepared: &'a Prepared,
+        truth: &'a tsf_lang::Spec,
+        opts: &Options,
+        plant: Plant<'a>,
+        plan: &'a Plan<'a>,
+        terms: &'a [Vec<Term<'a, f64>>],
+        mode_tables: &'a [Tables],
+    ) -> Result<Self, SimError> {
+        let (model, tables) = (&prepared.model, &prepared.tables);
+        let spec = &model.spec;
+        let n = spec.n();
+        let m = spec.m();
+        let dim = plant.dim();
+        let (t0, t1, h) = (plan.t0, plan.t1, plan.h);
+        let x = plan.x0.clone();
+        let sampler = sampler(
+            spec,
+            plan.trigger,
+            n,
+            t0,
+            h,
+            plan.seed,
+            prepared.trigger_weight.as_ref(),
+            &prepared.p,
+        )?;
+        let (rtol, atol) = opts.tolerances;
+        let stepper = match plan.integrator {
+            Integrator::Rk4 => Stepper::Rk4(Rk4::new(dim, h)),
+            Integrator::Dopri5 => Stepper::Dopri5(Dopri5::new(dim, rtol, atol, h)),
+        };
+        let controller = law(tables, terms)?;
+        let mode_laws = mode_tables
             .iter()
-            .cloned()
-            .chain(plant.extra_names())
-            .collect(),
-        input_names: tables.input_names.clone(),
-        ..Trace::default()
-    };
-    let write_err = |e: std::io::Error| SimError::usage(format!("cannot write the CSV trace: {e}"));
-    if let Some(out) = csv.as_mut() {
-        super::csv::header(
-            *out,
-            &trace.state_names,
-            &trace.input_names,
-            chain.is_some(),
-        )
-        .map_err(write_err)?;
+            .map(|t| law(t, terms))
+            .collect::<Result<Vec<_>, _>>()?;
+        let chain = mode_chain(spec, truth, plan)?;
+        let z = vec![0.0; tables.p];
+        let sampled_modes =
+            chain.is_some() && plan.trigger.is_some_and(|t| *t != Trigger::Continuous);
+        Ok(Run {
+            plan,
+            n,
+            region: Region::new(model, tables),
+            premises: Premises::new(tables, opts.evaluator),
+            signals: Signals::new(truth, &prepared.source, opts.evaluator),
+            u: vec![0.0; m],
+            tally: Tally::new(n, m, &x, opts.convergence_rel_tol),
+            mismatch: MismatchTally::new(crate::synth::relaxations::kappa_relied_on(model)),
+            rates: RateTally::new(crate::synth::lyapunov::fuzzy::phi(model).map(<[f64]>::to_vec)),
+            h_now: vec![0.0; tables.r],
+            saturated: 0,
+            nonfinite_at: None,
+            progress: Progress::new(opts.progress, t0, t1),
+            t: t0,
+            k: 0,
+            sampled_modes,
+            held: (x[..n].to_vec(), z.clone()),
+            at_jump: false,
+            pending: None,
+            monitor_tol: (h * 1e-6).max(1e-12),
+            plant,
+            stepper,
+            sampler,
+            controller,
+            mode_laws,
+            chain,
+            x,
+            z,
+        })
     }
-    let mut tally = Tally::new(n, m, &x, opts.convergence_rel_tol);
-    let mut mismatch = MismatchTally::new(crate::synth::relaxations::kappa_relied_on(model));
-    let mut rates = RateTally::new(crate::synth::lyapunov::fuzzy::phi(model).map(<[f64]>::to_vec));
-    let mut h_now = vec![0.0; tables.r];
-    let mut saturated = 0u64;
-    let mut nonfinite_at = None;
-    let mut progress = Progress::new(opts.progress, t0, t1);
-    let mut t = t0;
-    let mut k = 0u64;
-    // A sampled loop with modes: a mode jump between samples is not a
-    // sample; the command is re-blended from the held sample with the new
-    // mode's gains (the mode is known continuously, docs/xue2024.md).
-    let sampled_modes = chain.is_some() && plan.trigger.is_some_and(|t| *t != Trigger::Continuous);
-    let mut held = (x[..n].to_vec(), z.clone());
-    let mut at_jump = false;
-    // The sampling instant a jump cut the step short of, still ahead.
-    let mut pending: Option<f64> = None;
-    // Continuous monitoring: each crossing is located to this time tolerance.
-    let monitor_tol = (h * 1e-6).max(1e-12);
-    let last_sent = loop {
+
+    /// The sampling instant `t`: the mode jumps due by now, the gate's
+    /// decision, the command, the tallies. Returns whether the sample was
+    /// transmitted and the mode.
+    fn sample(&mut self) -> (bool, Option<usize>) {
+        let (n, t) = (self.n, self.t);
         // Jumps of the mode process due by now.
-        let mode = chain.as_mut().map(|c| {
+        let mode = self.chain.as_mut().map(|c| {
             while c.process.next_jump() <= t {
                 let at = c.process.next_jump();
                 c.process.jump();
@@ -413,65 +525,77 @@ pub fn run_truth(
             }
             c.process.mode()
         });
-        let rejump = sampled_modes && std::mem::take(&mut at_jump);
-        let sent = !rejump && sampler.gate.decide(&x[..n]);
+        let rejump = self.sampled_modes && std::mem::take(&mut self.at_jump);
+        let sent = !rejump && self.sampler.gate.decide(&self.x[..n]);
         let mut no_rule = false;
-        if let Some(p) = premises.as_mut() {
-            p.eval(&x[..n], &mut z);
+        if let Some(p) = self.premises.as_mut() {
+            p.eval(&self.x[..n], &mut self.z);
         }
-        controller.strengths(&x[..n], premises.as_ref().map(|_| &z[..]), &mut h_now);
-        mismatch.sample(&h_now, sent);
-        rates.sample(t, &h_now);
-        if sent && sampled_modes {
-            held.0.copy_from_slice(&x[..n]);
-            held.1.copy_from_slice(&z);
+        self.controller.strengths(
+            &self.x[..n],
+            self.premises.as_ref().map(|_| &self.z[..]),
+            &mut self.h_now,
+        );
+        self.mismatch.sample(&self.h_now, sent);
+        self.rates.sample(t, &self.h_now);
+        if sent && self.sampled_modes {
+            self.held.0.copy_from_slice(&self.x[..n]);
+            self.held.1.copy_from_slice(&self.z);
         }
-        if sent || (rejump && !mode_laws.is_empty()) {
-            // The mode's controller (mode-dependent gains), else the one law,
-            // on the sample (at a jump of a sampled loop: the held one).
-            let ctl = match mode {
-                Some(a) if !mode_laws.is_empty() => &mode_laws[a.min(mode_laws.len() - 1)],
-                _ => &controller,
-            };
-            let (xs, zs) = if sent {
-                (&x[..n], &z[..])
-            } else {
-                (&held.0[..], &held.1[..])
-            };
-            let flags = match &premises {
-                Some(_) => ctl.command_with(xs, zs, &mut u),
-                None => ctl.command(xs, &mut u),
-            };
-            saturated += u64::from(flags.contains(Flags::SATURATED) && sent);
-            no_rule = flags.contains(Flags::NO_RULE_FIRED);
+        if sent || (rejump && !self.mode_laws.is_empty()) {
+            no_rule = self.command(mode, sent);
         }
-        let in_region = match &premises {
-            Some(_) => region.contains_premises(&z),
-            None => region.contains(&x[..n]),
+        let in_region = match &self.premises {
+            Some(_) => self.region.contains_premises(&self.z),
+            None => self.region.contains(&self.x[..n]),
         };
-        tally.sample(&Sample {
+        self.tally.sample(&Sample {
             t,
-            x: &x,
-            u: &u,
+            x: &self.x,
+            u: &self.u,
             sent,
             no_rule,
             in_region,
         });
-        if let Some(obs) = observer.as_mut() {
-            obs(t, &x, &u);
+        if let (Some(c), Some(a)) = (self.chain.as_mut(), mode) {
+            c.tally.sample(a, &self.u);
         }
-        if let (Some(c), Some(a)) = (chain.as_mut(), mode) {
-            c.tally.sample(a, &u);
-        }
-        if let Some(out) = csv.as_mut() {
-            super::csv::row(*out, t, &x, &u, sent, mode).map_err(write_err)?;
-        }
-        if t >= t1 || nonfinite_at.is_some() {
-            break sent;
-        }
-        let mut t_next = pending
+        (sent, mode)
+    }
+
+    /// A new held command: the mode's controller (mode-dependent gains), else
+    /// the one law, on the sample (`sent`; at a jump of a sampled loop: the
+    /// held one). Whether no rule fired.
+    fn command(&mut self, mode: Option<usize>, sent: bool) -> bool {
+        let n = self.n;
+        let ctl = match mode {
+            Some(a) if !self.mode_laws.is_empty() => {
+                &self.mode_laws[a.min(self.mode_laws.len() - 1)]
+            }
+            _ => &self.controller,
+        };
+        let (xs, zs) = if sent {
+            (&self.x[..n], &self.z[..])
+        } else {
+            (&self.held.0[..], &self.held.1[..])
+        };
+        let flags = match &self.premises {
+            Some(_) => ctl.command_with(xs, zs, &mut self.u),
+            None => ctl.command(xs, &mut self.u),
+        };
+        self.saturated += u64::from(flags.contains(Flags::SATURATED) && sent);
+        flags.contains(Flags::NO_RULE_FIRED)
+    }
+
+    /// Integrates the plant with the held command to the next sampling
+    /// instant, or to a mode jump, or to the crossing of a continuously
+    /// monitored trigger, whichever comes first (the `mode` of this sample).
+    fn advance(&mut self, mode: Option<usize>) -> Result<(), SimError> {
+        let (n, t, t1, h) = (self.n, self.t, self.plan.t1, self.plan.h);
+        let mut t_next = self
+            .pending
             .take()
-            .unwrap_or_else(|| sampler.schedule.next(k, t))
+            .unwrap_or_else(|| self.sampler.schedule.next(self.k, t))
             .min(t1);
         // Snap to the end instead of leaving a sliver of an interval.
         if t1 - t_next < 1e-9 * h {
@@ -479,41 +603,43 @@ pub fn run_truth(
         }
         // A mode jump ends the step early: the plant switches at the jump.
         let mut jumps = false;
-        if let Some(c) = chain.as_mut() {
+        if let Some(c) = self.chain.as_mut() {
             if c.process.next_jump() < t_next {
-                pending = Some(t_next);
+                self.pending = Some(t_next);
                 t_next = c.process.next_jump();
                 jumps = true;
             }
             if let Some(a) = mode {
-                c.actuation.plant_input(a, &u, &mut c.u_plant);
+                c.actuation.plant_input(a, &self.u, &mut c.u_plant);
             }
         }
-        let (u_plant, given) = match (&chain, mode) {
+        let (u_plant, given) = match (&self.chain, mode) {
             (Some(c), Some(a)) => (&c.u_plant, Some((&c.actuation, a))),
-            _ => (&u, None),
+            _ => (&self.u, None),
         };
+        let (signals, plant, u) = (&mut self.signals, &mut self.plant, &self.u);
         let mut rhs = |tt: f64, y: &[f64], dy: &mut [f64]| {
             let w = signals.at(tt)?;
             plant.rhs(tt, y, u_plant, w, dy)?;
             if let Some((act, a)) = given {
-                act.add_given(a, &u, &mut dy[..n]);
+                act.add_given(a, u, &mut dy[..n]);
             }
             Ok::<(), SimError>(())
         };
-        let start = sampler.continuous.then(|| x.clone());
-        stepper.advance(&mut rhs, t, t_next, &mut x)?;
+        let start = self.sampler.continuous.then(|| self.x.clone());
+        self.stepper.advance(&mut rhs, t, t_next, &mut self.x)?;
         let mut located = false;
         if let Some(x_start) = start {
-            if sampler.gate.would_transmit(&x[..n]) && t_next - t > monitor_tol {
+            let tol = self.monitor_tol;
+            if self.sampler.gate.would_transmit(&self.x[..n]) && t_next - t > tol {
                 // Bisect the crossing: re-integrate from the step's start state.
                 let (mut lo, mut hi) = (t, t_next);
-                let mut x_hi = x.clone();
-                while hi - lo > monitor_tol {
+                let mut x_hi = self.x.clone();
+                while hi - lo > tol {
                     let mid = 0.5 * (lo + hi);
                     let mut y = x_start.clone();
-                    stepper.advance(&mut rhs, t, mid, &mut y)?;
-                    if sampler.gate.would_transmit(&y[..n]) {
+                    self.stepper.advance(&mut rhs, t, mid, &mut y)?;
+                    if self.sampler.gate.would_transmit(&y[..n]) {
                         hi = mid;
                         x_hi = y;
                     } else {
@@ -522,91 +648,104 @@ pub fn run_truth(
                 }
                 located = hi < t_next;
                 t_next = hi;
-                x = x_hi;
+                self.x = x_hi;
             }
         }
-        t = t_next;
+        self.t = t_next;
         // A located crossing or a mode jump ends the step early: the grid
         // point is still ahead.
         if !located && !jumps {
-            k += 1;
+            self.k += 1;
         }
-        at_jump = jumps;
-        if !x.iter().all(|v| v.is_finite()) {
-            nonfinite_at = Some(t);
+        self.at_jump = jumps;
+        if !self.x.iter().all(|v| v.is_finite()) {
+            self.nonfinite_at = Some(self.t);
         }
-        progress.update(t);
-    };
-    progress.finish();
-    if let Some(out) = csv.as_mut() {
-        out.flush().map_err(write_err)?;
+        self.progress.update(self.t);
+        Ok(())
     }
-    let last = Sample {
-        t,
-        x: &x,
-        u: &u,
-        sent: last_sent,
-        no_rule: false,
-        in_region: true,
-    };
-    let facts = RunFacts {
-        u_max: tables.u_max.clone(),
-        t_end: t1,
-        saturated,
-        nonfinite_at,
-        p: &prepared.p,
-    };
-    let (mut metrics, trace) = tally.finish(&facts, &last, trace);
-    mismatch.finish(&mut metrics);
-    rates.finish(&mut metrics);
-    metrics.integrator = match &stepper {
-        Stepper::Rk4(s) => format!("rk4, fixed step <= {} s", s.h),
-        Stepper::Dopri5(s) => format!(
-            "dopri5, rtol = {rtol:e}, atol = {atol:e}, h_max = {h} s, {} accepted / {} rejected steps",
-            s.accepted, s.rejected
-        ),
-    };
-    metrics.rhs_evaluations = stepper.evals();
-    metrics.trigger = describe_trigger(plan.trigger);
-    if let Some(src) = sampler.weight_source {
-        metrics.trigger.push_str("; trigger weight U: ");
-        metrics.trigger.push_str(src.describe());
-    }
-    metrics.final_nu = sampler.gate.nu();
-    if let Some(Trigger::Mixed { monitor, .. }) = plan.trigger {
-        (metrics.monitor, metrics.monitor_step) = match monitor {
-            Monitor::Step => (Some("step".into()), Some(h)),
-            Monitor::Continuous => (Some("continuous".into()), Some(monitor_tol)),
-            Monitor::Sampling(..) => (None, None),
+
+    /// The outcome of the finished run (`last_sent`: whether its last sample
+    /// was transmitted), with the `trace` to fill.
+    fn finish(
+        self,
+        prepared: &Prepared,
+        opts: &Options,
+        last_sent: bool,
+        trace: Trace,
+        started: Instant,
+    ) -> Outcome {
+        let (spec, tables) = (&prepared.model.spec, &prepared.tables);
+        let (n, dim, plan) = (self.n, self.plant.dim(), self.plan);
+        let (t1, h) = (plan.t1, plan.h);
+        let (rtol, atol) = opts.tolerances;
+        let last = Sample {
+            t: self.t,
+            x: &self.x,
+            u: &self.u,
+            sent: last_sent,
+            no_rule: false,
+            in_region: true,
         };
+        let facts = RunFacts {
+            u_max: tables.u_max.clone(),
+            t_end: t1,
+            saturated: self.saturated,
+            nonfinite_at: self.nonfinite_at,
+            p: &prepared.p,
+        };
+        let (mut metrics, trace) = self.tally.finish(&facts, &last, trace);
+        self.mismatch.finish(&mut metrics);
+        self.rates.finish(&mut metrics);
+        metrics.integrator = match &self.stepper {
+            Stepper::Rk4(s) => format!("rk4, fixed step <= {} s", s.h),
+            Stepper::Dopri5(s) => format!(
+                "dopri5, rtol = {rtol:e}, atol = {atol:e}, h_max = {h} s, {} accepted / {} rejected steps",
+                s.accepted, s.rejected
+            ),
+        };
+        metrics.rhs_evaluations = self.stepper.evals();
+        metrics.trigger = describe_trigger(plan.trigger);
+        if let Some(src) = self.sampler.weight_source {
+            metrics.trigger.push_str("; trigger weight U: ");
+            metrics.trigger.push_str(src.describe());
+        }
+        metrics.final_nu = self.sampler.gate.nu();
+        if let Some(Trigger::Mixed { monitor, .. }) = plan.trigger {
+            (metrics.monitor, metrics.monitor_step) = match monitor {
+                Monitor::Step => (Some("step".into()), Some(h)),
+                Monitor::Continuous => (Some("continuous".into()), Some(self.monitor_tol)),
+                Monitor::Sampling(..) => (None, None),
+            };
+        }
+        metrics.seed = plan.seed;
+        let mut trace = trace;
+        if let (Some(c), Some(modes)) = (self.chain, &spec.modes) {
+            let (mm, switches) = c.tally.finish(t1, modes.design.keyword(), c.seed);
+            metrics.modes = Some(mm);
+            trace.modes = switches;
+            trace.mode_names = modes.modes.iter().map(|m| m.name.clone()).collect();
+        }
+        let sim_dynamics = spec.simulate.as_ref().is_some_and(|s| s.dynamics.is_some());
+        metrics.plant = if dim > n || sim_dynamics {
+            format!(
+                "the spec's dynamics block ({dim} states, {} not seen by the controller)",
+                dim - n
+            )
+        } else {
+            "the design model x' = A(x) x + B(x) sat(u) + D(x) w".into()
+        };
+        metrics.wall_time_s = started.elapsed().as_secs_f64();
+        Outcome {
+            name: spec.controller.node.clone(),
+            spec: std::path::Path::new(&prepared.source.name)
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            trace,
+            metrics,
+            u_max: tables.u_max.clone(),
+            n,
+        }
     }
-    metrics.seed = plan.seed;
-    let mut trace = trace;
-    if let (Some(c), Some(modes)) = (chain, &spec.modes) {
-        let (mm, switches) = c.tally.finish(t1, modes.design.keyword(), c.seed);
-        metrics.modes = Some(mm);
-        trace.modes = switches;
-        trace.mode_names = modes.modes.iter().map(|m| m.name.clone()).collect();
-    }
-    let sim_dynamics = spec.simulate.as_ref().is_some_and(|s| s.dynamics.is_some());
-    metrics.plant = if dim > n || sim_dynamics {
-        format!(
-            "the spec's dynamics block ({dim} states, {} not seen by the controller)",
-            dim - n
-        )
-    } else {
-        "the design model x' = A(x) x + B(x) sat(u) + D(x) w".into()
-    };
-    metrics.wall_time_s = started.elapsed().as_secs_f64();
-    Ok(Outcome {
-        name: spec.controller.node.clone(),
-        spec: std::path::Path::new(&prepared.source.name)
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-        trace,
-        metrics,
-        u_max: tables.u_max.clone(),
-        n,
-    })
 }

@@ -340,8 +340,6 @@ pub(super) fn impose(
     eps: f64,
     reduce: bool,
 ) -> Result<TriggerBuilt, LmiError> {
-    let n = model.n;
-    let sector = !plan.levels.is_empty();
     let (gamma, xi) = if plan.linf {
         (
             Some(problem.scalar("gamma_tr")?),
@@ -411,6 +409,42 @@ pub(super) fn impose(
             }
         }
     }
+    impose_regions(&mut problem, &mut nonstrict, model, plan, &vars, &ctrl, eps)?;
+    if let (Some(gamma), Some(xi)) = (gamma, xi) {
+        peak(&mut problem, plan, vars.p, gamma, xi, eps)?;
+        problem.minimize(Expr::var(gamma))?;
+    }
+    let p = match vars.p {
+        Factor::Var(p) => Some(p),
+        Factor::Val(_) => None,
+    };
+    let w = match vars.w {
+        Some(Factor::Var(w)) => Some(w),
+        _ => None,
+    };
+    Ok(TriggerBuilt {
+        problem,
+        vars: TriggerVars { p, w, gamma, xi },
+        reductions,
+        nonstrict,
+    })
+}
+
+/// Imposes E(P, c) inside the linear region of each controller vertex of
+/// `ctrl` (with saturation levels) and inside the premise box, and around
+/// each initial set; every one a nonstrict condition, named in `nonstrict`.
+fn impose_regions(
+    problem: &mut Problem,
+    nonstrict: &mut Vec<String>,
+    model: &TsModel,
+    plan: &TriggerPlan,
+    vars: &LoopVars<'_>,
+    ctrl: &[(Factor<'_>, Factor<'_>)],
+    eps: f64,
+) -> Result<(), LmiError> {
+    let n = model.n;
+    let sector = !plan.levels.is_empty();
+    let xi = vars.xi;
     // E(P, c) inside the linear region |(F_j - G_j)_s x| <= u_bar_s, c = plan.region_level():
     // [P, r'; r, u_bar_s^2 / c] >= 0, solved as [P, k r'; k r, 1] >= 0 with k = sqrt(c) / u_bar_s
     // (the congruence diag(I, k); entries of one size when the gains are large).
@@ -447,8 +481,8 @@ pub(super) fn impose(
                 }
             };
             nonstrict_psd(
-                &mut problem,
-                &mut nonstrict,
+                problem,
+                nonstrict,
                 &format!("trigger linear region [{},{}]", j + 1, s + 1),
                 e,
                 eps,
@@ -459,8 +493,8 @@ pub(super) fn impose(
     for face in plan.region.iter().flat_map(|r| &r.faces) {
         let e = contain(&face.row, face.bound)?;
         nonstrict_psd(
-            &mut problem,
-            &mut nonstrict,
+            problem,
+            nonstrict,
             &format!("trigger premise region {}", face.name),
             e,
             eps,
@@ -468,31 +502,14 @@ pub(super) fn impose(
     }
     for (name, e) in &plan.contain {
         nonstrict_psd(
-            &mut problem,
-            &mut nonstrict,
+            problem,
+            nonstrict,
             &format!("sampled region of attraction: {name}"),
             contain_block(vars.p, e)?,
             eps,
         )?;
     }
-    if let (Some(gamma), Some(xi)) = (gamma, xi) {
-        peak(&mut problem, plan, vars.p, gamma, xi, eps)?;
-        problem.minimize(Expr::var(gamma))?;
-    }
-    let p = match vars.p {
-        Factor::Var(p) => Some(p),
-        Factor::Val(_) => None,
-    };
-    let w = match vars.w {
-        Some(Factor::Var(w)) => Some(w),
-        _ => None,
-    };
-    Ok(TriggerBuilt {
-        problem,
-        vars: TriggerVars { p, w, gamma, xi },
-        reductions,
-        nonstrict,
-    })
+    Ok(())
 }
 
 /// With a premise region, the L-inf channel and no initial set, the level of

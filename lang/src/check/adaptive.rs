@@ -24,6 +24,21 @@ pub const MAX_ADAPTIVE_PARAMETERS: usize = 20_000;
 /// The settings of the block.
 const SETTINGS: [&str; 3] = ["error", "reference", "Q"];
 
+/// The parts of an `adaptive` block, as its statements are checked.
+#[derive(Default)]
+struct Parts {
+    error: Option<Mat>,
+    reference: Option<Mat>,
+    q: Option<Mat>,
+    a: Option<Estimate>,
+    b: Option<Estimate>,
+    robust: Option<Robust>,
+    r: Option<Expr>,
+    /// Where each setting, estimate and the reference input was given first.
+    seen: [Option<Span>; 7],
+    converged: Vec<Convergence>,
+}
+
 impl<'a> Checker<'a> {
     /// The `adaptive` block of the file, if any (given once), checked.
     pub(super) fn adaptive_block(
@@ -107,39 +122,10 @@ impl<'a> Checker<'a> {
     fn adaptive(&mut self, span: Span, stmts: &[AdaptiveStmt], dims: Dims) -> Option<Adaptive> {
         let m = dims.m;
         let mut ok = true;
-        let (mut error, mut reference, mut q) = (None, None, None);
-        let (mut a, mut b, mut robust, mut r) = (None, None, None, None);
-        let mut seen: [Option<Span>; 7] = [None; 7];
-        let mut converged = Vec::new();
+        let mut p = Parts::default();
         for s in stmts {
             match s {
-                AdaptiveStmt::Setting(s) => {
-                    let Some(k) = SETTINGS.iter().position(|k| *k == s.key.node) else {
-                        self.err(unknown_choice(s.key.span, "adaptive setting", "settings", &s.key.node, &SETTINGS).with_help(
-                            "estimates are `estimate a|b rate g bounds lo .. hi [init v];`, the robust term `robust d rate g bounds lo .. hi [init v] layer phi;`",
-                        ));
-                        ok = false;
-                        continue;
-                    };
-                    if !self.singleton(&mut seen[k], s.span, &format!("`{}`", s.key.node)) {
-                        ok = false;
-                        continue;
-                    }
-                    let Some(e) = plain_expr(self, s) else {
-                        ok = false;
-                        continue;
-                    };
-                    match k {
-                        0 => error = self.error_map(&s.key, e, dims),
-                        1 => reference = self.square(e, m, "the reference model A_m"),
-                        _ => {
-                            q = self
-                                .square(e, m, "Q")
-                                .and_then(|q| self.symmetric_pd_diag(e, q))
-                        }
-                    }
-                    ok &= [&error, &reference, &q][k].is_some();
-                }
+                AdaptiveStmt::Setting(s) => ok &= self.adaptive_setting(s, &mut p, dims),
                 AdaptiveStmt::Estimate {
                     robust: is_robust,
                     name,
@@ -162,37 +148,22 @@ impl<'a> Checker<'a> {
                         ok = false;
                         continue;
                     };
-                    if !self.singleton(&mut seen[slot + which], *span, &format!("`{}`", name.node))
-                    {
+                    if !self.singleton(
+                        &mut p.seen[slot + which],
+                        *span,
+                        &format!("`{}`", name.node),
+                    ) {
                         ok = false;
                         continue;
                     }
                     let est = self.estimate(name, rate, lo, hi, init.as_ref(), *span);
                     match (is_robust, which, est) {
                         (true, _, Some(e)) => {
-                            robust = self.robust(e, name, layer.as_ref(), *span);
-                            ok &= robust.is_some();
+                            p.robust = self.robust(e, name, layer.as_ref(), *span);
+                            ok &= p.robust.is_some();
                         }
                         (false, w, Some(e)) => {
-                            if let Some(l) = layer {
-                                self.err(
-                                    Diagnostic::error(
-                                        l.span,
-                                        "only the robust term has a boundary layer",
-                                    )
-                                    .with_help("remove `layer ...`"),
-                                );
-                                ok = false;
-                            } else if w == 1 && e.lo <= 0.0 && e.hi >= 0.0 {
-                                self.err(Diagnostic::error(*span, "the input gain estimates must have a known sign")
-                                    .with_label(format!("the bounds {} .. {} contain 0", Num(e.lo), Num(e.hi)))
-                                    .with_help("give bounds on one side of 0 (e.g. `bounds 1e-4 .. 1e-3`): the law divides by b_hat"));
-                                ok = false;
-                            } else if w == 0 {
-                                a = Some(e);
-                            } else {
-                                b = Some(e);
-                            }
+                            ok &= self.adapted_estimate(&mut p, w, e, layer.as_ref(), *span)
                         }
                         _ => ok = false,
                     }
@@ -203,12 +174,12 @@ impl<'a> Checker<'a> {
                     value,
                     span,
                 } => {
-                    if !self.singleton(&mut seen[6], *span, "the reference input") {
+                    if !self.singleton(&mut p.seen[6], *span, "the reference input") {
                         ok = false;
                         continue;
                     }
-                    r = self.reference_input(name, param, value, m);
-                    ok &= r.is_some();
+                    p.r = self.reference_input(name, param, value, m);
+                    ok &= p.r.is_some();
                 }
                 AdaptiveStmt::Converged {
                     signal,
@@ -216,19 +187,100 @@ impl<'a> Checker<'a> {
                     by,
                     span,
                 } => match self.claim(signal, tol, by, *span, dims.n) {
-                    Some(c) => converged.push(c),
+                    Some(c) => p.converged.push(c),
                     None => ok = false,
                 },
             }
         }
         for (k, what) in [(0, "error"), (1, "reference")] {
-            if seen[k].is_none() {
+            if p.seen[k].is_none() {
                 self.err(Diagnostic::error(span, format!("the adaptive controller needs `{what} = ...;`")).with_help(
                     "e.g. `error = omega + 0.5 * rho;` (one component per input) and `reference = -0.5 * eye(3);` (A_m, Hurwitz)",
                 ));
                 ok = false;
             }
         }
+        ok &= self.adaptive_size(span, dims);
+        if !ok {
+            return None;
+        }
+        Some(Adaptive {
+            error: p.error?,
+            reference: p.reference?,
+            q: p.q.unwrap_or_else(|| Mat::identity(m, m)),
+            a: p.a,
+            b: p.b,
+            robust: p.robust,
+            r: p.r,
+            converged: p.converged,
+            span,
+        })
+    }
+
+    /// `error = ...;`, `reference = ...;` or `Q = ...;`, into `p`; `false`
+    /// if it was refused.
+    fn adaptive_setting(&mut self, s: &Setting, p: &mut Parts, dims: Dims) -> bool {
+        let m = dims.m;
+        let Some(k) = SETTINGS.iter().position(|k| *k == s.key.node) else {
+            self.err(unknown_choice(s.key.span, "adaptive setting", "settings", &s.key.node, &SETTINGS).with_help(
+                "estimates are `estimate a|b rate g bounds lo .. hi [init v];`, the robust term `robust d rate g bounds lo .. hi [init v] layer phi;`",
+            ));
+            return false;
+        };
+        if !self.singleton(&mut p.seen[k], s.span, &format!("`{}`", s.key.node)) {
+            return false;
+        }
+        let Some(e) = plain_expr(self, s) else {
+            return false;
+        };
+        match k {
+            0 => p.error = self.error_map(&s.key, e, dims),
+            1 => p.reference = self.square(e, m, "the reference model A_m"),
+            _ => {
+                p.q = self
+                    .square(e, m, "Q")
+                    .and_then(|q| self.symmetric_pd_diag(e, q))
+            }
+        }
+        [&p.error, &p.reference, &p.q][k].is_some()
+    }
+
+    /// A checked `estimate a` (`which` 0) or `estimate b` (1), into `p`;
+    /// `false` if it was refused.
+    fn adapted_estimate(
+        &mut self,
+        p: &mut Parts,
+        which: usize,
+        e: Estimate,
+        layer: Option<&Expr>,
+        span: Span,
+    ) -> bool {
+        if let Some(l) = layer {
+            self.err(
+                Diagnostic::error(l.span, "only the robust term has a boundary layer")
+                    .with_help("remove `layer ...`"),
+            );
+            false
+        } else if which == 1 && e.lo <= 0.0 && e.hi >= 0.0 {
+            self.err(Diagnostic::error(span, "the input gain estimates must have a known sign")
+                .with_label(format!("the bounds {} .. {} contain 0", Num(e.lo), Num(e.hi)))
+                .with_help("give bounds on one side of 0 (e.g. `bounds 1e-4 .. 1e-3`): the law divides by b_hat"));
+            false
+        } else {
+            if which == 0 {
+                p.a = Some(e);
+            } else {
+                p.b = Some(e);
+            }
+            true
+        }
+    }
+
+    /// The size limits of an adaptive controller (inputs, adapted numbers);
+    /// `false` if one is passed.
+    fn adaptive_size(&mut self, span: Span, dims: Dims) -> bool {
+        let m = dims.m;
+        let mut ok = true;
         if m > MAX_ADAPTIVE_INPUTS {
             self.err(Diagnostic::error(span, format!("an adaptive controller has at most {MAX_ADAPTIVE_INPUTS} inputs, this spec has {m}")));
             ok = false;
@@ -252,20 +304,7 @@ impl<'a> Checker<'a> {
             );
             ok = false;
         }
-        if !ok {
-            return None;
-        }
-        Some(Adaptive {
-            error: error?,
-            reference: reference?,
-            q: q.unwrap_or_else(|| Mat::identity(m, m)),
-            a,
-            b,
-            robust,
-            r,
-            converged,
-            span,
-        })
+        ok
     }
 
     /// `error = expr;`: linear in the state only, one component per input.

@@ -39,14 +39,23 @@ const FLAGS: [(&str, u8, &str); 5] = [
 impl Gen<'_> {
     /// The controller header `<name>.h`: the interface, self-contained.
     pub(super) fn header(&self) -> String {
+        let mut s = self.banner("C99 interface");
+        self.header_top(&mut s);
+        self.header_defines(&mut s);
+        self.header_interface(&mut s);
+        s
+    }
+
+    /// The header's opening: semantics, include guard, the real type and
+    /// the dimensions.
+    fn header_top(&self, s: &mut String) {
         let t = self.t;
-        let (p, u) = (&self.p, &self.u);
+        let u = &self.u;
         let real = format!("{u}REAL");
         let default_real = match t.precision {
             Precision::F64 => "double",
             Precision::F32 => "float",
         };
-        let mut s = self.banner("C99 interface");
         let _ = write!(
             s,
             r#"//
@@ -90,6 +99,12 @@ extern "C" {{
             np = t.p,
             r = t.r,
         );
+    }
+
+    /// The sampling period or interval, the flag bits and the modes.
+    fn header_defines(&self, s: &mut String) {
+        let t = self.t;
+        let u = &self.u;
         let note = crate::codegen::header::modal_sampling_note(t);
         match (t.header.sampling, note) {
             (Some((lo, hi)), Some(_)) if lo == hi => {
@@ -132,6 +147,14 @@ extern "C" {{
                 );
             }
         }
+    }
+
+    /// The state struct, the step functions and the triggers' interface.
+    fn header_interface(&self, s: &mut String) {
+        let t = self.t;
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        let note = crate::codegen::header::modal_sampling_note(t);
         let (mode_param, mode_doc) = match t.modes {
             Some(_) => (
                 "uint8_t mode, ",
@@ -225,6 +248,5 @@ int {p}mixed_decide({p}mixed_t *t, const {real} sigma[{u}N]);
 #endif /* {u}H */
 "#
         );
-        s
     }
 }

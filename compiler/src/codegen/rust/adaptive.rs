@@ -9,7 +9,7 @@ use super::tokens::{array, float, matrix};
 use super::{dimension_consts, premise_imports, unparse, Premises, Rules};
 use crate::codegen::header::generated_lines;
 use crate::codegen::CodegenError;
-use crate::tables::AdaptiveTables;
+use crate::tables::{AdaptiveTables, Tables};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use tsf_lang::spec::Precision;
@@ -61,11 +61,7 @@ pub fn emit_rust_adaptive(at: &AdaptiveTables) -> Result<String, CodegenError> {
         quote!(Flags),
     ];
     imports.extend(premise_imports(t));
-    let state_doc = format!("State order: {}.", t.state_names.join(", "));
-    let input_doc = format!(
-        "Input (and reference, error-signal) order: {}.",
-        t.input_names.join(", ")
-    );
+    let state = state_type(t, step_call);
     let tokens = quote! {
         use tsf_runtime::{#(#imports),*};
 
@@ -121,6 +117,21 @@ pub fn emit_rust_adaptive(at: &AdaptiveTables) -> Result<String, CodegenError> {
 
         #premise_fn
 
+        #state
+    };
+    let body = unparse(tokens)?;
+    Ok(format!("{}{body}", header(at)))
+}
+
+/// The caller-owned `State` of the adaptive law and its `step`
+/// (`step_call`: the runtime call, with or without the premise function).
+fn state_type(t: &Tables, step_call: TokenStream) -> TokenStream {
+    let state_doc = format!("State order: {}.", t.state_names.join(", "));
+    let input_doc = format!(
+        "Input (and reference, error-signal) order: {}.",
+        t.input_names.join(", ")
+    );
+    quote! {
         /// The adaptive controller's state, owned by the caller: the
         /// estimates, the reference model's state and what the last step did.
         #[doc = #state_doc]
@@ -208,9 +219,7 @@ pub fn emit_rust_adaptive(at: &AdaptiveTables) -> Result<String, CodegenError> {
                 Self::new()
             }
         }
-    };
-    let body = unparse(tokens)?;
-    Ok(format!("{}{body}", header(at)))
+    }
 }
 
 /// The header comment (no timestamps, no absolute paths).

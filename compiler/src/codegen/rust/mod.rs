@@ -93,17 +93,7 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
         quote!(TABLE.step_with_premises(#mode_arg x, &premises(x)))
     };
     let centres = matrix(&t.centres, prec);
-    let gain_set = |set: &[Vec<Vec<f64>>]| {
-        let items = set.iter().map(|g| matrix(g, prec));
-        quote!([#(#items),*])
-    };
-    let gains = match &t.modes {
-        Some(mt) => {
-            let sets = mt.gains.iter().map(|set| gain_set(set));
-            quote!([#(#sets),*])
-        }
-        None => gain_set(&t.gains),
-    };
+    let gains = gain_tokens(t);
     let u_max = array(&t.u_max, prec);
     let state_doc = format!("State order: {}.", t.state_names.join(", "));
     let input_doc = format!("Input order: {}.", t.input_names.join(", "));
@@ -116,45 +106,14 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     imports.extend(premise_imports(t));
     let sampling_note = modal_sampling_note(t).map(|n| format!(" {n}"));
     let sampling = sampling_consts(t.header.sampling, sampling_note.as_deref());
-    let (table_ty, table_ctor, mode_consts, step_sig, step_doc, mode_accessor) = match &modal {
-        Some(md) => (
-            quote!(ModalController<'static, #ty, N, M, P, R, D, K>),
-            quote!(ModalController),
-            md.consts.clone(),
-            quote!(pub fn step(&mut self, mode: u8, x: &[#ty; N]) -> [#ty; M]),
-            {
-                let note = modal_sampling_note(t).map(|n| {
-                    let n = format!(" {n}");
-                    quote!(#[doc = ""] #[doc = #n])
-                });
-                quote! {
-                    /// One control update in mode `mode` (an index of `MODE_NAMES`, from
-                    /// fault detection): the saturated command for state `x` with that
-                    /// mode's gains. Never panics; NaN or infinite states give a zero
-                    /// command and a fault flag; a mode `>= K` uses mode 0's gains and
-                    /// raises `Flags::MODE_OUT_OF_RANGE`.
-                    #note
-                }
-            },
-            quote! {
-                /// Whether the last step was given a mode `>= K` (mode 0's gains used).
-                pub fn mode_out_of_range(&self) -> bool {
-                    self.flags.contains(Flags::MODE_OUT_OF_RANGE)
-                }
-            },
-        ),
-        None => (
-            quote!(FactoredController<'static, #ty, N, M, P, R, D>),
-            quote!(FactoredController),
-            quote!(),
-            quote!(pub fn step(&mut self, x: &[#ty; N]) -> [#ty; M]),
-            quote! {
-                /// One control update: the saturated command for state `x`.
-                /// Never panics; NaN or infinite states give a zero command and a fault flag.
-            },
-            quote!(),
-        ),
-    };
+    let StepTokens {
+        table_ty,
+        table_ctor,
+        mode_consts,
+        step_sig,
+        step_doc,
+        mode_accessor,
+    } = step_tokens(t, modal.as_ref());
     let tokens = quote! {
         use tsf_runtime::{#(#imports),*};
 
@@ -243,6 +202,79 @@ pub fn emit_rust(t: &Tables) -> Result<String, CodegenError> {
     };
     let body = unparse(tokens)?;
     Ok(format!("{}{body}", header(t)))
+}
+
+/// The gains as tokens: one matrix per rule, one such set per mode with modes.
+fn gain_tokens(t: &Tables) -> TokenStream {
+    let prec = t.precision;
+    let gain_set = |set: &[Vec<Vec<f64>>]| {
+        let items = set.iter().map(|g| matrix(g, prec));
+        quote!([#(#items),*])
+    };
+    let gains = match &t.modes {
+        Some(mt) => {
+            let sets = mt.gains.iter().map(|set| gain_set(set));
+            quote!([#(#sets),*])
+        }
+        None => gain_set(&t.gains),
+    };
+    gains
+}
+
+/// What the controller's step depends on modes for: the table's type and
+/// constructor, the mode constants, `step`'s signature and doc, and the
+/// mode accessor.
+struct StepTokens {
+    table_ty: TokenStream,
+    table_ctor: TokenStream,
+    mode_consts: TokenStream,
+    step_sig: TokenStream,
+    step_doc: TokenStream,
+    mode_accessor: TokenStream,
+}
+
+/// The [`StepTokens`] of `t`, with `modal` its mode constants if it has modes.
+fn step_tokens(t: &Tables, modal: Option<&Modal>) -> StepTokens {
+    let ty = real_ty(t.precision);
+    match modal {
+        Some(md) => StepTokens {
+            table_ty: quote!(ModalController<'static, #ty, N, M, P, R, D, K>),
+            table_ctor: quote!(ModalController),
+            mode_consts: md.consts.clone(),
+            step_sig: quote!(pub fn step(&mut self, mode: u8, x: &[#ty; N]) -> [#ty; M]),
+            step_doc: {
+                let note = modal_sampling_note(t).map(|n| {
+                    let n = format!(" {n}");
+                    quote!(#[doc = ""] #[doc = #n])
+                });
+                quote! {
+                    /// One control update in mode `mode` (an index of `MODE_NAMES`, from
+                    /// fault detection): the saturated command for state `x` with that
+                    /// mode's gains. Never panics; NaN or infinite states give a zero
+                    /// command and a fault flag; a mode `>= K` uses mode 0's gains and
+                    /// raises `Flags::MODE_OUT_OF_RANGE`.
+                    #note
+                }
+            },
+            mode_accessor: quote! {
+                /// Whether the last step was given a mode `>= K` (mode 0's gains used).
+                pub fn mode_out_of_range(&self) -> bool {
+                    self.flags.contains(Flags::MODE_OUT_OF_RANGE)
+                }
+            },
+        },
+        None => StepTokens {
+            table_ty: quote!(FactoredController<'static, #ty, N, M, P, R, D>),
+            table_ctor: quote!(FactoredController),
+            mode_consts: quote!(),
+            step_sig: quote!(pub fn step(&mut self, x: &[#ty; N]) -> [#ty; M]),
+            step_doc: quote! {
+                /// One control update: the saturated command for state `x`.
+                /// Never panics; NaN or infinite states give a zero command and a fault flag.
+            },
+            mode_accessor: quote!(),
+        },
+    }
 }
 
 /// The rule premises as tokens: the statics (`about` points, one index array

@@ -65,7 +65,7 @@ pub mod sampled;
 
 use super::achieved::{Achieved, Quantity};
 use super::design::{Design, SolverLog, SynthError};
-use super::plan::initial_plan;
+use super::plan::{initial_plan, Plan};
 use super::search::Runner;
 use nalgebra::DMatrix;
 use problem::{diagonal_shift, names, FtbParams, Performance};
@@ -73,7 +73,7 @@ use std::cell::Cell;
 use std::time::{Duration, Instant};
 use tsf_lang::modes::{ModeDesign, Modes};
 use tsf_lang::spec::{Objective, Spec, Target};
-use tsf_lmi::SolveStatus;
+use tsf_lmi::{Solution, SolveStatus};
 
 /// alpha * T of the finite-time grid when alpha is not given; the best grid
 /// point is then refined by golden section between its neighbours.
@@ -307,93 +307,7 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         runner.log.status = Some(sol.status);
         runner.log.iterations = sol.iterations;
         runner.log.stats = Some(built.problem.stats());
-        let iterate = sol.assignment_any_status();
-        let value = |v| {
-            iterate
-                .value(v)
-                .cloned()
-                .map_err(|e| SynthError::Internal(format!("{e}")))
-        };
-        let values = built
-            .problem
-            .vars()
-            .map(|(name, v)| value(v).map(|m| (name.to_string(), m)))
-            .collect::<Result<Vec<_>, _>>()?;
-        let scalar = |name: &str| {
-            values
-                .iter()
-                .find(|(n, _)| n == name)
-                .map(|(_, m)| m[(0, 0)])
-        };
-        let (performance, objective) = match perf {
-            Performance::None => (Performance::None, None),
-            Performance::Hinf { from, to, gamma } => {
-                let g = scalar(names::G);
-                (
-                    Performance::Hinf {
-                        from: *from,
-                        to: *to,
-                        gamma: gamma.or(g.map(|g| g.max(0.0).sqrt())),
-                    },
-                    g,
-                )
-            }
-            Performance::FiniteTime(f) => {
-                let c2 = scalar(names::C2);
-                (
-                    Performance::FiniteTime(FtbParams {
-                        c2: f.c2.or(c2),
-                        ..f.clone()
-                    }),
-                    c2,
-                )
-            }
-        };
-        let mut md = ModesDesign {
-            design: modes.design,
-            alpha: if matches!(perf, Performance::FiniteTime(_)) {
-                0.0
-            } else {
-                alpha
-            },
-            lambda3: scalar(names::LAMBDA3).unwrap_or(0.0).max(0.0),
-            performance,
-            p: Vec::new(),
-            gains: Vec::new(),
-            slack: Vec::new(),
-            sampled: None,
-        };
-        for v in &built.modes {
-            let x = value(v.x)?;
-            let Some(chol) = x.clone().cholesky() else {
-                return Err(SynthError::Solver {
-                    status: SolveStatus::NumericalError,
-                    message: "a solved X_a is not positive definite".into(),
-                    achievable: Vec::new(),
-                });
-            };
-            let p = chol.inverse();
-            let p = (&p + p.transpose()) * 0.5;
-            md.gains.push(
-                v.m.iter()
-                    .map(|mv| value(*mv).map(|m| chol.solve(&m.transpose()).transpose()))
-                    .collect::<Result<_, _>>()?,
-            );
-            md.slack.push(match v.y {
-                Some(y) => {
-                    let pyp = &p * value(y)? * &p;
-                    Some((&pyp + pyp.transpose()) * 0.5)
-                }
-                None => None,
-            });
-            md.p.push(p);
-        }
-        Ok(Some(Solved {
-            modes: md,
-            values,
-            objective,
-            almost: sol.status == SolveStatus::AlmostSolved,
-        }))
+        mode_solution(modes, &built, &sol, alpha, perf).map(Some)
     };
     let searched = search(
         &mut attempt,
@@ -435,30 +349,8 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         loop_note = Some(note);
     }
     let (plan, _) = initial_plan(&model.spec, settings.default_phi);
-    let mut achieved = Achieved::default();
-    achieved.set(Quantity::DecayRate, solved.modes.alpha);
-    achieved.decay_bracket = bracket;
-    if let Performance::Hinf { gamma: Some(g), .. } = solved.modes.performance {
-        achieved.set(Quantity::HinfGamma, g);
-    }
-    if let Some((_, numbers)) = solved.modes.finite_time() {
-        achieved.set(Quantity::FiniteTimeC2, numbers.c2);
-    }
-    let mut notes = vec![format!(
-        "Markov modes ({}): {} modes, conditions {} < 0 per mode and rule pair{}",
-        modes.design.keyword(),
-        modes.len(),
-        match solved.modes.performance {
-            Performance::None => "G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a",
-            Performance::Hinf { .. } => "[[G_aij, P_a D_i, (C + E F_aj)'], [*, -gamma^2 I, G'], [*, *, -I]] (G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a)",
-            Performance::FiniteTime(_) => "[[G_aij, P_a D_i], [*, -lambda3 I]] (G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b - alpha P_a)",
-        },
-        if modes.design == ModeDesign::Independent {
-            "; one P and one gain set for every mode (a common quadratic Lyapunov function: the gains hold under any switching)"
-        } else {
-            ""
-        }
-    )];
+    let achieved = achieved_of(&solved.modes, bracket);
+    let mut notes = vec![conditions_note(modes, &solved.modes.performance)];
     if let (Some((_, h)), Some(delta)) = (codesign, codesign_delta.get()) {
         notes.push(format!(
             "fault-blind gains co-designed with the sampled loop at h_max = {h} s: the continuous conditions and the sampled-loop conditions in descriptor form (one X = P2^-1 for every mode, descriptor ratio delta = {delta}) in one SDP; the sampled loop then re-certified by the analysis below"
@@ -468,33 +360,27 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
     if solved.almost {
         notes.push("the solver reached only reduced accuracy on the chosen SDP; the certificate re-checks every condition".into());
     }
-    if let Some((f, numbers)) = solved.modes.finite_time() {
-        notes.push(format!(
-            "finite time: alpha = {:.6} (alpha T = {:.4}{}), lambda1 = {:.6e}, lambda2 = {:.6e}, lambda3 = {:.6e}: E x(t)' R x(t) < c2 = {:.6} on [0, {}]",
-            f.alpha,
-            f.alpha * f.horizon,
-            match (ftb_alpha, &perf) {
-                (Some(_), _) => ", given",
-                (None, Performance::FiniteTime(FtbParams { c2: Some(_), .. })) => {
-                    ", the first grid point that meets the bound"
-                }
-                _ => ", grid and golden section",
-            },
-            numbers.lambda1,
-            numbers.lambda2,
-            numbers.lambda3,
-            numbers.c2,
-            f.horizon
-        ));
-    }
-    Ok(Design {
+    notes.extend(finite_time_note(&solved.modes, ftb_alpha, &perf));
+    Ok(design_of(plan, solved, achieved, notes, settings.eps))
+}
+
+/// The design of the solved modes: mode 0's gains and P stand for the
+/// design's (every mode's are in `modes`).
+fn design_of(
+    plan: Plan,
+    solved: Solved,
+    achieved: Achieved,
+    notes: Vec<String>,
+    eps: f64,
+) -> Design {
+    Design {
         plan,
         gains: solved.modes.gains[0].clone(),
         x: solved.modes.p[0].clone().try_inverse().unwrap_or_default(),
         p: solved.modes.p[0].clone(),
         values: solved.values,
         achieved,
-        eps: settings.eps,
+        eps,
         reductions: Vec::new(),
         notes,
         log: SolverLog::default(),
@@ -504,7 +390,166 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         verdicts: Vec::new(),
         fuzzy: None,
         modes: Some(solved.modes),
+    }
+}
+
+/// The values of a solved mode problem `built` (at decay rate `alpha`, for
+/// `perf`): each mode's P_a, gains and slack, and the achieved performance.
+fn mode_solution(
+    modes: &Modes,
+    built: &problem::XProblem,
+    sol: &Solution,
+    alpha: f64,
+    perf: &Performance,
+) -> Result<Solved, SynthError> {
+    let iterate = sol.assignment_any_status();
+    let value = |v| {
+        iterate
+            .value(v)
+            .cloned()
+            .map_err(|e| SynthError::Internal(format!("{e}")))
+    };
+    let values = built
+        .problem
+        .vars()
+        .map(|(name, v)| value(v).map(|m| (name.to_string(), m)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let scalar = |name: &str| {
+        values
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, m)| m[(0, 0)])
+    };
+    let (performance, objective) = match perf {
+        Performance::None => (Performance::None, None),
+        Performance::Hinf { from, to, gamma } => {
+            let g = scalar(names::G);
+            (
+                Performance::Hinf {
+                    from: *from,
+                    to: *to,
+                    gamma: gamma.or(g.map(|g| g.max(0.0).sqrt())),
+                },
+                g,
+            )
+        }
+        Performance::FiniteTime(f) => {
+            let c2 = scalar(names::C2);
+            (
+                Performance::FiniteTime(FtbParams {
+                    c2: f.c2.or(c2),
+                    ..f.clone()
+                }),
+                c2,
+            )
+        }
+    };
+    let mut md = ModesDesign {
+        design: modes.design,
+        alpha: if matches!(perf, Performance::FiniteTime(_)) {
+            0.0
+        } else {
+            alpha
+        },
+        lambda3: scalar(names::LAMBDA3).unwrap_or(0.0).max(0.0),
+        performance,
+        p: Vec::new(),
+        gains: Vec::new(),
+        slack: Vec::new(),
+        sampled: None,
+    };
+    for v in &built.modes {
+        let x = value(v.x)?;
+        let Some(chol) = x.clone().cholesky() else {
+            return Err(SynthError::Solver {
+                status: SolveStatus::NumericalError,
+                message: "a solved X_a is not positive definite".into(),
+                achievable: Vec::new(),
+            });
+        };
+        let p = chol.inverse();
+        let p = (&p + p.transpose()) * 0.5;
+        md.gains.push(
+            v.m.iter()
+                .map(|mv| value(*mv).map(|m| chol.solve(&m.transpose()).transpose()))
+                .collect::<Result<_, _>>()?,
+        );
+        md.slack.push(match v.y {
+            Some(y) => {
+                let pyp = &p * value(y)? * &p;
+                Some((&pyp + pyp.transpose()) * 0.5)
+            }
+            None => None,
+        });
+        md.p.push(p);
+    }
+    Ok(Solved {
+        modes: md,
+        values,
+        objective,
+        almost: sol.status == SolveStatus::AlmostSolved,
     })
+}
+
+/// What a mode design achieved: its decay rate (and the bracket of the
+/// search), H-inf gamma, finite-time c2.
+fn achieved_of(modes: &ModesDesign, bracket: Option<(f64, f64)>) -> Achieved {
+    let mut achieved = Achieved::default();
+    achieved.set(Quantity::DecayRate, modes.alpha);
+    achieved.decay_bracket = bracket;
+    if let Performance::Hinf { gamma: Some(g), .. } = modes.performance {
+        achieved.set(Quantity::HinfGamma, g);
+    }
+    if let Some((_, numbers)) = modes.finite_time() {
+        achieved.set(Quantity::FiniteTimeC2, numbers.c2);
+    }
+    achieved
+}
+
+/// The note naming the mode conditions of `modes` for `performance`.
+fn conditions_note(modes: &Modes, performance: &Performance) -> String {
+    format!(
+        "Markov modes ({}): {} modes, conditions {} < 0 per mode and rule pair{}",
+        modes.design.keyword(),
+        modes.len(),
+        match performance {
+            Performance::None => "G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a",
+            Performance::Hinf { .. } => "[[G_aij, P_a D_i, (C + E F_aj)'], [*, -gamma^2 I, G'], [*, *, -I]] (G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a)",
+            Performance::FiniteTime(_) => "[[G_aij, P_a D_i], [*, -lambda3 I]] (G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b - alpha P_a)",
+        },
+        if modes.design == ModeDesign::Independent {
+            "; one P and one gain set for every mode (a common quadratic Lyapunov function: the gains hold under any switching)"
+        } else {
+            ""
+        }
+    )
+}
+
+/// The finite-time note (alpha, lambdas, c2) of a finite-time design; how
+/// alpha was chosen: given (`ftb_alpha`), or searched for `perf`.
+fn finite_time_note(
+    modes: &ModesDesign,
+    ftb_alpha: Option<f64>,
+    perf: &Performance,
+) -> Option<String> {
+    let (f, numbers) = modes.finite_time()?;
+    Some(format!(
+        "finite time: alpha = {:.6} (alpha T = {:.4}{}), lambda1 = {:.6e}, lambda2 = {:.6e}, lambda3 = {:.6e}: E x(t)' R x(t) < c2 = {:.6} on [0, {}]",
+        f.alpha,
+        f.alpha * f.horizon,
+        match (ftb_alpha, perf) {
+            (Some(_), _) => ", given",
+            (None, Performance::FiniteTime(FtbParams { c2: Some(_), .. })) => {
+                ", the first grid point that meets the bound"
+            }
+            _ => ", grid and golden section",
+        },
+        numbers.lambda1,
+        numbers.lambda2,
+        numbers.lambda3,
+        numbers.c2,
+        f.horizon
+    ))
 }
 
 /// The search the spec's objectives ask for (fixed or maximized decay rate,
