@@ -4,8 +4,8 @@
 use super::LocalModel;
 use nalgebra::DMatrix;
 use tsf_lang::eval::Mode;
-use tsf_lang::spec::{ModelMatrix, Objective, Spec};
-use tsf_lang::{Diagnostic, Span};
+use tsf_lang::spec::{ModelMatrix, Spec};
+use tsf_lang::Diagnostic;
 
 /// Evaluates A, B, D for every rule.
 pub(super) fn local_models(spec: &Spec, diags: &mut Vec<Diagnostic>) -> Vec<LocalModel> {

@@ -104,7 +104,7 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
         }
     }
     let consistency = consistency::check(&spec, &rules, &premises, &terms, diags);
-    Some(TsModel {
+    let model = TsModel {
         consistency,
         n: spec.n(),
         m: spec.m(),
@@ -115,5 +115,10 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
         centers,
         coverage,
         spec,
-    })
+    };
+    if let Some(d) = region::diagnose(&model) {
+        diags.push(d);
+        return None;
+    }
+    Some(model)
 }
