@@ -290,9 +290,9 @@ mod tests {
         let texts = [
             "continuous",
             "periodic { every = 0.01; }",
-            "mixed { sampling = 0.001 .. 0.1; beta = 0.1; rho = 0.001; }",
-            "aperiodic { sampling = 0.001 .. 0.1; threshold nu = 0.02 adaptive(mu1 = 10, mu2 = 1, mu3 = 0.02, max = 0.05); weight = [2]; }",
-            "aperiodic { sampling = 0.001 .. 0.1; threshold nu = 0.2; weight = 2; }",
+            "mixed { beta = 0.1; rho = 0.001; monitor = step; }",
+            "aperiodic { sampling = 0.001 .. 0.1; weight = [2]; }",
+            "aperiodic { sampling = 0.001 .. 0.1; weight = 2; }",
         ];
         let item = |t: &str| {
             let end = if t.ends_with('}') { "" } else { ";" };
@@ -305,6 +305,27 @@ mod tests {
             let again = spec_with(&item(&printed)).trigger;
             assert_eq!(again.map(|a| a.node), Some(t));
         }
+        // Laws the checker refuses with this spec print as written too.
+        let mixed = Trigger::Mixed {
+            monitor: Monitor::Sampling(0.001, 0.1),
+            beta: 0.1,
+            rho: 0.001,
+            on: None,
+        };
+        assert_eq!(
+            mixed.to_string(),
+            "mixed { sampling = 0.001 .. 0.1; beta = 0.1; rho = 0.001; }"
+        );
+        let event = Trigger::Aperiodic {
+            sampling: (0.001, 0.1),
+            threshold: Some(Threshold {
+                nu: 0.02,
+                adaptive: Some((10.0, 1.0, 0.02)),
+                max: Some(0.05),
+            }),
+            weight: Weight::Given(crate::eval::Mat::from_element(1, 1, 2.0)),
+        };
+        assert_eq!(event.to_string(), "aperiodic { sampling = 0.001 .. 0.1; threshold nu = 0.02 adaptive(mu1 = 10, mu2 = 1, mu3 = 0.02, max = 0.05); weight = 2; }");
         assert_eq!(Trigger::Continuous.kind(), "continuous");
     }
 

@@ -4,8 +4,8 @@
 use super::LocalModel;
 use nalgebra::DMatrix;
 use tsf_lang::eval::Mode;
-use tsf_lang::spec::{ModelMatrix, Objective, Spec};
-use tsf_lang::{Diagnostic, Span};
+use tsf_lang::spec::{ModelMatrix, Spec};
+use tsf_lang::Diagnostic;
 
 /// Evaluates A, B, D for every rule.
 pub(super) fn local_models(spec: &Spec, diags: &mut Vec<Diagnostic>) -> Vec<LocalModel> {
@@ -86,21 +86,4 @@ pub(super) fn local_models(spec: &Spec, diags: &mut Vec<Diagnostic>) -> Vec<Loca
         }
     }
     out
-}
-
-/// Cross-checks objectives against declarations the checker sees separately.
-pub(super) fn check_objectives(spec: &Spec, diags: &mut Vec<Diagnostic>) {
-    for o in &spec.objectives {
-        if matches!(o.node, Objective::SaturationRegion { .. }) && spec.saturation.is_none() {
-            let at = spec.inputs.first().map_or(Span::new(0, 0), |s| s.span);
-            diags.push(
-                Diagnostic::error(
-                    o.span,
-                    "`objective saturation region` needs saturation levels",
-                )
-                .with_secondary(at, "input declared here")
-                .with_help("declare them: `input u[3] saturate 2.0;`"),
-            );
-        }
-    }
 }

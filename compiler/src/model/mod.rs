@@ -77,7 +77,6 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
     let terms = premise::rule_terms(&spec, &premises);
     let centers = premise::rule_centers(&spec, &premises, &terms);
     premise::check_operating_points(&spec, &premises, &terms, diags);
-    local::check_objectives(&spec, diags);
     if diags.iter().filter(|d| d.is_error()).count() > errors_before {
         return None;
     }
@@ -105,7 +104,7 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
         }
     }
     let consistency = consistency::check(&spec, &rules, &premises, &terms, diags);
-    Some(TsModel {
+    let model = TsModel {
         consistency,
         n: spec.n(),
         m: spec.m(),
@@ -116,5 +115,10 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
         centers,
         coverage,
         spec,
-    })
+    };
+    if let Some(d) = region::diagnose(&model) {
+        diags.push(d);
+        return None;
+    }
+    Some(model)
 }

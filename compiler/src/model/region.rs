@@ -15,6 +15,7 @@ use super::premise::TermSpec;
 use super::TsModel;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
+use tsf_lang::Diagnostic;
 use tsf_runtime::membership::about_degree;
 
 /// Largest number of rules a region accepts (H has at most r 2^(r-1) vertex candidates).
@@ -54,19 +55,68 @@ pub struct PremiseBox {
     pub h_vertex_count: usize,
 }
 
-/// The premise box of `model`'s `region` settings (`None` without any), with
-/// its membership bounds and the vertices of H; an error when a premise is not
-/// linear in the state, no rule fires on the box, or the problem is too large.
-pub fn premise_box(model: &TsModel) -> Result<Option<PremiseBox>, String> {
+/// Why the `region` settings give no premise box: a spec error, which the
+/// model stage reports at a `region` setting ([`diagnose`]); synthesis keeps
+/// it as a refusal (last line of defence).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionError {
+    /// The premise variable at fault, if one is.
+    pub premise: Option<String>,
+    /// What is wrong.
+    pub message: String,
+    /// What to do about it.
+    pub help: String,
+}
+
+impl std::fmt::Display for RegionError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "region: {}; {}", self.message, self.help)
+    }
+}
+
+/// The diagnostic of `model`'s `region` settings when they give no premise
+/// box, at the setting of the premise at fault (else the first setting).
+pub fn diagnose(model: &TsModel) -> Option<Diagnostic> {
+    let first = model.spec.trigger_region.first()?;
+    let e = checked(model).err()?;
+    let at = e
+        .premise
+        .as_ref()
+        .and_then(|p| model.spec.trigger_region.iter().find(|b| &b.premise == p))
+        .unwrap_or(first);
+    let d = Diagnostic::error(at.span, e.message);
+    let d = match &e.premise {
+        Some(p) if *p != at.premise => d.with_label(format!(
+            "premise `{p}` is not bounded here, but every premise must be linear in the state"
+        )),
+        _ => d,
+    };
+    Some(d.with_help(e.help))
+}
+
+/// The box of the `region` settings in state coordinates and its membership
+/// bounds, checked (`None` without settings).
+struct Checked {
+    z: Vec<(f64, f64)>,
+    faces: Vec<Face>,
+    h_bounds: Vec<(f64, f64)>,
+}
+
+/// [`Checked`] for `model`, or why the settings give no box.
+fn checked(model: &TsModel) -> Result<Option<Checked>, RegionError> {
     let bounds = &model.spec.trigger_region;
     if bounds.is_empty() {
         return Ok(None);
     }
     if model.r() > MAX_REGION_RULES {
-        return Err(format!(
-            "region: {} rules, at most {MAX_REGION_RULES} (the membership polytope has up to r 2^(r-1) vertices)",
-            model.r()
-        ));
+        return Err(RegionError {
+            premise: None,
+            message: format!(
+                "{} rules, at most {MAX_REGION_RULES} with `region` (the membership polytope has up to r 2^(r-1) vertices)",
+                model.r()
+            ),
+            help: "leave out `region` (the certificate then holds on the whole premise range), or use fewer rules".into(),
+        });
     }
     let c = premise_matrix(model)?;
     let mut z: Vec<(f64, f64)> = Vec::new();
@@ -84,7 +134,22 @@ pub fn premise_box(model: &TsModel) -> Result<Option<PremiseBox>, String> {
             }
         }
     }
-    let h_bounds = membership_bounds(&model.terms, &z)?;
+    let h_bounds = membership_bounds(&model.terms, &z).map_err(|message| RegionError {
+        premise: None,
+        message,
+        help: "shrink the region or widen the premise sets".into(),
+    })?;
+    Ok(Some(Checked { z, faces, h_bounds }))
+}
+
+/// The premise box of `model`'s `region` settings (`None` without any), with
+/// its membership bounds and the vertices of H; an error when a premise is not
+/// linear in the state, no rule fires on the box, or the problem is too large
+/// (the model stage reports these first, [`diagnose`]).
+pub fn premise_box(model: &TsModel) -> Result<Option<PremiseBox>, String> {
+    let Some(Checked { z, faces, h_bounds }) = checked(model).map_err(|e| e.to_string())? else {
+        return Ok(None);
+    };
     let h_vertices = polytope_vertices(&h_bounds);
     Ok(Some(PremiseBox {
         z,
@@ -148,10 +213,14 @@ pub fn continuous_model(model: &TsModel) -> Result<Option<(TsModel, PremiseBox)>
 
 /// C of z = C x, checked: z(0) = 0 and z(x) = C x at two further states (a
 /// premise such as sin(x1) has no box in state coordinates).
-fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, String> {
+fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, RegionError> {
     let n = model.n;
     let z = |x: &[f64]| {
-        super::premise_values(&model.spec, x).map_err(|d| format!("region: {}", d.message))
+        super::premise_values(&model.spec, x).map_err(|d| RegionError {
+            premise: None,
+            message: d.message,
+            help: "bound premises that are states (or linear combinations of states)".into(),
+        })
     };
     let cols = (0..n)
         .map(|k| {
@@ -171,8 +240,18 @@ fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, String> {
         let got = DVector::from_vec(z(x)?);
         let want = &c * DVector::from_column_slice(x);
         let scale = 1.0 + want.amax();
-        if (got - want).amax() > 1e-9 * scale {
-            return Err("region: a premise variable is not linear in the state, so the premise box has no faces in state coordinates; bound premises that are states (or linear combinations of states)".into());
+        if let Some(k) = (0..p).find(|&k| (got[k] - want[k]).abs() > 1e-9 * scale) {
+            let name = model
+                .premises
+                .slots
+                .iter()
+                .find(|s| k >= s.first && k < s.first + s.dim)
+                .map_or_else(|| model.premises.component_name(k), |s| s.name.clone());
+            return Err(RegionError {
+                message: format!("premise variable `{name}` is not linear in the state, so the premise box has no faces in state coordinates"),
+                premise: Some(name),
+                help: "bound premises that are states (or linear combinations of states)".into(),
+            });
         }
     }
     Ok(c)
@@ -246,7 +325,7 @@ pub fn membership_bounds(
         .fold((0.0, 0.0), |(a, b), (lo, hi)| (a + lo, b + hi));
     if sum_lo <= 0.0 {
         return Err(format!(
-            "region: some state of the premise box may fire no rule (the smallest total firing strength bound is {sum_lo:e}); shrink the region or widen the premise sets"
+            "some state of the premise box may fire no rule (the smallest total firing strength bound is {sum_lo:e})"
         ));
     }
     Ok(w.iter()

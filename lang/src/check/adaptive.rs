@@ -2,7 +2,8 @@
 //! in the state, one component per input), the reference model A_m and Q,
 //! the estimates `a`, `b` and the robust term `d` with rates, projection
 //! bounds, initial values and boundary layer, the reference input r(t), the
-//! convergence claims; and the items an adaptive controller cannot have.
+//! convergence claims (the items an adaptive controller cannot have are
+//! refused in `compat/adaptive.rs`).
 //! Conditions that need eigenvalues or the local models (A_m Hurwitz, P > 0,
 //! C B_i diagonal with the declared sign) are the compiler's.
 
@@ -62,61 +63,6 @@ impl<'a> Checker<'a> {
         let supported = self.adaptive_alone(span, items, draft, objectives, rules);
         let adaptive = self.adaptive(span, stmts, dims)?;
         supported.then_some(adaptive)
-    }
-
-    /// What an adaptive controller cannot be combined with.
-    fn adaptive_alone(
-        &mut self,
-        span: Span,
-        items: &[Item],
-        draft: &Draft,
-        objectives: &[SpannedObjective],
-        rules: &[RuleSpec],
-    ) -> bool {
-        let refuse = |this: &mut Self, at: Span, what: &str, help: &str| {
-            this.err(
-                Diagnostic::error(
-                    at,
-                    format!("{what} cannot be used with an adaptive controller"),
-                )
-                .with_secondary(span, "the adaptive controller is declared here")
-                .with_help(help.to_string()),
-            );
-        };
-        let mut ok = true;
-        if let Some(o) = objectives.first() {
-            refuse(self, o.span, "an LMI objective", "the adaptive law needs no LMI design: remove the `objective` items (docs/adaptive.md)");
-            ok = false;
-        }
-        if let Some(r) = rules.iter().find(|r| r.gain.is_some()) {
-            refuse(
-                self,
-                r.span,
-                "a given PDC gain",
-                "the adaptive law computes the feedback from its estimates: remove `F = ...`",
-            );
-            ok = false;
-        }
-        if let Some(t) = &draft.trigger {
-            refuse(
-                self,
-                t.span,
-                "a triggering law",
-                "the adaptive law runs at the simulation step; remove the `trigger` item",
-            );
-            ok = false;
-        }
-        for it in items {
-            let what = match &it.kind {
-                ItemKind::Modes(_) => "a `modes` block",
-                ItemKind::Input(_, Some(_)) => "input saturation",
-                ItemKind::Relaxation(..) => "a relaxation",
-                _ => continue,
-            };
-            refuse(self, it.span, what, "the adaptive design covers the unsaturated, single-mode loop only (docs/adaptive.md)");
-            ok = false;
-        }
-        ok
     }
 
     fn adaptive(&mut self, span: Span, stmts: &[AdaptiveStmt], dims: Dims) -> Option<Adaptive> {
@@ -572,5 +518,12 @@ mod tests {
             .iter()
             .any(|d| d.0.message.contains("an LMI objective cannot")));
         assert!(!diags.iter().any(|d| d.0.message.contains("`emit`")));
+        let (m, at) = only_error(&format!("{BLOCK}\nprecision f32;"));
+        assert_eq!(
+            m,
+            "`precision f32` cannot be used with an adaptive controller"
+        );
+        assert_eq!(at, "precision f32;");
+        spec_with(&format!("{BLOCK}\nprecision f64;"));
     }
 }

@@ -1,15 +1,13 @@
 //! `objective finite_time minimize | <= c2 with c1 = .., T = .., alpha = .., R = ..;`
-//! (finite-time boundedness) and what it needs from the rest of the spec: a
-//! `modes` block (one mode for a plant without faults) and, when the plant
-//! has disturbances, their energy bound (`disturbance d energy w2;`).
+//! (finite-time boundedness); what it needs from the rest of the spec is
+//! checked in `compat/finite_time.rs`.
 
 use super::objectives::ObjectiveItem;
 use super::Checker;
 use crate::diag::Diagnostic;
 use crate::eval::Mat;
 use crate::num::Num;
-use crate::span::Span;
-use crate::spec::{FiniteTime, Objective, SpannedObjective, Target};
+use crate::spec::{FiniteTime, Target};
 
 /// The `with` parameters of `finite_time`.
 pub const PARAMETERS: [&str; 4] = ["c1", "T", "alpha", "R"];
@@ -111,37 +109,6 @@ impl Checker<'_> {
             return None;
         }
         Some(r)
-    }
-
-    /// A `finite_time` objective needs a `modes` block (`modes_span`) and,
-    /// with `q` > 0 disturbance components, their energy bound.
-    pub(super) fn finite_time_fits(
-        &mut self,
-        objectives: &[SpannedObjective],
-        modes_span: Option<Span>,
-        q: usize,
-        energy: Option<f64>,
-        energy_broken: bool,
-    ) {
-        let Some(o) = objectives
-            .iter()
-            .find(|o| matches!(o.node, Objective::FiniteTime(_)))
-        else {
-            return;
-        };
-        if modes_span.is_none() {
-            self.err(
-                Diagnostic::error(o.span, "objective `finite_time` needs a `modes` block")
-                    .with_help("for a plant without faults, one mode: `modes { mode nominal { } rates = [0]; }`")
-                    .with_note("tsfc designs finite-time boundedness for Markov jump systems; one mode is the deterministic case"),
-            );
-        }
-        if q > 0 && energy.is_none() && !energy_broken {
-            self.err(
-                Diagnostic::error(o.span, "objective `finite_time` needs the disturbance energy bound")
-                    .with_help("declare it: `disturbance d energy w2;` (the integral of w'w over [0, T] is at most w2)"),
-            );
-        }
     }
 }
 

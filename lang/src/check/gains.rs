@@ -1,15 +1,14 @@
 //! Given gains: a rule may carry its PDC gain `F = ...` (m x n, u = F x);
 //! the compiler then analyzes these gains instead of synthesizing them. Every
-//! rule gives one or none, and they do not go with a method that designs the
-//! gains together with the trigger weight (Theorem 2).
+//! rule gives one or none (a method that designs the gains together with the
+//! trigger weight refuses them: `compat/trigger.rs`).
 
-use super::{Checker, Dims, Draft};
+use super::{Checker, Dims};
 use crate::ast::{Ident, Item, ItemKind, NamedArg};
 use crate::diag::Diagnostic;
 use crate::display::literal;
 use crate::eval::Mat;
 use crate::span::Span;
-use crate::spec::TriggerSynthesis;
 
 /// The name of the gain in a rule.
 pub(super) const GAIN: &str = "F";
@@ -23,7 +22,7 @@ fn shape_words(rows: usize, cols: usize) -> String {
 }
 
 /// The `F = ...` of a rule item, if it gives one.
-fn gain_arg(it: &Item) -> Option<&NamedArg> {
+pub(super) fn gain_arg(it: &Item) -> Option<&NamedArg> {
     match &it.kind {
         ItemKind::Rule { matrices, .. } => matrices.iter().find(|m| m.name.node == GAIN),
         _ => None,
@@ -109,26 +108,6 @@ impl Checker<'_> {
         )));
     }
 
-    /// Given gains with a trigger method that designs the gains itself.
-    pub(super) fn gains_with_trigger(&mut self, rule_items: &[&Item], draft: &Draft) {
-        let Some(given) = rule_items.iter().find_map(|it| gain_arg(it)) else {
-            return;
-        };
-        let method = match &draft.trigger_synthesis {
-            Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2",
-            Some(TriggerSynthesis::Codesign { .. }) => "co-design",
-            _ => return,
-        };
-        if let Some(at) = draft.weight_span {
-            self.err(
-                Diagnostic::error(at, format!("given gains cannot be analyzed with {method} weight synthesis"))
-                    .with_label(format!("{method} designs the gains together with the trigger weight"))
-                    .with_secondary(gain_span(given), "gain given here")
-                    .with_help("write `weight = synthesize;` (the two-step method keeps the given gains and designs the weight for them), or remove the gains"),
-            );
-        }
-    }
-
     /// (m, n) of a gain.
     fn gain_shape(&self) -> (usize, usize) {
         let d = self.dims();
@@ -137,7 +116,7 @@ impl Checker<'_> {
 }
 
 /// The span of `F = value`, for messages pointing at a given gain.
-fn gain_span(arg: &NamedArg) -> Span {
+pub(super) fn gain_span(arg: &NamedArg) -> Span {
     arg.name.span.join(arg.value.span)
 }
 
@@ -202,22 +181,5 @@ mod tests {
         // A gain of the wrong shape still counts as given: both mistakes are reported.
         let e = crate::check::testing::errors(&two_rules("F = [-1]", "at(x1 = 1)"));
         assert_eq!(e.len(), 2, "{e:#?}");
-    }
-
-    #[test]
-    fn given_gains_do_not_go_with_theorem2() {
-        let src = format!(
-            "{}disturbance d bound 0.1; D = [0; 1];\noutput y = x1;\n\
-             objective linf(d -> y) minimize with phi = 0.05, xi = 0.1;\nobjective saturation region;\n\
-             trigger aperiodic {{ sampling = 0.01 .. 0.1; weight = synthesize theorem2(xi = 0.1); }}\n",
-            two_rules("F = [-1, -2]", "F = [-1, -2.5]").replace("input u;", "input u saturate 2;")
-        );
-        let (m, at) = only_error_of(&src);
-        assert_eq!(
-            m,
-            "given gains cannot be analyzed with Theorem 2 weight synthesis"
-        );
-        assert_eq!(at, "weight = synthesize theorem2(xi = 0.1);");
-        valid(&src.replace(" theorem2(xi = 0.1)", ""));
     }
 }

@@ -6,15 +6,14 @@
 //! [`premises`], [`rules`] (and their given [`gains`]), [`objectives`], [`relaxation`], [`trigger`],
 //! [`targets`] (emit, precision), [`simulate`] and its [`dynamics`], [`monte_carlo`] and
 //! [`sweep`], [`modes`]; premises
-//! must be [`generatable`], and [`combinations`] rejects valid items the
-//! compiler cannot do together.
+//! must be [`generatable`], and [`compat`] rejects valid items the
+//! compiler cannot do together (one file per feature).
 //! Environments and constant evaluation are shared by all of them
 //! ([`env`], [`values`]).
 
 mod adaptive;
-mod combinations;
+mod compat;
 mod decls;
-mod discrete;
 mod dynamics;
 mod env;
 mod finite_time;
@@ -154,6 +153,8 @@ struct Draft<'a> {
     /// `lyapunov ..;`: the kind and its phi value (settled once the rules are known).
     lyapunov: Option<Spanned<lyapunov::Draft>>,
     trigger: Option<Spanned<Trigger>>,
+    /// Where the trigger's kind and settings are written.
+    trigger_spans: compat::TriggerSpans,
     /// The `on = name;` of a mixed trigger, resolved once every signal is checked.
     trigger_on: Option<Ident>,
     /// Named signals (`signal name = expr;`).
@@ -252,28 +253,27 @@ impl<'a> Checker<'a> {
             sector::Built::Failed => (Vec::new(), None),
         };
         self.gains_all_or_none(&draft.rule_items);
-        self.gains_with_trigger(&draft.rule_items, &draft);
         let objectives = self.objectives(&draft.objective_items, dims.n, &draft.outputs);
         let relaxation =
             self.settle_relaxation(draft.relaxation.take(), &rules, draft.rule_items.len());
-        // With modes, a threshold-free aperiodic trigger is the sampled loop
-        // of `synth/markov/sampled.rs`: no trigger weight is synthesized.
-        if items.iter().any(|it| matches!(it.kind, ItemKind::Modes(_)))
-            && matches!(
-                draft.trigger.as_ref().map(|t| &t.node),
-                Some(Trigger::Aperiodic {
-                    threshold: None,
-                    ..
-                })
-            )
-        {
-            draft.weight_span = None;
-        }
-        self.combinations(
-            &objectives,
+        let modes_span = items
+            .iter()
+            .find(|it| matches!(it.kind, ItemKind::Modes(_)))
+            .map(|it| it.span);
+        self.compatibility(
             &draft,
-            saturation.as_deref(),
-            disturbance_bound,
+            &compat::Around {
+                controller: controller.as_ref(),
+                objectives: &objectives,
+                objectives_complete: objectives.len() == draft.objective_items.len(),
+                rules: &rules,
+                levels: saturation.as_deref(),
+                saturate: limits.saturate.map(|e| e.span),
+                first_input: self.inputs.first().map(|s| s.span),
+                disturbance_bound,
+                trigger_region: &trigger_region,
+                modes: modes_span,
+            },
         );
         let modes = self.modes_block(
             items,
@@ -286,10 +286,6 @@ impl<'a> Checker<'a> {
                 saturated: saturation.is_some(),
             },
         );
-        let modes_span = items
-            .iter()
-            .find(|it| matches!(it.kind, ItemKind::Modes(_)))
-            .map(|it| it.span);
         self.finite_time_fits(
             &objectives,
             modes_span,

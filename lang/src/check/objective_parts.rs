@@ -267,7 +267,10 @@ mod tests {
 
     #[test]
     fn initial_sets_are_points_or_positive_definite_ellipsoids() {
-        let spec = spec_with("objective saturation region for x0 in ellipsoid(2);");
+        let spec = valid(&format!(
+            "{}objective saturation region for x0 in ellipsoid(2);",
+            base_with("input u;", "input u saturate 1;")
+        ));
         assert_eq!(
             spec.objectives[0].node,
             Objective::SaturationRegion {

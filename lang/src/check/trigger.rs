@@ -66,6 +66,7 @@ impl Checker<'_> {
                 draft.periodic_design = self.periodic_design(s);
             }
         }
+        draft.trigger_spans = super::compat::TriggerSpans::of(kind.span, settings);
         draft.trigger = Some(Spanned::new(t, it.span));
     }
 
@@ -572,26 +573,34 @@ mod tests {
             trigger("periodic { every = 0.01; }"),
             Trigger::Periodic { every: 0.01 }
         );
+        // At sampling instants the law is read, then refused (`compat/trigger.rs`).
         assert_eq!(
-            trigger("mixed { sampling = 0.001 .. 0.1; beta = 0.1; rho = 0.001; }"),
+            trigger("mixed { monitor = step; beta = 0.1; rho = 0.001; }"),
             Trigger::Mixed {
-                monitor: Monitor::Sampling(0.001, 0.1),
+                monitor: Monitor::Step,
                 beta: 0.1,
                 rho: 0.001,
                 on: None
             }
         );
         let Trigger::Aperiodic {
-            sampling,
-            threshold,
-            weight,
-        } = trigger(
-            "aperiodic { sampling = 0.001 .. 0.1; threshold nu = 0.02 adaptive(mu1 = 10, mu2 = 1, mu3 = 0.02, max = 0.05); weight = 2; }",
-        )
+            sampling, weight, ..
+        } = trigger("aperiodic { sampling = 0.001 .. 0.1; weight = 2; }")
         else {
             panic!("not aperiodic"); // ok: unit test
         };
         assert_eq!(sampling, (0.001, 0.1));
+        assert!(matches!(weight, Weight::Given(w) if w[(0, 0)] == 2.0));
+        // A threshold goes with a synthesized weight (L-inf and the saturation region).
+        let spec = valid(&format!(
+            "{}disturbance d; D = 1; output z = x1;\n\
+             objective linf(d -> z) minimize with phi = 0.1;\nobjective saturation region;\n\
+             trigger aperiodic {{ sampling = 0.001 .. 0.1; threshold nu = 0.02 adaptive(mu1 = 10, mu2 = 1, mu3 = 0.02, max = 0.05); }}",
+            base_with("input u;", "input u saturate 1;")
+        ));
+        let Some(Trigger::Aperiodic { threshold, .. }) = spec.trigger.map(|t| t.node) else {
+            panic!("not aperiodic"); // ok: unit test
+        };
         assert_eq!(
             threshold,
             Some(Threshold {
@@ -600,7 +609,6 @@ mod tests {
                 max: Some(0.05)
             })
         );
-        assert!(matches!(weight, Weight::Given(w) if w[(0, 0)] == 2.0));
     }
 
     #[test]

@@ -2,14 +2,14 @@
 //! route supports (stability and decay rate of synthesized gains, no
 //! `saturate`), each refusal at the setting with the reason.
 
-use super::Checker;
+use crate::check::Checker;
 use crate::diag::Diagnostic;
 use crate::span::Spanned;
 use crate::spec::{Objective, PeriodicDesign, RuleSpec, SpannedObjective};
 
 impl Checker<'_> {
     /// Errors for what `design = discrete` does not cover.
-    pub(super) fn discrete_design_fits(
+    pub(in crate::check) fn discrete_design_fits(
         &mut self,
         design: Option<&Spanned<PeriodicDesign>>,
         objectives: &[SpannedObjective],

@@ -1,0 +1,379 @@
+//! Trigger laws: which laws a certificate covers, what a synthesized trigger
+//! weight needs, and what the premise `region` needs. The compiler's side of
+//! these rules (kept there as a last line of defence) is `synth/sampling.rs`
+//! (`uncovered`), `synth/trigger.rs`, `synth/signal_trigger.rs`,
+//! `synth/given.rs`, `synth/build.rs` and `synth/experimental/theorem2.rs`.
+
+use super::Around;
+use crate::ast::Setting;
+use crate::check::gains::{gain_arg, gain_span};
+use crate::check::{Checker, Draft};
+use crate::diag::Diagnostic;
+use crate::span::Span;
+use crate::spec::{Objective, SpannedObjective, Trigger, TriggerSynthesis, Weight};
+
+/// Where the trigger's kind and settings are written, for the refusals
+/// that point at one of them.
+#[derive(Debug, Clone, Default)]
+pub struct TriggerSpans {
+    /// The kind (`aperiodic`, `mixed`, ..).
+    pub kind: Span,
+    /// Each setting's key and span.
+    pub settings: Vec<(String, Span)>,
+}
+
+impl TriggerSpans {
+    /// The spans of a trigger item of `kind` with `settings`.
+    pub fn of(kind: Span, settings: &[Setting]) -> Self {
+        TriggerSpans {
+            kind,
+            settings: settings
+                .iter()
+                .map(|s| (s.key.node.clone(), s.span))
+                .collect(),
+        }
+    }
+
+    /// The span of setting `key`, if written.
+    fn setting(&self, key: &str) -> Option<Span> {
+        self.settings
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, s)| *s)
+    }
+}
+
+/// The objectives the weight rules look at.
+struct Found<'o> {
+    linf: Option<&'o SpannedObjective>,
+    saturation: Option<&'o SpannedObjective>,
+    /// Whether every objective item checked (else a missing one may only have failed).
+    complete: bool,
+}
+
+impl Checker<'_> {
+    /// Errors for trigger laws outside every certificate and for what a
+    /// synthesized weight or a premise `region` needs. With `modes`, the
+    /// loops are judged by `modes.rs` instead.
+    pub(super) fn trigger_fits(&mut self, draft: &Draft, around: &Around<'_>) {
+        let Some(t) = &draft.trigger else {
+            return;
+        };
+        if around.modes.is_some() {
+            return;
+        }
+        let spans = &draft.trigger_spans;
+        match &t.node {
+            Trigger::Mixed { monitor, .. } => {
+                if monitor.sampling().is_some() {
+                    let at = spans.setting("sampling").unwrap_or(spans.kind);
+                    self.err(
+                        Diagnostic::error(at, "the `trigger mixed` law at aperiodic sampling instants is not covered by a certificate yet")
+                            .with_label("checked at aperiodic sampling instants")
+                            .with_note("the mixed-trigger certificate covers the law checked continuously (or at every step) only")
+                            .with_help("write `monitor = continuous;` with `on = <signal>;` (a signal that is a linear image of the PDC command is certified), or use `trigger aperiodic { sampling = ..; threshold nu = ..; weight = synthesize; }` (certified event trigger) or `trigger periodic { every = ..; }`"),
+                    );
+                }
+                if let Some(levels) = around.saturate {
+                    self.err(
+                        Diagnostic::error(spans.kind, "the mixed-trigger certificate does not cover input saturation")
+                            .with_label("this law is certified for the unsaturated loop")
+                            .with_secondary(levels, "input saturation declared here")
+                            .with_help("remove `saturate` from the input (the certificate assumes u is applied unsaturated), or use `trigger aperiodic { ..; weight = synthesize; }` with the saturation region"),
+                    );
+                }
+            }
+            Trigger::Aperiodic {
+                threshold: Some(_),
+                weight: Weight::Given(_),
+                ..
+            } => {
+                let at = spans.setting("weight").unwrap_or(spans.kind);
+                let mut d = Diagnostic::error(
+                    at,
+                    "an event trigger with a given weight is not covered by a certificate yet",
+                )
+                .with_label("weight given here");
+                if let Some(th) = spans.setting("threshold") {
+                    d = d.with_secondary(th, "the threshold makes it an event trigger");
+                }
+                self.err(d.with_help("write `weight = synthesize;` (the weight is then designed and certified with the threshold), or remove the threshold (every sample is then transmitted)"));
+            }
+            _ => {}
+        }
+        if let Some(at) = draft.weight_span.filter(|_| synthesized(draft)) {
+            self.gains_with_method(draft, at);
+            let find = |f: fn(&Objective) -> bool| around.objectives.iter().find(|o| f(&o.node));
+            let found = Found {
+                linf: find(|o| matches!(o, Objective::Linf { .. })),
+                saturation: find(|o| matches!(o, Objective::SaturationRegion { .. })),
+                complete: around.objectives_complete,
+            };
+            self.weight_synthesis(&found, draft, at);
+        }
+        self.region_level(around);
+    }
+
+    /// Given gains with a weight design method that designs the gains itself.
+    fn gains_with_method(&mut self, draft: &Draft, at: Span) {
+        let Some(given) = draft.rule_items.iter().find_map(|it| gain_arg(it)) else {
+            return;
+        };
+        let method = match &draft.trigger_synthesis {
+            Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2",
+            Some(TriggerSynthesis::Codesign { .. }) => "co-design",
+            _ => return,
+        };
+        self.err(
+            Diagnostic::error(at, format!("given gains cannot be analyzed with {method} weight synthesis"))
+                .with_label(format!("{method} designs the gains together with the trigger weight"))
+                .with_secondary(gain_span(given), "gain given here")
+                .with_help("write `weight = synthesize;` (the two-step method keeps the given gains and designs the weight for them), or remove the gains"),
+        );
+    }
+
+    /// What the design method of a synthesized trigger weight (asked for at `at`) needs.
+    fn weight_synthesis(&mut self, found: &Found, draft: &Draft, at: Span) {
+        let theorem2_xi = match &draft.trigger_synthesis {
+            Some(TriggerSynthesis::Theorem2 { xi, .. }) => Some(*xi),
+            _ => None,
+        };
+        let method = match &draft.trigger_synthesis {
+            Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2 (`theorem2`)",
+            Some(TriggerSynthesis::Codesign { .. }) => "the co-design (`codesign`)",
+            _ => "the two-step method",
+        };
+        let (Some(linf), Some(_)) = (found.linf, found.saturation) else {
+            if found.complete {
+                let missing = [
+                    found
+                        .linf
+                        .is_none()
+                        .then_some("`objective linf(d -> z) ...`"),
+                    found
+                        .saturation
+                        .is_none()
+                        .then_some("`objective saturation region;`"),
+                ];
+                let missing: Vec<&str> = missing.into_iter().flatten().collect();
+                self.err(
+                    Diagnostic::error(
+                        at,
+                        "a synthesized trigger weight needs an L-inf objective and the saturation region",
+                    )
+                    .with_label(format!("synthesized by {method}"))
+                    .with_note(format!("this spec has no {}", missing.join(" and no ")))
+                    .with_help(format!(
+                        "add {}, or give the weight as an n x n matrix: `weight = ...;`",
+                        missing.join(" and ")
+                    )),
+                );
+            }
+            return;
+        };
+        let Objective::Linf { to, xi, .. } = linf.node else {
+            return;
+        };
+        match theorem2_xi {
+            Some(None) if xi.is_none() => self.err(
+                Diagnostic::error(at, "Theorem 2 weight synthesis needs xi")
+                    .with_label("no `xi` here or in the L-inf objective")
+                    .with_secondary(linf.span, "L-inf objective without `with xi = ...`")
+                    .with_help(
+                        "write `theorem2(xi = ...)` or `objective linf(...) ... with xi = ...`",
+                    ),
+            ),
+            Some(_) => {}
+            None => {
+                let Some(out) = draft.outputs.get(to) else {
+                    return;
+                };
+                if out.e.iter().any(|v| *v != 0.0) {
+                    self.err(
+                        Diagnostic::error(
+                            linf.span,
+                            format!("a synthesized trigger weight needs an L-inf output that does not depend on the input, but `{}` does", out.name),
+                        )
+                        .with_label("the L-inf objective of the trigger design")
+                        .with_secondary(out.span, "output declared here")
+                        .with_secondary(at, "weight synthesized here")
+                        .with_help(format!("drop the input terms from output `{}`, or give the weight as an n x n matrix: `weight = ...;`", out.name)),
+                    );
+                }
+            }
+        }
+    }
+
+    /// With one common given gain, `region` certifies the continuous loop on
+    /// the premise box inside E(P, c), c sized by the saturation region's
+    /// level: the region (asked for, or implied by `saturate` levels without
+    /// an input bound) must be there.
+    fn region_level(&mut self, around: &Around<'_>) {
+        let Some(first) = around.trigger_region.first() else {
+            return;
+        };
+        let gains: Vec<_> = around.rules.iter().map(|r| r.gain.as_ref()).collect();
+        let common = match gains.first() {
+            Some(Some((f, _))) => gains.iter().all(|g| g.is_some_and(|(h, _)| h == f)),
+            _ => false,
+        };
+        let has = |f: fn(&Objective) -> bool| around.objectives.iter().any(|o| f(&o.node));
+        let region = has(|o| matches!(o, Objective::SaturationRegion { .. }))
+            || (around.levels.is_some() && !has(|o| matches!(o, Objective::InputNorm { .. })));
+        if !common || region || !around.objectives_complete {
+            return;
+        }
+        self.err(
+            Diagnostic::error(first.span, "`region` with a given gain needs the saturation region")
+                .with_label("the certified set E(P, c) is kept inside this box")
+                .with_note("the regional continuous certificate sizes E(P, c) by the saturation region's level")
+                .with_help(if around.levels.is_some() {
+                    "add `objective saturation region;`"
+                } else {
+                    "declare the input's levels (`input u saturate 2.0;`) and add `objective saturation region;`"
+                }),
+        );
+    }
+}
+
+/// Whether the trigger is aperiodic with `weight = synthesize`.
+fn synthesized(draft: &Draft) -> bool {
+    matches!(
+        draft.trigger.as_ref().map(|t| &t.node),
+        Some(Trigger::Aperiodic {
+            weight: Weight::Synthesize,
+            ..
+        })
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::check::testing::*;
+
+    /// `BASE` with saturation levels, a bounded disturbance and an output, then `extra`.
+    fn spec(extra: &str) -> String {
+        format!(
+            "{}disturbance d bound 0.1; D = 1;\noutput z = x1;\noutput y = x1 + u;\n{extra}",
+            base_with("input u;", "input u saturate 2;")
+        )
+    }
+
+    const TRIGGER: &str = "trigger aperiodic { sampling = 0.01 .. 0.1; weight = synthesize; }";
+
+    #[test]
+    fn supported_laws_are_accepted() {
+        valid(&spec(&format!(
+            "objective linf(d -> z) minimize with phi = 0.05;\nobjective saturation region;\n{TRIGGER}"
+        )));
+        valid(&spec(
+            "trigger aperiodic { sampling = 0.01 .. 0.1; weight = 1; }",
+        ));
+        valid(&format!(
+            "{BASE}signal s = x1;\ntrigger mixed {{ on = s; beta = 0.1; rho = 1e-4; monitor = continuous; }}"
+        ));
+    }
+
+    #[test]
+    fn laws_no_certificate_covers_are_refused_at_the_setting() {
+        let (m, at) =
+            only_error("trigger mixed { sampling = 0.01 .. 0.1; beta = 0.5; rho = 1e-4; }");
+        assert_eq!(m, "the `trigger mixed` law at aperiodic sampling instants is not covered by a certificate yet");
+        assert_eq!(at, "sampling = 0.01 .. 0.1;");
+        let (m, at) = only_error(
+            "trigger aperiodic { sampling = 0.01 .. 0.1; threshold nu = 0.1; weight = 1; }",
+        );
+        assert_eq!(
+            m,
+            "an event trigger with a given weight is not covered by a certificate yet"
+        );
+        assert_eq!(at, "weight = 1;");
+        let (m, at) = only_error_of(&spec(
+            "signal s = x1;\ntrigger mixed { on = s; beta = 0.1; rho = 1e-4; monitor = step; }",
+        ));
+        assert_eq!(
+            m,
+            "the mixed-trigger certificate does not cover input saturation"
+        );
+        assert_eq!(at, "mixed");
+    }
+
+    #[test]
+    fn a_synthesized_weight_needs_linf_and_the_saturation_region() {
+        let e = errors(&spec(&format!("objective saturation region;\n{TRIGGER}")));
+        assert_eq!(e.len(), 1, "{e:#?}");
+        assert_eq!(
+            e[0].0.message,
+            "a synthesized trigger weight needs an L-inf objective and the saturation region"
+        );
+        assert_eq!(e[0].1, "weight = synthesize;");
+        assert_eq!(
+            e[0].0.notes,
+            vec!["this spec has no `objective linf(d -> z) ...`".to_string()]
+        );
+        // The default weight is synthesized too: the error points at the trigger kind.
+        let (_, at) = only_error_of(&spec("trigger aperiodic { sampling = 0.01 .. 0.1; }"));
+        assert_eq!(at, "aperiodic");
+        // A failed L-inf objective is reported alone.
+        let e = errors(&spec(&format!(
+            "objective linf(d -> w) minimize with phi = 1;\nobjective saturation region;\n{TRIGGER}"
+        )));
+        assert_eq!(e.len(), 1, "{e:#?}");
+        assert_eq!(e[0].0.message, "`w` is not an output");
+    }
+
+    #[test]
+    fn the_two_step_linf_output_must_not_depend_on_u() {
+        let (m, at) = only_error_of(&spec(&format!(
+            "objective linf(d -> y) minimize with phi = 0.05;\nobjective saturation region;\n{TRIGGER}"
+        )));
+        assert_eq!(m, "a synthesized trigger weight needs an L-inf output that does not depend on the input, but `y` does");
+        assert_eq!(at, "objective linf(d -> y) minimize with phi = 0.05;");
+    }
+
+    #[test]
+    fn theorem2_needs_xi() {
+        let t2 = |xi: &str| {
+            format!(
+                "objective linf(d -> y) minimize with phi = 0.05;\nobjective saturation region;\n\
+                 trigger aperiodic {{ sampling = 0.01 .. 0.1; weight = synthesize theorem2({xi}); }}"
+            )
+        };
+        let (m, at) = only_error_of(&spec(&t2("eps1 = 1")));
+        assert_eq!(m, "Theorem 2 weight synthesis needs xi");
+        assert_eq!(at, "weight = synthesize theorem2(eps1 = 1);");
+        valid(&spec(&t2("xi = 0.08")));
+    }
+
+    #[test]
+    fn given_gains_do_not_go_with_theorem2() {
+        let src = spec(
+            "objective linf(d -> z) minimize with phi = 0.05, xi = 0.1;\nobjective saturation region;\n\
+             trigger aperiodic { sampling = 0.01 .. 0.1; weight = synthesize theorem2(xi = 0.1); }\n",
+        )
+        .replace("=> A = -2;", "=> A = -2, F = -1;");
+        let (m, at) = only_error_of(&src);
+        assert_eq!(
+            m,
+            "given gains cannot be analyzed with Theorem 2 weight synthesis"
+        );
+        assert_eq!(at, "weight = synthesize theorem2(xi = 0.1);");
+        valid(&src.replace(" theorem2(xi = 0.1)", ""));
+    }
+
+    #[test]
+    fn a_region_with_a_given_gain_needs_the_saturation_region() {
+        let region =
+            "trigger aperiodic { sampling = 0.01 .. 0.1; weight = 1; region x1 = -0.5 .. 0.5; }";
+        let src = BASE.replace("=> A = -2;", "=> A = -2, F = -1;");
+        let (m, at) = only_error_of(&format!("{src}{region}"));
+        assert_eq!(m, "`region` with a given gain needs the saturation region");
+        assert_eq!(at, "region x1 = -0.5 .. 0.5;");
+        // Implied by the levels, or asked for: accepted.
+        let saturated = src.replace("input u;", "input u saturate 2;");
+        valid(&format!("{saturated}{region}"));
+        valid(&format!(
+            "{saturated}objective saturation region;\n{region}"
+        ));
+    }
+}
