@@ -56,9 +56,18 @@ fn first_outside(t: &Tables) -> Option<(String, f64)> {
         TermSpec::About { point, sigma, .. } => [point.as_slice(), &[*sigma]].concat(),
     });
     groups.push(("a membership parameter", terms.collect()));
-    groups.push(("a rule centre", t.centres.iter().flatten().copied().collect()));
-    groups.push(("a gain entry", t.gains.iter().flatten().flatten().copied().collect()));
-    let modes = t.modes.iter().flat_map(|m| m.gains.iter().flatten().flatten());
+    groups.push((
+        "a rule centre",
+        t.centres.iter().flatten().copied().collect(),
+    ));
+    groups.push((
+        "a gain entry",
+        t.gains.iter().flatten().flatten().copied().collect(),
+    ));
+    let modes = t
+        .modes
+        .iter()
+        .flat_map(|m| m.gains.iter().flatten().flatten());
     groups.push(("a mode's gain entry", modes.flatten().copied().collect()));
     groups.push(("a saturation level", t.u_max.clone()));
     if let Some(s) = &t.trigger {
@@ -74,7 +83,9 @@ fn first_outside(t: &Tables) -> Option<(String, f64)> {
         s.exprs.iter().for_each(|e| sym_consts(e, &mut v));
         groups.push(("a value of the mixed trigger", v));
     }
-    groups
-        .into_iter()
-        .find_map(|(what, v)| v.into_iter().find(|x| !fits(*x)).map(|x| (what.to_string(), x)))
+    groups.into_iter().find_map(|(what, v)| {
+        v.into_iter()
+            .find(|x| !fits(*x))
+            .map(|x| (what.to_string(), x))
+    })
 }

@@ -78,10 +78,7 @@ impl Checker<'_> {
                     v
                 }
                 Trigger::Mixed {
-                    monitor,
-                    beta,
-                    rho,
-                    ..
+                    monitor, beta, rho, ..
                 } => {
                     let mut v = vec![*beta, *rho];
                     v.extend(monitor.sampling().iter().flat_map(|(a, b)| [*a, *b]));
@@ -92,16 +89,13 @@ impl Checker<'_> {
         }
         for (span, what, v) in found {
             self.err(
-                Diagnostic::error(
-                    span,
-                    format!("{what} does not fit `precision f32`"),
-                )
-                .with_label(format!(
-                    "{} is beyond the largest f32, {:e}: generated code would store infinity",
-                    Num(v),
-                    f32::MAX
-                ))
-                .with_help("scale the value into the f32 range, or write `precision f64;`"),
+                Diagnostic::error(span, format!("{what} does not fit `precision f32`"))
+                    .with_label(format!(
+                        "{} is beyond the largest f32, {:e}: generated code would store infinity",
+                        Num(v),
+                        f32::MAX
+                    ))
+                    .with_help("scale the value into the f32 range, or write `precision f64;`"),
             );
         }
     }
@@ -111,7 +105,8 @@ impl Checker<'_> {
 mod tests {
     use crate::check::testing::only_error_of as only_error;
 
-    const BASE: &str = "tsf 1; controller c; state x1; input u saturate 2; A = 1; B = 1;\nprecision f32;\n";
+    const BASE: &str =
+        "tsf 1; controller c; state x1; input u saturate 2; A = 1; B = 1;\nprecision f32;\n";
 
     #[test]
     fn every_stored_parameter_must_fit_an_f32() {
