@@ -110,17 +110,20 @@ enum Command {
         /// Certified report of the design (default: OUT/<controller>.report.json, if present).
         #[arg(long)]
         report: Option<PathBuf>,
-        /// Run a Monte Carlo campaign of N runs (default: the `runs` of the `monte_carlo` block).
-        #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "0")]
-        monte_carlo: Option<u64>,
-        /// Run only shard k of K of the campaign (run indices i with i mod K == k - 1).
-        #[arg(long, value_name = "k/K", requires = "monte_carlo", value_parser = tsfc::sim::campaign::parse_shard)]
-        shard: Option<(u64, u64)>,
+        /// Run a Monte Carlo campaign of N runs, 1 .. 1000000 (default: the `runs` of the
+        /// `monte_carlo` block).
+        #[arg(long, value_name = "N", num_args = 0..=1)]
+        monte_carlo: Option<Option<u64>>,
+        /// Run only shard k of K of the campaign (run indices i with i mod K == k - 1), K at most
+        /// 100000; `auto` (or `auto/K`) reads k and K from the job array of Slurm, Kubernetes,
+        /// AWS Batch or Google Cloud Batch (docs/monte_carlo.md).
+        #[arg(long, value_name = "k/K|auto[/K]", requires = "monte_carlo", value_parser = tsfc::sim::campaign::parse_shard)]
+        shard: Option<tsfc::sim::campaign::ShardArg>,
         /// Campaign seed (default: the scenario's `seed`).
         #[arg(long, requires = "monte_carlo")]
         seed: Option<u64>,
-        /// Worker threads of --monte-carlo or --sweep (default: all cores).
-        #[arg(long)]
+        /// Worker threads of --monte-carlo or --sweep, 1 .. 1024 (default: all cores).
+        #[arg(long, value_parser = jobs_arg)]
         jobs: Option<usize>,
         /// Run the sweep of triggering laws and write its comparison table.
         #[arg(long, conflicts_with_all = ["monte_carlo", "merge"])]
@@ -177,10 +180,20 @@ fn main() -> ExitCode {
                 run_sweep(&spec, &compare, &out, &runs, &cfg)
             }
             (None, Some(spec)) => match monte_carlo {
-                Some(n) => {
+                Some(runs) => {
+                    let shard = match shard.map(|a| {
+                        tsfc::sim::campaign::scheduler::resolve(a, &|v| std::env::var(v).ok())
+                    }) {
+                        None => (1, 1),
+                        Some(Ok(s)) => s,
+                        Some(Err(e)) => {
+                            eprintln!("error: {e}");
+                            return ExitCode::from(exit::IO);
+                        }
+                    };
                     let cfg = tsfc::sim::campaign::Config {
-                        runs: (n > 0).then_some(n),
-                        shard: shard.unwrap_or((1, 1)),
+                        runs,
+                        shard,
                         seed,
                         jobs,
                         progress: true,
@@ -192,6 +205,19 @@ fn main() -> ExitCode {
             // ok: clap requires the spec unless --merge is given.
             (None, None) => ExitCode::from(2),
         },
+    }
+}
+
+/// Most worker threads `--jobs` takes.
+const MAX_JOBS: usize = 1024;
+
+/// `--jobs N`: a whole number in 1 ..= [`MAX_JOBS`].
+fn jobs_arg(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=MAX_JOBS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "--jobs takes a whole number of threads in 1 ..= {MAX_JOBS}"
+        )),
     }
 }
 

@@ -63,6 +63,11 @@ pub const MAX_MISMATCH_RULES: usize = 16;
 /// solves two trigger-sized SDPs (a gain step and a trigger step).
 pub const MAX_CODESIGN_ROUNDS: u32 = 30;
 
+/// Smallest distance from 0 of each end of a trigger's `region z = lo .. hi`
+/// (and the reciprocal the largest): the certificate squares the bounds, so
+/// their squares and inverse squares stay normal f64 numbers.
+pub const MIN_REGION_BOUND: f64 = 1e-100;
+
 /// Rounds of `weight = synthesize codesign;` without `rounds`.
 pub const DEFAULT_CODESIGN_ROUNDS: u32 = 10;
 

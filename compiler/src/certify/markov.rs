@@ -209,6 +209,7 @@ fn margins(
             "this relaxation is not supported with `modes`".into(),
         ));
     };
+    let modes = &with_exact_rows(modes);
     let (problem, nonstrict) = p_problem(model, modes, md, gains, &conds, eps)?;
     let mut values: Vec<(String, DMatrix<f64>)> = Vec::new();
     for (a, mode) in modes.modes.iter().enumerate() {
@@ -227,6 +228,22 @@ fn margins(
         out.extend(margins_of(&problem, &[], &s.values, &[], &|_| {})?);
     }
     Ok(out)
+}
+
+/// The rates the certificate uses: each diagonal entry pi_aa replaced by the
+/// larger of itself and -sum_{b != a} pi_ab. The checker lets a row sum to 0
+/// within a relative tolerance; a diagonal below the exact one would count
+/// the defect (pi_aa + sum_b pi_ab) P_a < 0 as decay. With the larger one the
+/// conditions imply those of the exact generator (P_a > 0), whichever
+/// diagonal the written one rounds.
+pub fn with_exact_rows(modes: &Modes) -> Modes {
+    let mut out = modes.clone();
+    let k = out.rates.nrows();
+    for a in 0..k {
+        let off: f64 = (0..k).filter(|&b| b != a).map(|b| out.rates[(a, b)]).sum();
+        out.rates[(a, a)] = out.rates[(a, a)].max(-off);
+    }
+    out
 }
 
 /// The certificate of a mode design, with its stored-precision re-check.

@@ -213,7 +213,7 @@ pub fn continuous_model(model: &TsModel) -> Result<Option<(TsModel, PremiseBox)>
 
 /// C of z = C x, checked: z(0) = 0 and z(x) = C x at two further states (a
 /// premise such as sin(x1) has no box in state coordinates).
-fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, RegionError> {
+pub(crate) fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, RegionError> {
     let n = model.n;
     let z = |x: &[f64]| {
         super::premise_values(&model.spec, x).map_err(|d| RegionError {

@@ -16,6 +16,15 @@ pub const MAX_ADAPTIVE_STEPS: u64 = 10 * MAX_STEPS;
 /// bounded by [`MAX_STEPS`]): `runs * steps per run`, about a day of one core.
 pub const MAX_CAMPAIGN_STEPS: u64 = 100_000_000_000;
 
+/// Most shards of a Monte Carlo campaign (`--shard k/K`: K at most this):
+/// the largest job arrays of the schedulers it runs on (Kubernetes Indexed
+/// Jobs and Google Cloud Batch take 100,000 tasks; Slurm and AWS Batch fewer).
+pub const MAX_SHARDS: u64 = 100_000;
+
+/// Largest shard file `--merge` reads (bytes): a shard of 10^6 runs with a
+/// long error message per run fits.
+pub const MAX_SHARD_FILE_BYTES: u64 = 2 << 30;
+
 /// Most points per plotted series (samples, transmission instants, gaps).
 pub const MAX_PLOT_POINTS: usize = 4000;
 

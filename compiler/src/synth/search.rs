@@ -23,6 +23,11 @@ const XI_PROBE: f64 = 0.9;
 /// itself the gains leave no room for sampling (the Xu & Huang trigger step is
 /// infeasible for them) and fixed-xi solves within ~0.4 % of it stall.
 const XI_MARGIN_REL: f64 = 5e-3;
+/// With `linf ... minimize`, the xi grid above the smallest xi grows by this
+/// factor (gamma >= xi, so it stops once xi passes the best gamma).
+const XI_SCAN_FACTOR: f64 = 4.0;
+/// Golden-section steps on log xi around the best grid point.
+const XI_GOLDEN_STEPS: usize = 12;
 
 /// (largest feasible, smallest infeasible) value found by a bisection.
 pub(super) type Bracket = (f64, f64);
@@ -331,6 +336,86 @@ impl Runner<'_> {
         Ok(Some((best, note)))
     }
 
+    /// With gamma minimized: the smallest xi leaves the saturation region no
+    /// room and can inflate gamma (gamma(xi) falls, then rises with xi since
+    /// gamma >= xi). From the design `at_min` (solved at the smallest xi, to a
+    /// margin), xi grows by [`XI_SCAN_FACTOR`] while it is below the best gamma
+    /// found and the design solves, then [`XI_GOLDEN_STEPS`] golden-section
+    /// steps on log xi around the best grid point. Every design is solved at a
+    /// fixed xi; the one with the smallest gamma is kept, with a note when it
+    /// is not `at_min`.
+    fn xi_for_gamma(
+        &mut self,
+        plan: &Plan,
+        at_min: Design,
+    ) -> Result<(Design, Option<String>), SynthError> {
+        use super::achieved::Quantity::{LinfGamma, LinfXi};
+        let gamma = |d: &Design| d.achieved.get(LinfGamma).unwrap_or(f64::INFINITY);
+        let (Some(xi0), g0) = (at_min.achieved.get(LinfXi), gamma(&at_min)) else {
+            return Ok((at_min, None));
+        };
+        let solve = |runner: &mut Self, xi: f64| -> Result<Option<Design>, SynthError> {
+            let mut p = plan.clone();
+            if let Some(l) = p.get_mut::<Linf>() {
+                l.xi = Some(xi);
+            }
+            Ok(match runner.attempt(&p)? {
+                Attempt::Solved(d) => Some(*d),
+                _ => None,
+            })
+        };
+        let mut grid: Vec<(f64, f64)> = vec![(xi0, g0)];
+        let mut best = (at_min, xi0, g0);
+        let mut xi = xi0 * XI_SCAN_FACTOR;
+        while xi < best.2 && xi <= 1e8 {
+            let Some(d) = solve(self, xi)? else { break };
+            let g = gamma(&d);
+            grid.push((xi, g));
+            if g < best.2 {
+                best = (d, xi, g);
+            }
+            xi *= XI_SCAN_FACTOR;
+        }
+        if grid.len() == 1 {
+            return Ok((best.0, None));
+        }
+        // Golden section on log xi between the neighbours of the best point.
+        let k = grid.iter().position(|(x, _)| *x == best.1).unwrap_or(0);
+        let (mut a, mut b) = (
+            grid[k.saturating_sub(1)].0.ln(),
+            grid[(k + 1).min(grid.len() - 1)].0.ln(),
+        );
+        let gr = 0.5 * (5f64.sqrt() - 1.0);
+        let eval = |runner: &mut Self, t: f64, best: &mut (Design, f64, f64)| {
+            let xi = t.exp();
+            let g = solve(runner, xi)?.map_or(f64::INFINITY, |d| {
+                let g = gamma(&d);
+                if g < best.2 {
+                    *best = (d, xi, g);
+                }
+                g
+            });
+            Ok::<f64, SynthError>(g)
+        };
+        for _ in 0..XI_GOLDEN_STEPS {
+            if b - a < 1e-3 {
+                break;
+            }
+            let c = b - gr * (b - a);
+            let d = a + gr * (b - a);
+            if eval(self, c, &mut best)? < eval(self, d, &mut best)? {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        let (design, xi, g) = best;
+        let note = (xi != xi0).then(|| {
+            format!("gamma minimized over xi: at the smallest xi ({xi0:.6e}) gamma is {g0:.6e}; xi scanned upward by {XI_SCAN_FACTOR}x and refined by golden section on log xi: gamma = {g:.6e} at xi = {xi:.6e}")
+        });
+        Ok((design, note))
+    }
+
     /// One SDP that minimizes xi with the linear-region level computed at the
     /// bound xi <= `bound`; its xi places the search, so an `AlmostSolved`
     /// iterate is taken.
@@ -380,10 +465,20 @@ impl Runner<'_> {
                 .get::<super::objectives::Saturation>()
                 .and_then(|s| s.disturbance_bound)
                 .unwrap_or(0.0);
-            return Ok(self.min_xi(plan, tau)?.map(|(mut d, note)| {
-                d.notes.push(note);
-                d
-            }));
+            let Some((d, note)) = self.min_xi(plan, tau)? else {
+                return Ok(None);
+            };
+            let minimize = plan
+                .get::<Linf>()
+                .is_some_and(|l| matches!(l.target, Bound::Minimize));
+            let (mut d, scan) = if minimize {
+                self.xi_for_gamma(plan, d)?
+            } else {
+                (d, None)
+            };
+            d.notes.push(note);
+            d.notes.extend(scan);
+            return Ok(Some(d));
         }
         if phi_free {
             return self.linf_line_search(plan);

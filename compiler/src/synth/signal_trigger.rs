@@ -387,6 +387,87 @@ fn largest_beta(
     Ok(Some((lo * scale).floor() / scale))
 }
 
+/// Directions sampled on the boundary of the ultimate set when a premise is
+/// not linear in the state (each also at half the radius).
+const ULTIMATE_SAMPLES: usize = 2000;
+
+/// Why the ultimate set {x : x'Px <= v_inf} is no certified bound, or `None`:
+/// it must be finite and inside the premise region, where the T-S model (and
+/// so the certificate) holds. Premises linear in x (z = C x) are checked
+/// exactly, max over the set of |c_k x| = sqrt(v_inf c_k P^-1 c_k'); others at
+/// [`ULTIMATE_SAMPLES`] states of its boundary and as many at half radius.
+fn ultimate_set_outside(model: &TsModel, p: &DMatrix<f64>, v_inf: f64, rho: f64) -> Option<String> {
+    if !(v_inf.is_finite() && v_inf >= 0.0) {
+        return Some(format!(
+            "the ultimate bound V_inf = tau (1 + 1/eps) b0^2 / lambda is not finite (rho = {rho:e}): lower rho"
+        ));
+    }
+    let advice = |reach: f64, room: f64| {
+        format!(
+            "lower rho: V_inf grows as rho^2, so about rho <= {:.3e} keeps the set inside for these gains",
+            rho * room / reach
+        )
+    };
+    let Some(chol) = p.clone().cholesky() else {
+        return Some("the Lyapunov matrix P is not positive definite".into());
+    };
+    let slots = &model.premises.slots;
+    let component = |k: usize| {
+        slots
+            .iter()
+            .find(|s| (s.first..s.first + s.dim).contains(&k))
+    };
+    if let Ok(c) = crate::model::region::premise_matrix(model) {
+        let pinv = chol.inverse();
+        for k in 0..c.nrows() {
+            let Some(slot) = component(k) else { continue };
+            let row = c.row(k);
+            let reach = (v_inf * (&row * &pinv * row.transpose())[(0, 0)]).sqrt();
+            let (lo, hi) = slot.range;
+            if !(lo <= -reach && reach <= hi) {
+                return Some(format!(
+                    "its ultimate set x'Px <= V_inf = {v_inf:.4e} reaches |{}| = {reach:.4e}, outside the premise range {lo} .. {hi} where the T-S model holds; {}",
+                    model.premises.component_name(k),
+                    advice(reach, (-lo).min(hi).max(0.0))
+                ));
+            }
+        }
+        return None;
+    }
+    let n = model.n;
+    let mut rng = crate::sim::trigger::SplitMix64::new(0x0017_5e75);
+    let lt = chol.l().transpose();
+    for _ in 0..ULTIMATE_SAMPLES {
+        let u = DMatrix::from_fn(n, 1, |_, _| 2.0 * rng.next_f64() - 1.0);
+        let norm = u.norm();
+        if norm == 0.0 {
+            continue;
+        }
+        let Some(x) = lt.solve_upper_triangular(&(u * (v_inf.sqrt() / norm))) else {
+            continue;
+        };
+        for scale in [1.0, 0.5] {
+            let xs: Vec<f64> = x.iter().map(|v| v * scale).collect();
+            let Ok(z) = crate::model::premise_values(&model.spec, &xs) else {
+                return Some("a premise cannot be evaluated on its ultimate set".into());
+            };
+            for slot in slots {
+                let (lo, hi) = slot.range;
+                for k in slot.first..slot.first + slot.dim {
+                    let v = z.get(k).copied().unwrap_or(f64::NAN);
+                    if !(lo <= v && v <= hi) {
+                        return Some(format!(
+                            "its ultimate set x'Px <= V_inf = {v_inf:.4e} leaves the premise range {lo} .. {hi} of `{}` (value {v:.4e} at a sampled state), where the T-S model holds: lower rho",
+                            model.premises.component_name(k)
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
 /// Certifies the mixed-trigger loop for `gains`, or refuses naming why.
 pub(super) fn certify_loop(
     runner: &mut Runner<'_>,
@@ -475,6 +556,12 @@ pub(super) fn certify_loop(
     let v_inf = bound(tau, lambda, eps);
     let pmin = p.clone().symmetric_eigen().eigenvalues.min();
     let x_bound = (v_inf / pmin).sqrt();
+    let name = signal.map_or("the state", |s| s.name.as_str());
+    if let Some(why) = ultimate_set_outside(model, &p, v_inf, rho) {
+        return Err(SynthError::Unsupported(format!(
+            "the mixed-trigger loop on `{name}` is not certified: {why}"
+        )));
+    }
     let monitor_word = match monitor {
         Monitor::Step => "step",
         _ => "continuous",

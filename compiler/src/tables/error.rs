@@ -45,6 +45,13 @@ pub enum TablesError {
     /// An adaptive spec without a `simulate` step: the update laws have no
     /// controller period.
     AdaptivePeriod,
+    /// With `precision f32`, a stored number is beyond the f32 range.
+    F32Range {
+        /// Which table entry.
+        what: String,
+        /// Its value.
+        value: f64,
+    },
 }
 
 impl fmt::Display for TablesError {
@@ -76,6 +83,11 @@ impl fmt::Display for TablesError {
             }
             TablesError::AdaptivePeriod => f.write_str(
                 "the adaptive law is integrated at the controller period, the `simulate` block's step: add `simulate { time = t0 .. t1 step h; ... }`",
+            ),
+            TablesError::F32Range { what, value } => write!(
+                f,
+                "{what} is {value:e}, beyond the largest f32 ({:e}): `precision f32` would store infinity; scale the model or write `precision f64;`",
+                f32::MAX
             ),
         }
     }

@@ -6,6 +6,7 @@
 
 mod adaptive;
 mod error;
+mod f32_range;
 mod factored;
 mod sensor;
 mod signal;
@@ -243,7 +244,7 @@ pub fn tables(
     }
     let spec = &model.spec;
     let premise = premise_code(model)?;
-    Ok(Tables {
+    f32_range::checked(Tables {
         name: spec.controller.node.clone(),
         header: Header {
             tsfc_version: env!("CARGO_PKG_VERSION").to_string(),

@@ -25,6 +25,7 @@ mod modes;
 mod monte_carlo;
 mod objective_parts;
 mod objectives;
+mod precision;
 mod premises;
 mod relaxation;
 mod rules;
@@ -217,6 +218,7 @@ impl<'a> Checker<'a> {
         self.check_fn_bodies();
         self.require_signals();
         let dims = self.dims();
+        let saturate_span = limits.saturate.map(|e| e.span);
         let saturation = limits
             .saturate
             .and_then(|e| self.saturation_levels(e, dims.m));
@@ -315,7 +317,7 @@ impl<'a> Checker<'a> {
             },
         );
         let controller = controller?;
-        Some(Spec {
+        let spec = Spec {
             controller,
             consts: self.consts.clone(),
             fns: self.fns.clone(),
@@ -346,7 +348,9 @@ impl<'a> Checker<'a> {
             periodic_design: draft.periodic_design,
             sector,
             adaptive,
-        })
+        };
+        self.f32_storable(&spec, saturate_span);
+        Some(spec)
     }
 
     /// One item of the main pass, handed to the module of its kind.

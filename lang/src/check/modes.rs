@@ -19,6 +19,10 @@ use std::collections::HashMap;
 /// the magnitudes of the row's entries.
 pub const ROW_SUM_TOLERANCE: f64 = 1e-9;
 
+/// Smallest positive transition rate: the mode conditions divide by each
+/// rate (the X-form's -X_b / pi_ab block); a smaller one is 0 in effect.
+pub const MIN_POSITIVE_RATE: f64 = 1e-12;
+
 /// Most modes a `modes` block may declare (docs/limits.md).
 pub const MAX_MODES: usize = 32;
 
@@ -314,6 +318,24 @@ impl<'a> Checker<'a> {
                             Num(pi[(a, b)])
                         ))
                         .with_note("off-diagonal entries are rates (>= 0); the diagonal is minus the row's other entries"),
+                    );
+                    ok = false;
+                } else if pi[(a, b)] > 0.0 && pi[(a, b)] < MIN_POSITIVE_RATE {
+                    self.err(
+                        Diagnostic::error(
+                            literal.entry(a, b),
+                            format!(
+                                "a transition rate below {} is not supported",
+                                Num(MIN_POSITIVE_RATE)
+                            ),
+                        )
+                        .with_label(format!(
+                            "rate from mode {} to mode {} is {}",
+                            a + 1,
+                            b + 1,
+                            Num(pi[(a, b)])
+                        ))
+                        .with_help("write 0 for a transition that does not happen (the mode conditions divide by every positive rate)"),
                     );
                     ok = false;
                 }

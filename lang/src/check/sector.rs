@@ -123,9 +123,24 @@ impl Checker<'_> {
         }
         let sector = self.sector_premises(premises, first.span);
         match (ok, sector) {
-            (true, Some(idx)) => self.sector_model(first.span, idx, premises, matrices, dims),
+            // A matrix of the wrong shape was reported by `check_model`.
+            (true, Some(idx)) if self.sector_shapes(&matrices) => {
+                self.sector_model(first.span, idx, premises, matrices, dims)
+            }
             _ => Built::Failed,
         }
+    }
+
+    /// Whether every state-dependent matrix has its declared shape (the
+    /// fit indexes its entries by that shape).
+    fn sector_shapes(&self, matrices: &Matrices<'_>) -> bool {
+        let env = self.state_env(Mode::Shapes, &[], &[]);
+        matrices.iter().all(|(_, mm, rows, cols)| {
+            mm.filter(|m| m.state_dependent).is_none_or(|mm| {
+                self.evaluate(&env, &mm.expr)
+                    .is_ok_and(|v| (v.nrows(), v.ncols()) == (*rows, *cols))
+            })
+        })
     }
 
     /// The sector premises (scalar, with a range, no sets), checked.
@@ -246,9 +261,12 @@ impl Checker<'_> {
             z.push(*v.get(p.component.unwrap_or(0))?);
         }
         let mut y = Vec::new();
-        for (_, mm, _, _) in matrices {
+        for (_, mm, rows, cols) in matrices {
             if let Some(mm) = mm.filter(|m| m.state_dependent) {
                 let v = self.evaluate(&env, &mm.expr).ok()?;
+                if (v.nrows(), v.ncols()) != (*rows, *cols) {
+                    return None;
+                }
                 y.extend(v.iter().copied());
             }
         }

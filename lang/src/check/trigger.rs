@@ -5,7 +5,7 @@
 use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Expr, ExprKind, Ident, Item, Setting, Value};
 use crate::diag::Diagnostic;
-use crate::limits::{DEFAULT_CODESIGN_ROUNDS, MAX_CODESIGN_ROUNDS};
+use crate::limits::{DEFAULT_CODESIGN_ROUNDS, MAX_CODESIGN_ROUNDS, MIN_REGION_BOUND};
 use crate::num::Num;
 use crate::span::Spanned;
 use crate::spec::{
@@ -102,6 +102,21 @@ impl Checker<'_> {
                     format!("`region {}` needs lo < 0 < hi, found {} .. {}", premise.node, Num(lo), Num(hi)),
                 )
                 .with_help("the certified set is an ellipsoid around the equilibrium x = 0, so the box must contain 0 inside"),
+            );
+            return None;
+        }
+        if lo.abs().min(hi) < MIN_REGION_BOUND || lo.abs().max(hi) > 1.0 / MIN_REGION_BOUND {
+            self.err(
+                Diagnostic::error(
+                    s.span,
+                    format!("`region {}` = {} .. {} is too close to 0 or too wide", premise.node, Num(lo), Num(hi)),
+                )
+                .with_label(format!(
+                    "each end must be between {} and {} from 0 (`MIN_REGION_BOUND`): the certificate squares the bounds",
+                    Num(MIN_REGION_BOUND),
+                    Num(1.0 / MIN_REGION_BOUND)
+                ))
+                .with_help("rescale the premise (e.g. in other units) so that the region's ends are ordinary numbers"),
             );
             return None;
         }

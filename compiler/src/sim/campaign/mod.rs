@@ -10,9 +10,11 @@
 
 pub mod draw;
 pub mod plot;
+pub mod scheduler;
+pub mod shard;
 pub mod summary;
 
-use super::limits::MAX_CAMPAIGN_STEPS;
+use super::limits::{MAX_CAMPAIGN_STEPS, MAX_SHARDS, MAX_SHARD_FILE_BYTES};
 use super::metrics::norm;
 use super::plant::Plant;
 use super::scenario::{plan, run_truth};
@@ -56,20 +58,7 @@ impl Default for Config {
     }
 }
 
-/// Parses `k/K` (`1 <= k <= K`).
-pub fn parse_shard(s: &str) -> Result<(u64, u64), String> {
-    let bad = || format!("--shard takes k/K with 1 <= k <= K (got `{s}`)");
-    let (k, kk) = s.split_once('/').ok_or_else(bad)?;
-    let (k, kk): (u64, u64) = (
-        k.trim().parse().map_err(|_| bad())?,
-        kk.trim().parse().map_err(|_| bad())?,
-    );
-    if k >= 1 && k <= kk {
-        Ok((k, kk))
-    } else {
-        Err(bad())
-    }
-}
+pub use scheduler::{parse_shard, ShardArg};
 
 /// The spec's `monte_carlo` block.
 fn block(prepared: &Prepared) -> Result<&MonteCarlo, SimError> {
@@ -97,8 +86,17 @@ pub fn run_campaign(
         )));
     }
     let (k, kk) = cfg.shard;
-    if !(1 <= k && k <= kk) {
-        return Err(SimError::usage(format!("shard {k}/{kk}: need 1 <= k <= K")));
+    if !(1 <= k && k <= kk && kk <= MAX_SHARDS) {
+        return Err(SimError::usage(format!(
+            "shard {k}/{kk}: need 1 <= k <= K <= {MAX_SHARDS}"
+        )));
+    }
+    if !shard::plain_name(&spec.controller.node) {
+        return Err(SimError::usage(format!(
+            "the controller name `{}` is longer than {} bytes: a campaign's file names start with it",
+            spec.controller.node,
+            shard::MAX_NAME_BYTES
+        )));
     }
     let dim = Plant::new(spec, &prepared.source, Evaluator::Interpreter)?.dim();
     let plan = plan(prepared, opts, dim)?;
@@ -193,6 +191,9 @@ pub fn run_campaign(
     state_names.extend(Plant::new(spec, &prepared.source, Evaluator::Interpreter)?.extra_names());
     Ok(Partial {
         format: SHARD_FORMAT.into(),
+        tsfc_version: env!("CARGO_PKG_VERSION").into(),
+        spec_sha256: tables.header.spec_sha256.clone(),
+        design_sha256: shard::design_sha256(prepared),
         name: spec.controller.node.clone(),
         runs_total: runs,
         seed,
@@ -264,7 +265,8 @@ fn one_run(
     match result {
         Ok(out) => {
             let mt = out.metrics;
-            rec.max_abs_u = mt.max_abs_u;
+            // JSON has no infinity: an overflowed |u| is kept as f64::MAX.
+            rec.max_abs_u = mt.max_abs_u.iter().map(|u| u.min(f64::MAX)).collect();
             rec.transmissions = mt.transmissions;
             rec.diverged = mt.diverged;
             rec.nonfinite = mt.nonfinite_at_s.is_some();
@@ -275,8 +277,20 @@ fn one_run(
     rec
 }
 
-/// Writes `bytes` to `dir/file` atomically.
+/// Writes `bytes` to `dir/file` atomically; `file` must be a plain file name
+/// (nothing is written outside `dir`).
 pub(crate) fn write(dir: &Path, file: String, bytes: &[u8]) -> Result<PathBuf, SimError> {
+    let plain = !file.is_empty()
+        && !file.starts_with('.')
+        && file
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+    if !plain {
+        return Err(SimError::usage(format!(
+            "refusing to write `{}`: not a plain file name",
+            file.escape_debug()
+        )));
+    }
     let path = dir.join(file);
     crate::util::output::write_atomic(&path, bytes)
         .map_err(|e| SimError::usage(format!("cannot write `{}`: {e}", path.display())))?;
@@ -327,7 +341,9 @@ pub fn write_campaign(
     Ok((s, written))
 }
 
-/// Reads every `*.mc.shard-*.json` in `dirs` and merges them.
+/// Reads every `*.mc.shard-*.json` in `dirs`, checks each
+/// ([`shard::validate`]: identity, sizes, finite values, a plain controller
+/// name) and merges them ([`summary::merge`]: one campaign, every shard once).
 pub fn merge_dirs(dirs: &[PathBuf]) -> Result<Partial, SimError> {
     let mut parts = Vec::new();
     for dir in dirs {
@@ -343,20 +359,53 @@ pub fn merge_dirs(dirs: &[PathBuf]) -> Result<Partial, SimError> {
             .collect();
         paths.sort();
         for path in paths {
-            let text = std::fs::read_to_string(&path)
-                .map_err(|e| SimError::usage(format!("cannot read `{}`: {e}", path.display())))?;
-            let part: Partial = serde_json::from_str(&text).map_err(|e| {
-                SimError::usage(format!("`{}` is not a shard file: {e}", path.display()))
-            })?;
-            if part.format != SHARD_FORMAT {
-                return Err(SimError::usage(format!(
-                    "`{}` has format `{}`, expected `{SHARD_FORMAT}`",
-                    path.display(),
-                    part.format
-                )));
-            }
-            parts.push(part);
+            parts.push(read_shard(&path)?);
         }
     }
     summary::merge(parts).map_err(SimError::usage)
+}
+
+/// One shard file, read (a regular file of at most [`MAX_SHARD_FILE_BYTES`])
+/// and checked.
+fn read_shard(path: &Path) -> Result<Partial, SimError> {
+    use std::io::Read;
+    let shown = path.display();
+    let cannot = |e: std::io::Error| SimError::usage(format!("cannot read `{shown}`: {e}"));
+    let file = std::fs::File::open(path).map_err(cannot)?;
+    if !file.metadata().map_err(cannot)?.is_file() {
+        return Err(SimError::usage(format!("`{shown}` is not a regular file")));
+    }
+    let mut text = String::new();
+    file.take(MAX_SHARD_FILE_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(cannot)?;
+    if text.len() as u64 > MAX_SHARD_FILE_BYTES {
+        return Err(SimError::usage(format!(
+            "`{shown}` is larger than the shard file limit of {} GiB (docs/limits.md)",
+            MAX_SHARD_FILE_BYTES >> 30
+        )));
+    }
+    /// The format tag alone, read first: a file of another format version
+    /// is named as such, not as missing fields.
+    #[derive(serde::Deserialize)]
+    struct Tag {
+        format: String,
+        tsfc_version: Option<String>,
+    }
+    if let Ok(tag) = serde_json::from_str::<Tag>(&text) {
+        if tag.format != SHARD_FORMAT {
+            return Err(SimError::usage(format!(
+                "`{shown}` has format `{}` ({}); this tsfc merges `{SHARD_FORMAT}`: run the shard again with this tsfc",
+                tag.format.escape_debug(),
+                match tag.tsfc_version {
+                    Some(v) => format!("written by tsfc {}", v.escape_debug()),
+                    None => "written by an earlier tsfc".into(),
+                }
+            )));
+        }
+    }
+    let part: Partial = serde_json::from_str(&text)
+        .map_err(|e| SimError::usage(format!("`{shown}` is not a shard file: {e}")))?;
+    shard::validate(&part).map_err(|e| SimError::usage(format!("`{shown}` is refused: {e}")))?;
+    Ok(part)
 }

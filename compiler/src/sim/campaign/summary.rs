@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Format tag of a shard file.
-pub const SHARD_FORMAT: &str = "tsfc-monte-carlo-shard/1";
+pub const SHARD_FORMAT: &str = "tsfc-monte-carlo-shard/2";
 
 /// The figures of merit of one run (nothing per step).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -128,7 +128,13 @@ impl Envelope {
 pub struct Partial {
     /// [`SHARD_FORMAT`].
     pub format: String,
-    /// Controller name.
+    /// The tsfc version that ran the shard.
+    pub tsfc_version: String,
+    /// SHA-256 of the spec the shard ran.
+    pub spec_sha256: String,
+    /// Hash of the design the shard ran ([`super::shard::design_sha256`]).
+    pub design_sha256: String,
+    /// Controller name (a plain file name: [`super::shard::plain_name`]).
     pub name: String,
     /// Campaign size N (all shards).
     pub runs_total: u64,
@@ -153,38 +159,37 @@ pub struct Partial {
     pub nominal: Vec<Vec<Option<f64>>>,
 }
 
-impl Partial {
-    /// What must agree between shards of one campaign.
-    fn campaign(&self) -> impl PartialEq + '_ {
-        (
-            &self.name,
-            self.runs_total,
-            self.seed,
-            self.shard.1,
-            self.time_s,
-            &self.converged_rule,
-            &self.state_names,
-        )
-    }
-}
-
-/// Merges the shards `parts` of one campaign (every shard exactly once).
+/// Merges the shards `parts` of one campaign (every shard exactly once),
+/// each already checked by [`super::shard::validate`]: they must agree on
+/// their identity and campaign ([`super::shard::differences`]).
 pub fn merge(mut parts: Vec<Partial>) -> Result<Partial, String> {
     parts.sort_by_key(|p| p.shard.0);
     let Some(first) = parts.first() else {
         return Err("no shard files to merge".into());
     };
     let total = first.shard.1;
-    if let Some(p) = parts.iter().find(|p| p.campaign() != first.campaign()) {
-        return Err(format!(
-            "shard {}/{} belongs to another campaign (name, runs, seed, shard count, span, rule or states differ)",
-            p.shard.0, p.shard.1
-        ));
+    for p in &parts[1..] {
+        let differ = super::shard::differences(first, p);
+        if !differ.is_empty() {
+            return Err(format!(
+                "shard {}/{} and shard {}/{} belong to different campaigns: their {} differ",
+                first.shard.0,
+                first.shard.1,
+                p.shard.0,
+                p.shard.1,
+                differ.join(", ")
+            ));
+        }
     }
     let ks: Vec<u64> = parts.iter().map(|p| p.shard.0).collect();
-    if ks != (1..=total).collect::<Vec<_>>() {
+    if ks.len() as u64 != total || ks.iter().zip(1..).any(|(&k, want)| k != want) {
+        let mut shown: Vec<String> = ks.iter().take(20).map(u64::to_string).collect();
+        if ks.len() > 20 {
+            shown.push(format!("... ({} in all)", ks.len()));
+        }
         return Err(format!(
-            "the shards present are {ks:?}; a campaign of {total} shards needs each of 1..={total} once"
+            "the shards present are [{}]; a campaign of {total} shards needs each of 1..={total} once",
+            shown.join(", ")
         ));
     }
     let mut merged = first.clone();
