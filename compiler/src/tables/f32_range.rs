@@ -70,7 +70,7 @@ fn first_outside(t: &Tables) -> Option<(String, f64)> {
         .flat_map(|m| m.gains.iter().flatten().flatten());
     groups.push(("a mode's gain entry", modes.flatten().copied().collect()));
     groups.push(("a saturation level", t.u_max.clone()));
-    if let Some(s) = &t.trigger {
+    if let Some(s) = t.sensor.aperiodic() {
         let mut v = vec![s.h_min, s.h_max, s.nu_min, s.nu_max];
         v.extend(s.weight.iter().flatten());
         if let super::SensorLaw::Adaptive(a, b, c) = s.law {
@@ -78,7 +78,7 @@ fn first_outside(t: &Tables) -> Option<(String, f64)> {
         }
         groups.push(("a value of the sensor's trigger", v));
     }
-    if let Some(s) = &t.signal_trigger {
+    if let Some(s) = t.sensor.mixed() {
         let mut v = vec![s.beta, s.rho];
         s.exprs.iter().for_each(|e| sym_consts(e, &mut v));
         groups.push(("a value of the mixed trigger", v));
