@@ -123,7 +123,7 @@ enum Command {
         #[arg(long, requires = "monte_carlo")]
         seed: Option<u64>,
         /// Worker threads of --monte-carlo or --sweep, 1 .. 1024 (default: all cores).
-        #[arg(long, value_parser = jobs_arg)]
+        #[arg(long, value_parser = tsfc::sim::limits::parse_jobs)]
         jobs: Option<usize>,
         /// Run the sweep of triggering laws and write its comparison table.
         #[arg(long, conflicts_with_all = ["monte_carlo", "merge"])]
@@ -205,19 +205,6 @@ fn main() -> ExitCode {
             // ok: clap requires the spec unless --merge is given.
             (None, None) => ExitCode::from(2),
         },
-    }
-}
-
-/// Most worker threads `--jobs` takes.
-const MAX_JOBS: usize = 1024;
-
-/// `--jobs N`: a whole number in 1 ..= [`MAX_JOBS`].
-fn jobs_arg(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(n) if (1..=MAX_JOBS).contains(&n) => Ok(n),
-        _ => Err(format!(
-            "--jobs takes a whole number of threads in 1 ..= {MAX_JOBS}"
-        )),
     }
 }
 

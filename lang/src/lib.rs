@@ -15,7 +15,7 @@ mod display;
 pub mod eval;
 pub mod limits;
 pub mod modes;
-mod num;
+pub mod num;
 mod parser;
 pub mod sector;
 pub mod span;

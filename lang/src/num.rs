@@ -4,7 +4,7 @@ use std::fmt::{self, Display, Formatter};
 
 /// A number as a spec would write it: shortest round-trip form, with an
 /// exponent only for very small or very large magnitudes.
-pub(crate) struct Num(pub f64);
+pub struct Num(pub f64);
 
 impl Display for Num {
     fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {

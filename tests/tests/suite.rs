@@ -12,6 +12,7 @@ mod fuzz;
 mod fuzz_pipeline;
 mod fuzzy_lyapunov;
 mod given_gains;
+mod hardening;
 mod markov;
 mod markov_performance;
 mod markov_runtime;

@@ -340,3 +340,32 @@ fn stored_check(
         membership_rounding_bound: membership,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_certificate_never_counts_a_row_defect_as_decay() {
+        let two =
+            "modes { mode a { } mode b { } rates = [-1000000.0019, 1000000; 3, -2.9999999999]; }";
+        let src = format!(
+            "tsf 1; controller c; state x1; input u; A = -1; B = 1;\n\
+             premise x1 range -1 .. 1 {{ all = trap(-1, -1, 1, 1); }}\n\
+             rule R: x1 is all => A = -2;\n{two}\n"
+        );
+        let (spec, diags) = tsf_lang::check_source(&src);
+        let modes = spec
+            .and_then(|s| s.modes)
+            .unwrap_or_else(|| panic!("{diags:#?}"));
+        let exact = with_exact_rows(&modes);
+        // Row 1 is more negative than its rates: the exact diagonal is used.
+        assert_eq!(exact.rates[(0, 0)], -1_000_000.0);
+        // Row 2 is less negative (conservative): kept as written.
+        assert_eq!(exact.rates[(1, 1)], -2.9999999999);
+        for a in 0..2 {
+            let sum: f64 = exact.rates.row(a).iter().sum();
+            assert!(sum >= 0.0, "row {a} sums to {sum}");
+        }
+    }
+}

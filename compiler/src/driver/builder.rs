@@ -102,6 +102,7 @@ impl Builder {
             targets.push(Emit::C);
         }
         let mut written = Vec::new();
+        let mut owners: Vec<(PathBuf, &Path)> = Vec::new();
         for spec in &self.specs {
             println!("cargo:rerun-if-changed={}", spec.display());
             let files: Vec<(PathBuf, Vec<u8>)> = self
@@ -109,6 +110,7 @@ impl Builder {
                 .into_iter()
                 .map(|f| (out.join(&f.name), f.text.into_bytes()))
                 .collect();
+            claim_files(&mut owners, &files, spec)?;
             write_set(&files)
                 .map_err(|e| Error::usage(format!("cannot write into {}: {e}", out.display())))?;
             written.extend(files.into_iter().map(|(p, _)| p));
@@ -123,4 +125,26 @@ impl Builder {
         }
         front.compile(&self.settings)?.generate(targets)
     }
+}
+
+/// Records that `spec` writes `files`; an error when an earlier spec of the
+/// same build writes one of them (two controllers of one name would
+/// overwrite each other's code).
+fn claim_files<'s>(
+    owners: &mut Vec<(PathBuf, &'s Path)>,
+    files: &[(PathBuf, Vec<u8>)],
+    spec: &'s Path,
+) -> Result<(), Error> {
+    for (path, _) in files {
+        if let Some((_, first)) = owners.iter().find(|(p, _)| p == path) {
+            return Err(Error::usage(format!(
+                "`{}` and `{}` both generate `{}`: their controllers have the same name; rename one (`controller <name>;`)",
+                first.display(),
+                spec.display(),
+                path.display()
+            )));
+        }
+    }
+    owners.extend(files.iter().map(|(p, _)| (p.clone(), spec)));
+    Ok(())
 }

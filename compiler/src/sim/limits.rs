@@ -25,6 +25,20 @@ pub const MAX_SHARDS: u64 = 100_000;
 /// long error message per run fits.
 pub const MAX_SHARD_FILE_BYTES: u64 = 2 << 30;
 
+/// Most worker threads `--jobs` takes (a campaign or sweep needs no more).
+pub const MAX_JOBS: usize = 1024;
+
+/// `--jobs N`: a whole number of threads in 1 ..= [`MAX_JOBS`].
+pub fn parse_jobs(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=MAX_JOBS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "--jobs takes a whole number of threads in 1 ..= {MAX_JOBS} (got `{}`)",
+            s.escape_debug()
+        )),
+    }
+}
+
 /// Most points per plotted series (samples, transmission instants, gaps).
 pub const MAX_PLOT_POINTS: usize = 4000;
 
@@ -36,15 +50,20 @@ pub const PROGRESS_LOG_PERIOD_S: f64 = 10.0;
 /// simulator's one step count. Refuses a span or step that is not positive
 /// and finite, and more than [`MAX_STEPS`] steps; the message says which.
 pub fn step_count(t0: f64, t1: f64, h: f64, shortest_interval: f64) -> Result<u64, String> {
+    use tsf_lang::num::Num;
+    let (t0n, t1n) = (Num(t0), Num(t1));
     if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
-        return Err(format!("the time span {t0} .. {t1} is empty or not finite"));
+        return Err(format!(
+            "the time span {t0n} .. {t1n} is empty or not finite"
+        ));
     }
     if !(h.is_finite() && h > 0.0) {
-        return Err(format!("the step {h} s is not a positive number"));
+        return Err(format!("the step {} s is not a positive number", Num(h)));
     }
     if !(shortest_interval.is_finite() && shortest_interval > 0.0) {
         return Err(format!(
-            "the shortest sampling interval {shortest_interval} s is not a positive number"
+            "the shortest sampling interval {} s is not a positive number",
+            Num(shortest_interval)
         ));
     }
     // The slack keeps a span of exactly k steps from counting k + 1.
@@ -54,8 +73,8 @@ pub fn step_count(t0: f64, t1: f64, h: f64, shortest_interval: f64) -> Result<u6
         Ok(steps.max(1.0) as u64)
     } else {
         Err(format!(
-            "{t0} .. {t1} s at step {} s is {steps:.3e} steps; the simulator takes at most {MAX_STEPS:.0e}",
-            h.min(shortest_interval),
+            "{t0n} .. {t1n} s at step {} s is {steps:.3e} steps; the simulator takes at most {MAX_STEPS:.0e}",
+            Num(h.min(shortest_interval)),
             MAX_STEPS = MAX_STEPS as f64
         ))
     }

@@ -189,7 +189,8 @@ pub fn plan<'a>(
         Some(hz) if hz.is_finite() && hz > 0.0 => t0 + hz,
         Some(hz) => {
             return Err(SimError::usage(format!(
-                "the horizon must be a positive number of seconds (got {hz})"
+                "the horizon must be a positive number of seconds (got {})",
+                tsf_lang::num::Num(hz)
             )))
         }
         None => spec_t1,

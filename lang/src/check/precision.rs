@@ -114,7 +114,7 @@ mod tests {
             (
                 "premise x1 range -2 .. 2 { a = gauss(-1e39, 0.6); b = gauss(1, 0.6); }\nrule R1: x1 is a => A = 1;\nrule R2: x1 is b => A = 1;",
                 "a parameter of the set `a` of `x1` does not fit `precision f32`",
-                "a = gauss(-1e39, 0.6)",
+                "a = gauss(-1e39, 0.6);",
             ),
             (
                 "premise x1 range -2 .. 2 { a = trap(-2, -2, 2, 2); }\nrule R1: x1 is a => A = 1, F = -1e41;",
