@@ -9,13 +9,14 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use tsf_lang::spec::Emit;
-use tsfc::frontend::{self, Source};
+use tsfc::driver::frontend::{self, Source};
 use tsfc::sim::campaign::scheduler::{resolve, ShardArg};
 use tsfc::sim::campaign::summary::{summarize, Partial};
 use tsfc::sim::campaign::{
     merge_dirs, parse_shard, run_campaign, shard_file, write_campaign, write_shard, Config,
 };
-use tsfc::sim::{prepare, Options, Prepared};
+use tsfc::sim::{Options, Prepared};
+use tsfc::driver::{prepare};
 use tsfc::synth::Settings;
 
 /// A fresh folder for one test.
