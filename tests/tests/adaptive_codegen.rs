@@ -102,7 +102,14 @@ fn generate_adaptive(
 #[test]
 fn adaptive_generation_refusals() {
     let text = std::fs::read_to_string(common::spec_path(WANG)).expect("spec");
-    let f32 = common::model_of("f32.tsf", &format!("{text}\nprecision f32;"));
+    // A spec error at check time; code generation keeps its refusal.
+    let e = common::errors_of("f32.tsf", &format!("{text}\nprecision f32;"));
+    assert_eq!(
+        e[0].message,
+        "`precision f32` cannot be used with an adaptive controller"
+    );
+    let mut f32 = common::model_of("f32.tsf", &text);
+    f32.spec.precision = tsf_lang::spec::Precision::F32;
     let d = design(&f32).design.expect("well posed");
     let e = generate_adaptive(&f32, &d, "f32.tsf", "sha", &[Emit::C]).expect_err("f64 only");
     assert!(e.to_string().contains("f64 only"), "{e}");

@@ -171,16 +171,18 @@ fn refusals_name_the_cause() {
         e.contains("full column rank") || e.contains("constant linear image"),
         "{e}"
     );
-    // Saturation is not covered.
-    let c = compiled(
+    // Saturation is not covered: a spec error at check time.
+    let e = common::errors_of(
         "am.tsf",
         &format!(
             "{}trigger mixed {{ on = s; beta = 0.3; rho = 1e-4; monitor = continuous; }}\n",
             TWO_RULES.replace("input u;", "input u saturate 5;")
         ),
     );
-    let e = c.outcome.expect_err("refused").to_string();
-    assert!(e.contains("saturation"), "{e}");
+    assert_eq!(
+        e[0].message,
+        "the mixed-trigger certificate does not cover input saturation"
+    );
     // Negative beta is a check error.
     let source = tsfc::driver::frontend::Source {
         name: "am.tsf".into(),

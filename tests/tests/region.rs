@@ -211,7 +211,12 @@ fn from_rest_the_loop_stays_in_its_certified_set_below_its_gain() {
 
 /// A two-state spec with premise `z = <premise>` and `region z = -0.5 .. 0.5;`.
 fn with_premise(premise: &str) -> TsModel {
-    let text = format!(
+    common::model_of("region.tsf", &premise_text(premise))
+}
+
+/// The text of [`with_premise`].
+fn premise_text(premise: &str) -> String {
+    format!(
         "tsf 1; controller c;\nstate x1, x2; input u saturate 1; disturbance w bound 0.1;\n\
          output y = x; A = [0, 1; -1, -1]; B = [0; 1]; D = [0; 1];\n\
          premise z = {premise} range -1 .. 1 {{ neg = trap(-1, -1, -1, 1); pos = trap(-1, 1, 1, 1); }}\n\
@@ -219,14 +224,19 @@ fn with_premise(premise: &str) -> TsModel {
          rule R2: z is pos => at(x1 = 0), F = [-1, -1];\n\
          objective linf(w -> y) minimize with phi = 0.1; objective saturation region;\n\
          trigger aperiodic {{ sampling = 0.001 .. 0.01; threshold nu = 0.01; region z = -0.5 .. 0.5; }}\n"
-    );
-    common::model_of("region.tsf", &text)
+    )
 }
 
 #[test]
 fn a_premise_not_linear_in_the_state_has_no_regional_certificate() {
-    let err = premise_box(&with_premise("sin(x1)")).expect_err("sin(x1) is not linear");
-    assert!(err.contains("not linear in the state"), "{err}");
+    // A spec error of the model stage (exit 1 from `tsfc check`), at the setting.
+    let e = common::errors_of("region.tsf", &premise_text("sin(x1)"));
+    assert_eq!(e.len(), 1, "{e:?}");
+    assert!(e[0].message.contains("not linear in the state"), "{e:?}");
+    assert!(e[0]
+        .help
+        .as_deref()
+        .is_some_and(|h| h.contains("linear combinations of states")));
     // A linear combination of states is: its face is the row [0.5, 0.5].
     let b = premise_box(&with_premise("0.5 * (x1 + x2)"))
         .expect("linear")

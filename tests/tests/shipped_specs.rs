@@ -77,3 +77,19 @@ fn wang2013_adaptive_checks_clean() {
     assert_eq!((m.n, m.m, m.r()), (6, 3, 9));
     assert!(m.spec.adaptive.is_some() && m.spec.objectives.is_empty());
 }
+
+#[test]
+fn every_shipped_spec_checks_clean() {
+    // A new compatibility rule must not refuse a shipped spec.
+    let dir = common::spec_path("");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .expect("the specs folder")
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".tsf"))
+        .collect();
+    names.sort();
+    for name in &names {
+        check(name);
+    }
+    assert!(names.len() >= 12, "{names:?}");
+}

@@ -6,6 +6,7 @@ mod adaptive_codegen;
 mod amrr;
 mod c_codegen;
 mod common;
+mod compat;
 mod diagnostics;
 mod event_trigger;
 mod fuzz;

@@ -24,6 +24,8 @@ pub const MAX_REGION_RULES: usize = 16;
 pub const MAX_REGION_VERTICES: usize = 64;
 /// Relative outward widening of every membership bound (rounding of exp and products).
 const WIDEN: f64 = 1e-12;
+/// The help of a premise not linear in the state.
+const LINEAR_HELP: &str = "bound premises that are states (or linear combinations of states)";
 /// Singular values below this fraction of the largest span no direction.
 const RANK_TOL: f64 = 1e-10;
 
@@ -219,7 +221,7 @@ pub(crate) fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, RegionErro
         super::premise_values(&model.spec, x).map_err(|d| RegionError {
             premise: None,
             message: d.message,
-            help: "bound premises that are states (or linear combinations of states)".into(),
+            help: LINEAR_HELP.into(),
         })
     };
     let cols = (0..n)
@@ -250,7 +252,7 @@ pub(crate) fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, RegionErro
             return Err(RegionError {
                 message: format!("premise variable `{name}` is not linear in the state, so the premise box has no faces in state coordinates"),
                 premise: Some(name),
-                help: "bound premises that are states (or linear combinations of states)".into(),
+                help: LINEAR_HELP.into(),
             });
         }
     }

@@ -30,6 +30,22 @@ pub fn model_of(name: &str, text: &str) -> TsModel {
     checked.model.expect("a model for a clean spec")
 }
 
+/// The errors of a source text that does not check clean (check and model stage).
+pub fn errors_of(name: &str, text: &str) -> Vec<tsf_lang::Diagnostic> {
+    let source = Source {
+        name: name.into(),
+        text: text.into(),
+        bytes: text.as_bytes().to_vec(),
+    };
+    let errors: Vec<_> = frontend::check(&source)
+        .diagnostics
+        .into_iter()
+        .filter(|d| d.is_error())
+        .collect();
+    assert!(!errors.is_empty(), "{name} checks clean");
+    errors
+}
+
 /// The model of a shipped spec.
 pub fn shipped(name: &str) -> TsModel {
     let text = std::fs::read_to_string(spec_path(name)).unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -5,7 +5,7 @@
 //!
 //! | feature | file |
 //! |---|---|
-//! | trigger laws: certificates per law, a synthesized weight's needs, `region` | [`trigger`] |
+//! | trigger laws: the laws a certificate covers, a synthesized weight's needs, `region` | [`trigger`] |
 //! | `saturate` levels and the saturation region (explicit or implied) | [`saturation`] |
 //! | `trigger periodic { design = discrete; }` | [`discrete`] |
 //! | `modes` (Markov jump modes) | [`modes`] |

@@ -36,13 +36,16 @@ impl Checker<'_> {
                     | Objective::Hinf { .. }
                     | Objective::FiniteTime(_)
             ) {
-                self.err(unsupported(
-                    o.span,
-                    format!(
-                        "objective `{}` is not supported with `modes`",
-                        o.node.kind()
-                    ),
-                ));
+                self.err(
+                    unsupported(
+                        o.span,
+                        format!(
+                            "objective `{}` is not supported with `modes`",
+                            o.node.kind()
+                        ),
+                    )
+                    .with_help("remove this objective, or the `modes` block"),
+                );
             }
         }
         let performance: Vec<&SpannedObjective> = around
@@ -67,7 +70,8 @@ impl Checker<'_> {
                             other.node.kind()
                         ),
                     )
-                    .with_secondary(ft.span, "finite_time here"),
+                    .with_secondary(ft.span, "finite_time here")
+                    .with_help("with modes `finite_time` is designed alone (with `objective stability;` at most): remove this objective"),
                 );
             }
         } else if let [first, second, ..] = performance.as_slice() {
@@ -76,7 +80,8 @@ impl Checker<'_> {
                     second.span,
                     "more than one `hinf` objective is not supported with `modes`".into(),
                 )
-                .with_secondary(first.span, "first one here"),
+                .with_secondary(first.span, "first one here")
+                .with_help("keep one `hinf` objective"),
             );
         }
         if let (Some(o), Relaxation::Tanaka { .. }) = (performance.first(), around.relaxation.node)
@@ -96,22 +101,28 @@ impl Checker<'_> {
             around.relaxation.node,
             Relaxation::Tuan | Relaxation::Polya { .. }
         ) {
-            self.err(unsupported(
-                around.relaxation.span,
-                "this relaxation is not supported with `modes`".into(),
-            ));
+            self.err(
+                unsupported(
+                    around.relaxation.span,
+                    "this relaxation is not supported with `modes`".into(),
+                )
+                .with_help("use `relaxation basic;`, `tanaka(s = ..)` or `membership_mismatch;`"),
+            );
         }
         if let Some((_, span)) = around.rules.iter().find_map(|r| r.gain.as_ref()) {
-            self.err(unsupported(
-                *span,
-                "given gains are not supported with `modes`".into(),
-            ));
+            self.err(
+                unsupported(*span, "given gains are not supported with `modes`".into())
+                    .with_help("remove `F = ..` from the rules: the mode gains are synthesized"),
+            );
         }
         if around.saturated {
-            self.err(unsupported(
-                modes.span,
-                "`saturate` levels are not supported with `modes`".into(),
-            ));
+            self.err(
+                unsupported(
+                    modes.span,
+                    "`saturate` levels are not supported with `modes`".into(),
+                )
+                .with_help("remove `saturate` from the input, or the `modes` block"),
+            );
         }
         if let Some(t) = &draft.trigger {
             self.modes_trigger(t, draft, &performance, &unsupported);

@@ -54,11 +54,12 @@ struct Found<'o> {
 impl Checker<'_> {
     /// Errors for trigger laws outside every certificate and for what a
     /// synthesized weight or a premise `region` needs. With `modes`, the
-    /// loops are judged by `modes.rs` instead.
+    /// loops are judged by `modes.rs` instead (`region` here).
     pub(super) fn trigger_fits(&mut self, draft: &Draft, around: &Around<'_>) {
         let Some(t) = &draft.trigger else {
             return;
         };
+        self.region_fits(draft, around);
         if around.modes.is_some() {
             return;
         }
@@ -111,7 +112,6 @@ impl Checker<'_> {
             };
             self.weight_synthesis(&found, draft, at);
         }
-        self.region_level(around);
     }
 
     /// Given gains with a weight design method that designs the gains itself.
@@ -204,35 +204,34 @@ impl Checker<'_> {
         }
     }
 
-    /// With one common given gain, `region` certifies the continuous loop on
-    /// the premise box inside E(P, c), c sized by the saturation region's
-    /// level: the region (asked for, or implied by `saturate` levels without
-    /// an input bound) must be there.
-    fn region_level(&mut self, around: &Around<'_>) {
+    /// `region` makes the event-triggered certificate local to a premise box:
+    /// it needs an event trigger whose weight tsfc synthesizes by the
+    /// two-step method or the co-design (no other certificate uses the box,
+    /// and with `modes` the loop is certified on the whole premise range).
+    fn region_fits(&mut self, draft: &Draft, around: &Around<'_>) {
         let Some(first) = around.trigger_region.first() else {
             return;
         };
-        let gains: Vec<_> = around.rules.iter().map(|r| r.gain.as_ref()).collect();
-        let common = match gains.first() {
-            Some(Some((f, _))) => gains.iter().all(|g| g.is_some_and(|(h, _)| h == f)),
-            _ => false,
-        };
-        let has = |f: fn(&Objective) -> bool| around.objectives.iter().any(|o| f(&o.node));
-        let region = has(|o| matches!(o, Objective::SaturationRegion { .. }))
-            || (around.levels.is_some() && !has(|o| matches!(o, Objective::InputNorm { .. })));
-        if !common || region || !around.objectives_complete {
+        let event = synthesized(draft)
+            && matches!(
+                draft.trigger_synthesis,
+                None | Some(TriggerSynthesis::TwoStep) | Some(TriggerSynthesis::Codesign { .. })
+            );
+        if event && around.modes.is_none() {
             return;
         }
-        self.err(
-            Diagnostic::error(first.span, "`region` with a given gain needs the saturation region")
-                .with_label("the certified set E(P, c) is kept inside this box")
-                .with_note("the regional continuous certificate sizes E(P, c) by the saturation region's level")
-                .with_help(if around.levels.is_some() {
-                    "add `objective saturation region;`"
-                } else {
-                    "declare the input's levels (`input u saturate 2.0;`) and add `objective saturation region;`"
-                }),
-        );
+        let mut d = Diagnostic::error(
+            first.span,
+            "`region` needs an event trigger whose weight tsfc synthesizes",
+        )
+        .with_label("no certificate of this loop is made local to this box");
+        d = match around.modes {
+            Some(m) => d
+                .with_secondary(m, "modes here")
+                .with_note("with `modes` the loop is certified on the whole premise range"),
+            None => d.with_note("the regional certificate is the two-step or co-designed event trigger's (docs/language.md, Regional certificate)"),
+        };
+        self.err(d.with_help("remove `region` (the certificate then holds on the whole premise range), or use `threshold nu = ..; weight = synthesize;` (or `synthesize codesign`) with an L-inf objective and the saturation region"));
     }
 }
 
@@ -362,18 +361,29 @@ mod tests {
     }
 
     #[test]
-    fn a_region_with_a_given_gain_needs_the_saturation_region() {
-        let region =
-            "trigger aperiodic { sampling = 0.01 .. 0.1; weight = 1; region x1 = -0.5 .. 0.5; }";
-        let src = BASE.replace("=> A = -2;", "=> A = -2, F = -1;");
-        let (m, at) = only_error_of(&format!("{src}{region}"));
-        assert_eq!(m, "`region` with a given gain needs the saturation region");
-        assert_eq!(at, "region x1 = -0.5 .. 0.5;");
-        // Implied by the levels, or asked for: accepted.
-        let saturated = src.replace("input u;", "input u saturate 2;");
-        valid(&format!("{saturated}{region}"));
-        valid(&format!(
-            "{saturated}objective saturation region;\n{region}"
+    fn a_region_needs_a_synthesized_event_trigger_weight() {
+        let want = "`region` needs an event trigger whose weight tsfc synthesizes";
+        let (m, at) = only_error(
+            "trigger aperiodic { sampling = 0.01 .. 0.1; weight = 1; region x1 = -0.5 .. 0.5; }",
+        );
+        assert_eq!(
+            (m.as_str(), at.as_str()),
+            (want, "region x1 = -0.5 .. 0.5;")
+        );
+        let src = spec(&format!(
+            "objective linf(d -> z) minimize with phi = 0.05, xi = 0.1;\nobjective saturation region;\n\
+             trigger aperiodic {{ sampling = 0.01 .. 0.1; threshold nu = 0.1; weight = synthesize{{}}; region x1 = -0.5 .. 0.5; }}"
         ));
+        valid(&src.replace("{}", ""));
+        valid(&src.replace("{}", " codesign"));
+        let (m, _) = only_error_of(&src.replace("{}", " theorem2"));
+        assert_eq!(m, want);
+        // With modes the loop is certified on the whole range.
+        let modes = "modes { mode a { } rates = [0]; }\n";
+        let e = errors(&format!(
+            "{BASE}{modes}trigger aperiodic {{ sampling = 0.01 .. 0.1; region x1 = -0.5 .. 0.5; }}"
+        ));
+        assert_eq!(e.len(), 1, "{e:#?}");
+        assert_eq!(e[0].0.message, want);
     }
 }
