@@ -370,10 +370,10 @@ mod tests {
             (m.as_str(), at.as_str()),
             (want, "region x1 = -0.5 .. 0.5;")
         );
-        let src = spec(&format!(
+        let src = spec(
             "objective linf(d -> z) minimize with phi = 0.05, xi = 0.1;\nobjective saturation region;\n\
-             trigger aperiodic {{ sampling = 0.01 .. 0.1; threshold nu = 0.1; weight = synthesize{{}}; region x1 = -0.5 .. 0.5; }}"
-        ));
+             trigger aperiodic { sampling = 0.01 .. 0.1; threshold nu = 0.1; weight = synthesize{}; region x1 = -0.5 .. 0.5; }",
+        );
         valid(&src.replace("{}", ""));
         valid(&src.replace("{}", " codesign"));
         let (m, _) = only_error_of(&src.replace("{}", " theorem2"));
