@@ -268,7 +268,6 @@ impl<'a> Checker<'a> {
                 controller: controller.as_ref(),
                 objectives: &objectives,
                 objectives_complete: objectives.len() == draft.objective_items.len(),
-                rules: &rules,
                 levels: saturation.as_deref(),
                 saturate: limits.saturate.map(|e| e.span),
                 first_input: self.inputs.first().map(|s| s.span),

@@ -32,7 +32,7 @@ pub(super) use trigger::TriggerSpans;
 
 use super::{Checker, Draft};
 use crate::span::{Span, Spanned};
-use crate::spec::{RegionBound, RuleSpec, SpannedObjective};
+use crate::spec::{RegionBound, SpannedObjective};
 
 /// The checked items the trigger and saturation rules look at.
 pub(super) struct Around<'s> {
@@ -42,8 +42,6 @@ pub(super) struct Around<'s> {
     pub objectives: &'s [SpannedObjective],
     /// Whether every objective item checked (else a missing one may only have failed).
     pub objectives_complete: bool,
-    /// The checked rules.
-    pub rules: &'s [RuleSpec],
     /// The `saturate` levels, when they evaluated.
     pub levels: Option<&'s [f64]>,
     /// Where `saturate` is written, evaluated or not.

@@ -103,6 +103,7 @@ impl Checker<'_> {
             _ => {}
         }
         if let Some(at) = draft.weight_span.filter(|_| synthesized(draft)) {
+            let before = self.diags.len();
             self.gains_with_method(draft, at);
             let find = |f: fn(&Objective) -> bool| around.objectives.iter().find(|o| f(&o.node));
             let found = Found {
@@ -111,6 +112,17 @@ impl Checker<'_> {
                 complete: around.objectives_complete,
             };
             self.weight_synthesis(&found, draft, at);
+            let theorem2 = matches!(
+                draft.trigger_synthesis,
+                Some(TriggerSynthesis::Theorem2 { .. })
+            );
+            if theorem2 && self.diags.len() == before {
+                self.err(
+                    Diagnostic::warning(at, "Theorem 2 designs are reported, never emitted: `tsfc compile` solves them and exits 3")
+                        .with_note("Xu & Huang's Theorem 2 is an experiment (docs/event_trigger.md); no certificate of it is built")
+                        .with_help("write `weight = synthesize;` (or `synthesize codesign`) for a certified design"),
+                );
+            }
         }
     }
 
@@ -341,7 +353,12 @@ mod tests {
         let (m, at) = only_error_of(&spec(&t2("eps1 = 1")));
         assert_eq!(m, "Theorem 2 weight synthesis needs xi");
         assert_eq!(at, "weight = synthesize theorem2(eps1 = 1);");
-        valid(&spec(&t2("xi = 0.08")));
+        // Accepted, with a warning that compile reports and refuses it.
+        let (_, diags) = crate::check_source(&spec(&t2("xi = 0.08")));
+        assert!(diags.iter().all(|d| !d.is_error()), "{diags:#?}");
+        assert!(diags.iter().any(|d| d
+            .message
+            .starts_with("Theorem 2 designs are reported, never emitted")));
     }
 
     #[test]
@@ -370,10 +387,10 @@ mod tests {
             (m.as_str(), at.as_str()),
             (want, "region x1 = -0.5 .. 0.5;")
         );
-        let src = spec(&format!(
+        let src = spec(
             "objective linf(d -> z) minimize with phi = 0.05, xi = 0.1;\nobjective saturation region;\n\
-             trigger aperiodic {{ sampling = 0.01 .. 0.1; threshold nu = 0.1; weight = synthesize{{}}; region x1 = -0.5 .. 0.5; }}"
-        ));
+             trigger aperiodic { sampling = 0.01 .. 0.1; threshold nu = 0.1; weight = synthesize{}; region x1 = -0.5 .. 0.5; }",
+        );
         valid(&src.replace("{}", ""));
         valid(&src.replace("{}", " codesign"));
         let (m, _) = only_error_of(&src.replace("{}", " theorem2"));
