@@ -5,7 +5,7 @@
 
 use std::path::Path;
 use tsf_lang::diag;
-use tsfc::frontend;
+use tsfc::driver::frontend;
 use tsfc::synth::Settings;
 
 /// Each fixture of `tests/bad/`, and the text of the line its error points at.
