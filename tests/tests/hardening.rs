@@ -10,13 +10,13 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use tsf_lang::spec::Emit;
 use tsfc::driver::frontend::{self, Source};
+use tsfc::driver::prepare;
 use tsfc::sim::campaign::scheduler::{resolve, ShardArg};
 use tsfc::sim::campaign::summary::{summarize, Partial};
 use tsfc::sim::campaign::{
     merge_dirs, parse_shard, run_campaign, shard_file, write_campaign, write_shard, Config,
 };
 use tsfc::sim::{Options, Prepared};
-use tsfc::driver::{prepare};
 use tsfc::synth::Settings;
 
 /// A fresh folder for one test.

@@ -13,7 +13,9 @@ use tsf_lang::spec::{Threshold, Trigger, Weight};
 use tsfc::driver::prepare;
 use tsfc::sim::integrator::{Dopri5, Rk4};
 use tsfc::sim::limits::{MAX_ADAPTIVE_STEPS, MAX_PLOT_POINTS, MAX_STEPS};
-use tsfc::sim::{simulate, simulate_csv, simulate_to, ErrorKind, Options, Outcome, Prepared, SimError};
+use tsfc::sim::{
+    simulate, simulate_csv, simulate_to, ErrorKind, Options, Outcome, Prepared, SimError,
+};
 
 fn spec(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -349,8 +349,7 @@ pub fn report(
     };
     let certified = status == "certified";
     let problem = problem_stats(log);
-    let (modes, transition_rates) =
-        markov::sections(model, design, cert.as_ref(), certified);
+    let (modes, transition_rates) = markov::sections(model, design, cert.as_ref(), certified);
     Report {
         modes,
         transition_rates,
