@@ -435,7 +435,7 @@ fn ultimate_set_outside(model: &TsModel, p: &DMatrix<f64>, v_inf: f64, rho: f64)
         return None;
     }
     let n = model.n;
-    let mut rng = crate::sim::trigger::SplitMix64::new(0x0017_5e75);
+    let mut rng = crate::util::rng::SplitMix64::new(0x0017_5e75);
     let lt = chol.l().transpose();
     for _ in 0..ULTIMATE_SAMPLES {
         let u = DMatrix::from_fn(n, 1, |_, _| 2.0 * rng.next_f64() - 1.0);
