@@ -26,7 +26,7 @@ pub struct Settings {
     /// problem is refused before solving ([`SynthError::TooLarge`]).
     pub memory_limit: u64,
     /// The certificate's verdict on a candidate design, handed in by the
-    /// driver (`crate::certify`); synthesis asks it where a search must know
+    /// driver (the certificate stage); synthesis asks it where a search must know
     /// whether a candidate certifies (the per-objective verdicts of given
     /// gains). `None`: such searches report that no verdict was available.
     pub verifier: Option<Verifier>,

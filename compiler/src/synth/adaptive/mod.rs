@@ -7,7 +7,7 @@
 //! projection boxes against the design model's values) and reports what the
 //! Lyapunov argument guarantees and what it does not. The verdict is its own
 //! status, `adaptive-well-posed` (exit 0) or `adaptive-refused` (exit 3); it
-//! is not an LMI certificate. `crate::sim::adaptive` runs the closed loop with the runtime's
+//! is not an LMI certificate. The simulator (`sim/adaptive.rs`) runs the closed loop with the runtime's
 //! [`tsf_runtime::AdaptiveLaw`].
 
 pub mod lyapunov;

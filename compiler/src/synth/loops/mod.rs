@@ -9,7 +9,7 @@
 //! rebuilds its conditions (also with the values as generated code stores
 //! them), the sampling it certifies, its certified region and its report
 //! section. Check-time refusals of a law live with its check
-//! (`lang/src/check/trigger.rs`); its sensor tables in `crate::tables`, its
+//! (`lang/src/check/trigger.rs`); its sensor tables in the tables stage, its
 //! generated sensor code in each backend, its gate in `crate::sim::trigger`.
 //!
 //! Laws: [`continuous`] (no trigger), [`every_sample`] (periodic sampling,
