@@ -765,7 +765,7 @@ fn linf_minimize_finds_the_gamma_of_the_best_xi() {
         (r.exit_code() == 0).then(|| linf_gamma(&r))
     };
     let mut best = (f64::INFINITY, 0.0);
-    let mut scan = |grid: Vec<f64>, best: &mut (f64, f64)| {
+    let scan = |grid: Vec<f64>, best: &mut (f64, f64)| {
         for (k, xi) in grid.into_iter().enumerate() {
             if let Some(g) = gamma_at(format!("linf-xi-{k}"), xi) {
                 if g < best.0 {

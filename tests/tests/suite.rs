@@ -9,6 +9,7 @@ mod common;
 mod diagnostics;
 mod event_trigger;
 mod fuzz;
+mod fuzz_features;
 mod fuzz_pipeline;
 mod fuzzy_lyapunov;
 mod given_gains;

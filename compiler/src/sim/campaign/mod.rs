@@ -309,8 +309,10 @@ pub fn shard_file(p: &Partial) -> String {
     format!("{}.mc.shard-{}-of-{}.json", p.name, p.shard.0, p.shard.1)
 }
 
-/// Writes the shard's partial output (`<name>.mc.shard-k-of-K.json`) into `dir`.
+/// Writes the shard's partial output (`<name>.mc.shard-k-of-K.json`) into
+/// `dir`, checked as `--merge` will check it.
 pub fn write_shard(p: &Partial, dir: &Path) -> Result<PathBuf, SimError> {
+    shard::validate(p).map_err(|e| SimError::usage(format!("the shard is not written: {e}")))?;
     write(dir, shard_file(p), &json(p)?)
 }
 
@@ -321,6 +323,8 @@ pub fn write_campaign(
     p: &Partial,
     dir: &Path,
 ) -> Result<(summary::Summary, Vec<PathBuf>), SimError> {
+    shard::validate(p)
+        .map_err(|e| SimError::usage(format!("the campaign is not written: {e}")))?;
     let s = summary::summarize(p);
     let name = &p.name;
     let mut files: Vec<(String, Vec<u8>)> = vec![
