@@ -323,8 +323,7 @@ pub fn write_campaign(
     p: &Partial,
     dir: &Path,
 ) -> Result<(summary::Summary, Vec<PathBuf>), SimError> {
-    shard::validate(p)
-        .map_err(|e| SimError::usage(format!("the campaign is not written: {e}")))?;
+    shard::validate(p).map_err(|e| SimError::usage(format!("the campaign is not written: {e}")))?;
     let s = summary::summarize(p);
     let name = &p.name;
     let mut files: Vec<(String, Vec<u8>)> = vec![
