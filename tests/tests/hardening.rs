@@ -827,3 +827,23 @@ fn a_panic_in_the_solver_setup_is_contained() {
         Err((m, code)) => assert!((1..=3).contains(&code), "{code}: {m}"),
     }
 }
+
+#[test]
+fn merge_reads_regular_files_only() {
+    let (dir, [one, _]) = two_shards("fifo");
+    std::fs::remove_file(&one).expect("remove");
+    // A folder (and, on Unix, a FIFO, which opening would block on) in the
+    // place of a shard file is refused without opening it.
+    std::fs::create_dir(&one).expect("folder");
+    let e = merge_dirs(std::slice::from_ref(&dir)).expect_err("folder");
+    assert!(e.message.contains("is not a regular file"), "{}", e.message);
+    #[cfg(unix)]
+    {
+        std::fs::remove_dir(&one).expect("remove");
+        let made = std::process::Command::new("mkfifo").arg(&one).status();
+        if made.is_ok_and(|s| s.success()) {
+            let e = merge_dirs(std::slice::from_ref(&dir)).expect_err("fifo");
+            assert!(e.message.contains("is not a regular file"), "{}", e.message);
+        }
+    }
+}

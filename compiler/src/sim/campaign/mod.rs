@@ -372,12 +372,14 @@ pub fn merge_dirs(dirs: &[PathBuf]) -> Result<Partial, SimError> {
 /// and checked.
 fn read_shard(path: &Path) -> Result<Partial, SimError> {
     use std::io::Read;
-    let shown = path.display();
+    // A file name may hold control characters: shown escaped.
+    let shown = path.display().to_string().escape_debug().to_string();
     let cannot = |e: std::io::Error| SimError::usage(format!("cannot read `{shown}`: {e}"));
-    let file = std::fs::File::open(path).map_err(cannot)?;
-    if !file.metadata().map_err(cannot)?.is_file() {
+    // Checked before opening: opening a FIFO would wait for a writer.
+    if !std::fs::metadata(path).map_err(cannot)?.is_file() {
         return Err(SimError::usage(format!("`{shown}` is not a regular file")));
     }
+    let file = std::fs::File::open(path).map_err(cannot)?;
     let mut text = String::new();
     file.take(MAX_SHARD_FILE_BYTES + 1)
         .read_to_string(&mut text)
