@@ -11,7 +11,11 @@ use tsfc::driver::frontend::{self, Source};
 fn corpus() -> Vec<String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut out = Vec::new();
-    for dir in [root.join("../specs"), root.join("bad")] {
+    for dir in [
+        root.join("../specs"),
+        root.join("bad"),
+        root.join("fuzz_seeds"),
+    ] {
         let Ok(rd) = std::fs::read_dir(&dir) else {
             continue;
         };
@@ -31,7 +35,7 @@ fn corpus() -> Vec<String> {
 }
 
 /// Splits text into rough tokens (words, numbers, single punctuation, spaces).
-fn tokens(s: &str) -> Vec<String> {
+pub(crate) fn tokens(s: &str) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     let mut cur = String::new();
     for ch in s.chars() {
@@ -50,8 +54,9 @@ fn tokens(s: &str) -> Vec<String> {
     out
 }
 
+/// One edit of a spec's tokens or bytes.
 #[derive(Debug, Clone)]
-enum Mutation {
+pub(crate) enum Mutation {
     DeleteToken(usize),
     DuplicateToken(usize),
     SwapTokens(usize, usize),
@@ -61,7 +66,8 @@ enum Mutation {
     InsertText(usize, String),
 }
 
-fn apply(text: &str, muts: &[Mutation]) -> Vec<u8> {
+/// `text` with `muts` applied: token edits first, then byte edits.
+pub(crate) fn apply(text: &str, muts: &[Mutation]) -> Vec<u8> {
     let mut toks = tokens(text);
     let mut bytes: Vec<u8>;
     for m in muts {
@@ -97,7 +103,8 @@ fn apply(text: &str, muts: &[Mutation]) -> Vec<u8> {
     bytes
 }
 
-fn mutation() -> impl Strategy<Value = Mutation> {
+/// A random [`Mutation`].
+pub(crate) fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         any::<usize>().prop_map(Mutation::DeleteToken),
         any::<usize>().prop_map(Mutation::DuplicateToken),

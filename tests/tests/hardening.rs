@@ -341,11 +341,14 @@ fn shard_counts_are_bounded_when_parsed() {
     assert_eq!(e.exit_code(), 2);
 }
 
+/// Environment variables of one scheduler task.
+type Vars = &'static [(&'static str, &'static str)];
+
 #[test]
 fn shards_by_environment_variables_merge_into_the_one_machine_run() {
     let whole = shard(1, 1);
     // (scheduler variables of the first and second task, `auto` or `auto/K`)
-    let schedulers: [(&[(&str, &str)], &[(&str, &str)], Option<u64>); 4] = [
+    let schedulers: [(Vars, Vars, Option<u64>); 4] = [
         (
             &[
                 ("SLURM_ARRAY_TASK_ID", "3"),
@@ -398,7 +401,7 @@ fn shards_by_environment_variables_merge_into_the_one_machine_run() {
         assert!(dir.join(shard_file(&shard(2, 2))).exists());
     }
     // A missing size, an index past it and a gapped Slurm array are refused.
-    let refused: [(&[(&str, &str)], Option<u64>); 3] = [
+    let refused: [(Vars, Option<u64>); 3] = [
         (&[("JOB_COMPLETION_INDEX", "1")], None),
         (&[("JOB_COMPLETION_INDEX", "2")], Some(2)),
         (
@@ -805,4 +808,43 @@ fn linf_minimize_finds_the_gamma_of_the_best_xi() {
     let run = compile("linf-syn", &syn).unwrap_or_else(|(m, _)| panic!("{m}"));
     assert_eq!(run.exit_code(), 0);
     assert!(linf_gamma(&run) < 10.0, "{}", linf_gamma(&run));
+}
+
+#[test]
+fn a_panic_in_the_solver_setup_is_contained() {
+    // Found by the feature campaign (tests/tests/fuzz_features.rs): with
+    // `linf <= 1e39` the co-design's constant data has an entry outside the
+    // sparsity pattern Clarabel's chordal decomposition builds from A alone,
+    // and its setup indexed with usize::MAX. The SDP is now set up again
+    // without the decomposition.
+    let text = "tsf 1; controller fd; state x1, x2; input u saturate 1; disturbance w bound 0.01;\n\
+        output y = [x1];\nA = [0, 1; -1, -1]; B = [0; 1]; D = [0; 1];\n\
+        premise x1 range -1 .. 1 { all = trap(-2, -2, 2, 2); }\n\
+        rule R: x1 is all => A = [0, 1; -1, -1];\n\
+        objective linf(w -> y) <= 1e39 with phi = 0.1;\nobjective saturation region;\n\
+        trigger aperiodic { sampling = 0.001 .. 0.01; threshold nu = 0.01; weight = synthesize codesign(rounds = 1); }\n";
+    match compile("chordal", text) {
+        Ok(run) => assert!(run.exit_code() == 0 || run.certified().is_err()),
+        Err((m, code)) => assert!((1..=3).contains(&code), "{code}: {m}"),
+    }
+}
+
+#[test]
+fn merge_reads_regular_files_only() {
+    let (dir, [one, _]) = two_shards("fifo");
+    std::fs::remove_file(&one).expect("remove");
+    // A folder (and, on Unix, a FIFO, which opening would block on) in the
+    // place of a shard file is refused without opening it.
+    std::fs::create_dir(&one).expect("folder");
+    let e = merge_dirs(std::slice::from_ref(&dir)).expect_err("folder");
+    assert!(e.message.contains("is not a regular file"), "{}", e.message);
+    #[cfg(unix)]
+    {
+        std::fs::remove_dir(&one).expect("remove");
+        let made = std::process::Command::new("mkfifo").arg(&one).status();
+        if made.is_ok_and(|s| s.success()) {
+            let e = merge_dirs(std::slice::from_ref(&dir)).expect_err("fifo");
+            assert!(e.message.contains("is not a regular file"), "{}", e.message);
+        }
+    }
 }

@@ -422,7 +422,7 @@ fn ultimate_set_outside(model: &TsModel, p: &DMatrix<f64>, v_inf: f64, rho: f64)
         for k in 0..c.nrows() {
             let Some(slot) = component(k) else { continue };
             let row = c.row(k);
-            let reach = (v_inf * (&row * &pinv * row.transpose())[(0, 0)]).sqrt();
+            let reach = (v_inf * (row * &pinv * row.transpose())[(0, 0)]).sqrt();
             let (lo, hi) = slot.range;
             if !(lo <= -reach && reach <= hi) {
                 return Some(format!(

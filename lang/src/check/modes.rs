@@ -305,38 +305,28 @@ impl<'a> Checker<'a> {
         let mut ok = true;
         for a in 0..count {
             for b in (0..count).filter(|b| *b != a) {
-                if pi[(a, b)] < 0.0 {
-                    self.err(
-                        Diagnostic::error(
-                            literal.entry(a, b),
-                            "a transition rate between two modes must not be negative",
-                        )
-                        .with_label(format!(
-                            "rate from mode {} to mode {} is {}",
-                            a + 1,
-                            b + 1,
-                            Num(pi[(a, b)])
-                        ))
-                        .with_note("off-diagonal entries are rates (>= 0); the diagonal is minus the row's other entries"),
-                    );
-                    ok = false;
-                } else if pi[(a, b)] > 0.0 && pi[(a, b)] < MIN_POSITIVE_RATE {
-                    self.err(
-                        Diagnostic::error(
-                            literal.entry(a, b),
-                            format!(
-                                "a transition rate below {} is not supported",
-                                Num(MIN_POSITIVE_RATE)
-                            ),
-                        )
-                        .with_label(format!(
-                            "rate from mode {} to mode {} is {}",
-                            a + 1,
-                            b + 1,
-                            Num(pi[(a, b)])
-                        ))
-                        .with_help("write 0 for a transition that does not happen (the mode conditions divide by every positive rate)"),
-                    );
+                let v = pi[(a, b)];
+                let refusal = if v < 0.0 {
+                    Some((
+                        "a transition rate between two modes must not be negative".to_string(),
+                        "off-diagonal entries are rates (>= 0); the diagonal is minus the row's other entries",
+                    ))
+                } else if v > 0.0 && v < MIN_POSITIVE_RATE {
+                    Some((
+                        format!("a transition rate below {} is not supported", Num(MIN_POSITIVE_RATE)),
+                        "write 0 for a transition that does not happen (the mode conditions divide by every positive rate)",
+                    ))
+                } else {
+                    None
+                };
+                if let Some((message, help)) = refusal {
+                    let label = format!("rate from mode {} to mode {} is {}", a + 1, b + 1, Num(v));
+                    let d = Diagnostic::error(literal.entry(a, b), message).with_label(label);
+                    self.err(if v < 0.0 {
+                        d.with_note(help)
+                    } else {
+                        d.with_help(help)
+                    });
                     ok = false;
                 }
             }

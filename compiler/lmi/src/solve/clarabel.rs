@@ -123,15 +123,31 @@ fn failed_early(s: &ConeSolution) -> bool {
 /// One Clarabel run with `settings`.
 fn solve_once(program: &ConeProgram, settings: &SolveSettings) -> Result<ConeSolution> {
     let cones: Vec<SupportedConeT<f64>> = program.cones.iter().map(|&c| cone(c)).collect();
-    let mut solver = DefaultSolver::new(
-        &csc(&program.p),
-        &program.q,
-        &csc(&program.a),
-        &program.b,
-        &cones,
-        clarabel_settings(settings),
-    )
-    .map_err(|e| LmiError::Solver(e.to_string()))?;
+    let built = guard::run(|| {
+        DefaultSolver::new(
+            &csc(&program.p),
+            &program.q,
+            &csc(&program.a),
+            &program.b,
+            &cones,
+            clarabel_settings(settings),
+        )
+    });
+    let mut solver = match built {
+        Ok(solver) => solver.map_err(|e| LmiError::Solver(e.to_string()))?,
+        // Clarabel's chordal decomposition indexes the constant vector b by
+        // the sparsity pattern of A alone and panics (an index left at
+        // usize::MAX) when b has an entry outside it: the same data without
+        // the decomposition.
+        Err(_) if settings.chordal_decomposition => {
+            let whole = SolveSettings {
+                chordal_decomposition: false,
+                ..settings.clone()
+            };
+            return solve_once(program, &whole);
+        }
+        Err(_) => return Ok(ConeSolution::failed(program.q.len())),
+    };
     if guard::run(|| solver.solve()).is_err() {
         return Ok(ConeSolution::failed(program.q.len()));
     }

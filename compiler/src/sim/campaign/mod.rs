@@ -309,8 +309,10 @@ pub fn shard_file(p: &Partial) -> String {
     format!("{}.mc.shard-{}-of-{}.json", p.name, p.shard.0, p.shard.1)
 }
 
-/// Writes the shard's partial output (`<name>.mc.shard-k-of-K.json`) into `dir`.
+/// Writes the shard's partial output (`<name>.mc.shard-k-of-K.json`) into
+/// `dir`, checked as `--merge` will check it.
 pub fn write_shard(p: &Partial, dir: &Path) -> Result<PathBuf, SimError> {
+    shard::validate(p).map_err(|e| SimError::usage(format!("the shard is not written: {e}")))?;
     write(dir, shard_file(p), &json(p)?)
 }
 
@@ -321,6 +323,7 @@ pub fn write_campaign(
     p: &Partial,
     dir: &Path,
 ) -> Result<(summary::Summary, Vec<PathBuf>), SimError> {
+    shard::validate(p).map_err(|e| SimError::usage(format!("the campaign is not written: {e}")))?;
     let s = summary::summarize(p);
     let name = &p.name;
     let mut files: Vec<(String, Vec<u8>)> = vec![
@@ -369,12 +372,14 @@ pub fn merge_dirs(dirs: &[PathBuf]) -> Result<Partial, SimError> {
 /// and checked.
 fn read_shard(path: &Path) -> Result<Partial, SimError> {
     use std::io::Read;
-    let shown = path.display();
+    // A file name may hold control characters: shown escaped.
+    let shown = path.display().to_string().escape_debug().to_string();
     let cannot = |e: std::io::Error| SimError::usage(format!("cannot read `{shown}`: {e}"));
-    let file = std::fs::File::open(path).map_err(cannot)?;
-    if !file.metadata().map_err(cannot)?.is_file() {
+    // Checked before opening: opening a FIFO would wait for a writer.
+    if !std::fs::metadata(path).map_err(cannot)?.is_file() {
         return Err(SimError::usage(format!("`{shown}` is not a regular file")));
     }
+    let file = std::fs::File::open(path).map_err(cannot)?;
     let mut text = String::new();
     file.take(MAX_SHARD_FILE_BYTES + 1)
         .read_to_string(&mut text)

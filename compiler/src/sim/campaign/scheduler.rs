@@ -230,9 +230,12 @@ mod tests {
         assert_eq!(resolve(ShardArg::Auto(None), &with(&gcp)), Ok((2, 2)));
     }
 
+    /// The variables of one task.
+    type Vars = &'static [(&'static str, &'static str)];
+
     #[test]
     fn missing_out_of_range_and_gapped_indices_are_refused() {
-        let cases: [(&[(&str, &str)], Option<u64>, &str); 8] = [
+        let cases: [(Vars, Option<u64>, &str); 8] = [
             (&[], None, "no job-array index"),
             (
                 &[("JOB_COMPLETION_INDEX", "0")],

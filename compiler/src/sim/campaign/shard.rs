@@ -76,7 +76,7 @@ fn sha(s: &str) -> bool {
 
 /// How many run indices `i < runs` satisfy `i mod K == k - 1`.
 pub fn shard_size(runs: u64, (k, kk): (u64, u64)) -> u64 {
-    if k == 0 || kk == 0 || k - 1 >= runs {
+    if k == 0 || kk == 0 || k > runs {
         0
     } else {
         (runs - k) / kk + 1
@@ -124,10 +124,12 @@ pub fn validate(p: &Partial) -> Result<(), String> {
         ));
     }
     let (signal, tol, by) = &p.converged_rule;
-    if !text(signal, MAX_LABEL_BYTES, false)
-        || !(tol.is_finite() && *tol >= 0.0)
-        || !(by.is_finite() && *by <= t1)
-    {
+    let rule_ok = text(signal, MAX_LABEL_BYTES, false)
+        && tol.is_finite()
+        && *tol >= 0.0
+        && by.is_finite()
+        && *by <= t1;
+    if !rule_ok {
         return Err(
             "its convergence rule is not a signal, a finite bound and a time of the span".into(),
         );
