@@ -178,11 +178,12 @@ impl Display for TriggerSynthesis {
 }
 
 impl Trigger {
-    /// The law's keyword: `continuous`, `periodic`, `aperiodic` or `mixed`.
+    /// The law's keyword: `continuous`, `periodic`, `jittered`, `aperiodic` or `mixed`.
     pub fn kind(&self) -> &'static str {
         match self {
             Trigger::Continuous => "continuous",
             Trigger::Periodic { .. } => "periodic",
+            Trigger::Jittered { .. } => "jittered",
             Trigger::Aperiodic { .. } => "aperiodic",
             Trigger::Mixed { .. } => "mixed",
         }
@@ -197,6 +198,14 @@ impl Display for Trigger {
         match self {
             Trigger::Continuous => Ok(()),
             Trigger::Periodic { every } => write!(f, " {{ every = {}; }}", Num(*every)),
+            Trigger::Jittered { every, jitter } => {
+                write!(
+                    f,
+                    " {{ every = {}; jitter = {}; }}",
+                    Num(*every),
+                    Num(*jitter)
+                )
+            }
             Trigger::Aperiodic {
                 sampling,
                 threshold,

@@ -419,6 +419,11 @@ pub enum TriggerSynthesis {
     },
 }
 
+/// The sampling intervals [h - j, h + j] of `trigger jittered { every = h; jitter = j; }`.
+pub fn jittered_intervals(every: f64, jitter: f64) -> (f64, f64) {
+    (every - jitter, every + jitter)
+}
+
 /// A triggering law.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Trigger {
@@ -428,6 +433,15 @@ pub enum Trigger {
     Periodic {
         /// The period.
         every: f64,
+    },
+    /// Nominally every h seconds, each instant within j/2 of the nominal
+    /// grid, so every interval lies in [h - j, h + j] (0 <= j < h); every
+    /// sample transmitted, the command held.
+    Jittered {
+        /// The nominal period h.
+        every: f64,
+        /// The jitter j: how far an interval may differ from h.
+        jitter: f64,
     },
     /// Aperiodic sampling with a relative event trigger.
     Aperiodic {

@@ -13,7 +13,7 @@ use tsfc::synth::{self, Settings, SynthError};
 
 /// The mass-spring-damper with a hardening spring and an input limit, with
 /// `trigger`.
-fn msd(trigger: &str) -> String {
+pub(crate) fn msd(trigger: &str) -> String {
     format!(
         "tsf 1;\ncontroller msd;\nstate x1, x2;\ninput u saturate 0.7;\n\
          A(x) = [0, 1; -(1 + x1 ^ 2), -0.5];\nB = [0; 1];\n\

@@ -15,6 +15,7 @@ mod fuzz_pipeline;
 mod fuzzy_lyapunov;
 mod given_gains;
 mod hardening;
+mod jittered;
 mod markov;
 mod markov_performance;
 mod markov_runtime;

@@ -51,6 +51,11 @@ fn describe_trigger(t: Option<&Trigger>) -> String {
     match t {
         None | Some(Trigger::Continuous) => "continuous (every integration step)".into(),
         Some(Trigger::Periodic { every }) => format!("periodic every {every} s"),
+        Some(Trigger::Jittered { every, jitter }) => {
+            format!(
+                "jittered periodic every {every} s, jitter {jitter} s; every sample transmitted"
+            )
+        }
         Some(Trigger::Aperiodic {
             sampling,
             threshold,
@@ -142,6 +147,9 @@ fn interval((lo, hi): (f64, f64)) -> Result<f64, String> {
 fn shortest_interval(trigger: Option<&Trigger>, h: f64) -> Result<f64, String> {
     match trigger {
         Some(Trigger::Aperiodic { sampling, .. }) => interval(*sampling),
+        Some(Trigger::Jittered { every, jitter }) => {
+            interval(tsf_lang::spec::jittered_intervals(*every, *jitter))
+        }
         Some(Trigger::Mixed { monitor, .. }) => match monitor.sampling() {
             Some(s) => interval(s),
             None => Ok(h),

@@ -1,7 +1,8 @@
 //! Sampling instants and transmission decisions.
 //!
 //! A [`Schedule`] says when the state is sampled (every integration step,
-//! periodically, or aperiodically in `[h_min, h_max]` from a seeded PRNG);
+//! periodically, with jitter around a periodic grid, or aperiodically in
+//! `[h_min, h_max]`, the last two from a seeded PRNG);
 //! a [`Gate`] says whether a sample is transmitted to the controller. The
 //! gates are the runtime's trigger state machines
 //! (`tsf_runtime::{PeriodicTrigger, RelativeTrigger, AdaptiveTrigger, MixedTrigger}`),
@@ -24,6 +25,18 @@ pub enum Schedule {
         /// Spacing.
         h: f64,
     },
+    /// `t_k = t0 + k h + j (r_k - 1/2)` for k >= 1, `r_k` uniform from the
+    /// seed: each instant within j/2 of the grid, each interval in [h - j, h + j].
+    Jittered {
+        /// Start time.
+        t0: f64,
+        /// Nominal period.
+        h: f64,
+        /// Jitter.
+        jitter: f64,
+        /// The pattern's generator.
+        rng: SplitMix64,
+    },
     /// `t_{k+1} = t_k + h_min + (h_max - h_min) r_k`, `r_k` uniform from the seed.
     Random {
         /// Shortest interval.
@@ -40,6 +53,9 @@ impl Schedule {
     pub fn next(&mut self, k: u64, t: f64) -> f64 {
         match self {
             Schedule::Grid { t0, h } => *t0 + (k + 1) as f64 * *h,
+            Schedule::Jittered { t0, h, jitter, rng } => {
+                *t0 + (k + 1) as f64 * *h + *jitter * (rng.next_f64() - 0.5)
+            }
             Schedule::Random { h_min, h_max, rng } => {
                 t + *h_min + (*h_max - *h_min) * rng.next_f64()
             }
@@ -283,6 +299,16 @@ pub fn sampler(
                 continuous: false,
             });
         }
+        Some(Trigger::Jittered { every, jitter }) => (
+            Schedule::Jittered {
+                t0,
+                h: *every,
+                jitter: *jitter,
+                rng: SplitMix64::new(seed),
+            },
+            None,
+            None,
+        ),
         Some(Trigger::Aperiodic {
             sampling,
             threshold,
@@ -396,5 +422,38 @@ mod tests {
         );
         let mean = xs.iter().sum::<f64>() / xs.len() as f64;
         assert!((mean - 0.5).abs() < 0.01, "mean {mean}");
+    }
+
+    #[test]
+    fn a_jittered_schedule_stays_near_its_grid_with_intervals_in_the_certified_range() {
+        let (t0, h, jitter) = (1.0, 0.01, 0.005);
+        let mut s = Schedule::Jittered {
+            t0,
+            h,
+            jitter,
+            rng: SplitMix64::new(3),
+        };
+        let mut t = t0;
+        let (mut lo, mut hi) = (f64::INFINITY, 0.0_f64);
+        for k in 0..10_000_u64 {
+            let next = s.next(k, t);
+            let grid = t0 + (k + 1) as f64 * h;
+            assert!(
+                (next - grid).abs() <= jitter / 2.0 + 1e-12,
+                "{k}: {next} vs {grid}"
+            );
+            lo = lo.min(next - t);
+            hi = hi.max(next - t);
+            t = next;
+        }
+        assert!(
+            lo >= h - jitter - 1e-12 && hi <= h + jitter + 1e-12,
+            "[{lo}, {hi}]"
+        );
+        // The pattern reaches close to both ends of [h - j, h + j].
+        assert!(
+            lo < h - 0.9 * jitter && hi > h + 0.9 * jitter,
+            "[{lo}, {hi}]"
+        );
     }
 }

@@ -1,6 +1,7 @@
 //! The sampled loop a spec ships. `trigger periodic { every = h; }` holds the
 //! command for h seconds; `trigger aperiodic` without a threshold holds it for
-//! any interval in [h_min, h_max]. The continuous design's gains F_j (and
+//! any interval in [h_min, h_max], `trigger jittered` for any interval in
+//! [h - j, h + j] (its law: [`super::loops::jittered`]). The continuous design's gains F_j (and
 //! sector gains G_j under saturation) are certified for that loop with the
 //! looped functional of [`super::trigger`] (Seuret, "A novel stability analysis
 //! of linear systems under asynchronous samplings", 2012; Xu & Huang 2020) with
@@ -158,6 +159,11 @@ where
     Ok(lo)
 }
 
+/// How a refusal advises a shorter sampling: for the advised longest
+/// interval, the intervals it is re-solved at and the trigger text that
+/// asks for them.
+pub(super) type Advise<'a> = &'a dyn Fn(f64) -> ((f64, f64), String);
+
 /// The trigger text that asks for `sampling` scaled to the longest interval
 /// `advice` (`trigger periodic { every = ..; }` or `sampling = .. ..;`).
 pub(super) fn write_sampling(sampling: (f64, f64), advice: f64) -> String {
@@ -186,11 +192,29 @@ impl Runner<'_> {
     }
 
     /// The sampled-loop certificate for the gains of `design` at the spec's
-    /// sampling, or the refusal with the longest sampling that certifies.
+    /// sampling, or the refusal with the longest sampling that certifies
+    /// (advised as `periodic { every }` or `sampling = h_min .. h_max`).
     pub(super) fn sampled(
         &mut self,
         design: &Design,
         sampling: (f64, f64),
+    ) -> Result<(SampledDesign, String), SynthError> {
+        let scaled = |advice: f64| {
+            let s = advice / sampling.1;
+            (
+                (sampling.0 * s, sampling.1 * s),
+                write_sampling(sampling, advice),
+            )
+        };
+        self.sampled_with(design, sampling, &scaled)
+    }
+
+    /// [`Runner::sampled`] with the refusal's advice written by `advise`.
+    pub(super) fn sampled_with(
+        &mut self,
+        design: &Design,
+        sampling: (f64, f64),
+        advise: Advise<'_>,
     ) -> Result<(SampledDesign, String), SynthError> {
         let base = plan_for(self.model, design, sampling);
         if let Some(d) = self.sampled_attempt(&base)? {
@@ -218,14 +242,19 @@ impl Runner<'_> {
         }
         // Advise a short-printed value, re-solved: advice must certify when used.
         let mut advice = round_down(sampling.1 * lo);
+        let mut written = advise(advice);
         for _ in 0..4 {
-            let s = advice / sampling.1;
-            if self.sampled_attempt(&at(s))?.is_some() {
+            let plan = TriggerPlan {
+                sampling: written.0,
+                ..base.clone()
+            };
+            if self.sampled_attempt(&plan)?.is_some() {
                 break;
             }
             advice = round_down(advice * 0.95);
+            written = advise(advice);
         }
-        let write = write_sampling(sampling, advice);
+        let write = written.1;
         Err(SynthError::Infeasible {
             message: format!("the sampled loop is not certified: the gains of the continuous design are not certified for {what}"),
             achievable: vec![format!(

@@ -62,6 +62,7 @@ impl Checker<'_> {
             let values: Vec<f64> = match &t.node {
                 Trigger::Continuous => Vec::new(),
                 Trigger::Periodic { every } => vec![*every],
+                Trigger::Jittered { every, jitter } => vec![*every, *jitter],
                 Trigger::Aperiodic {
                     sampling,
                     threshold,

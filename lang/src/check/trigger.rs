@@ -1,4 +1,4 @@
-//! The triggering law: `trigger continuous;`, `periodic { every }`,
+//! The triggering law: `trigger continuous;`, `periodic { every }`, `jittered { every, jitter }`,
 //! `aperiodic { sampling, threshold, weight }`, `mixed { on, beta, rho, monitor | sampling }`,
 //! and the design method of a synthesized weight.
 
@@ -212,10 +212,11 @@ impl Checker<'_> {
         let allowed: &[&str] = match kind.node.as_str() {
             "continuous" => &[],
             "periodic" => &["every", "design"],
+            "jittered" => &["every", "jitter"],
             "aperiodic" => &["sampling", "threshold", "weight", "region"],
             "mixed" => &["on", "beta", "rho", "monitor", "sampling"],
             other => {
-                let kinds = ["continuous", "periodic", "aperiodic", "mixed"];
+                let kinds = ["continuous", "periodic", "jittered", "aperiodic", "mixed"];
                 self.err(unknown_choice(
                     kind.span, "trigger", "triggers", other, &kinds,
                 ));
@@ -263,12 +264,14 @@ impl Checker<'_> {
                 "continuous" => Some(Trigger::Continuous),
                 "periodic" => {
                     let s = require(self, "every")?;
-                    let v = self.setting_scalar(s)?;
-                    if v <= 0.0 {
-                        self.err(Diagnostic::error(s.span, "the period must be positive"));
-                        return None;
-                    }
-                    Some(Trigger::Periodic { every: v })
+                    Some(Trigger::Periodic {
+                        every: self.period(s)?,
+                    })
+                }
+                "jittered" => {
+                    let every = require(self, "every");
+                    let jitter = require(self, "jitter");
+                    self.jittered(every?, jitter?)
                 }
                 "aperiodic" => {
                     let s = require(self, "sampling")?;
@@ -401,6 +404,36 @@ impl Checker<'_> {
             );
         }
         Some(rho)
+    }
+
+    /// `jittered { every = h; jitter = j; }` with h > 0 and 0 <= j < h.
+    fn jittered(&mut self, every: &Setting, jitter: &Setting) -> Option<Trigger> {
+        let h = self.period(every);
+        let j = self.setting_nonnegative(jitter);
+        let (h, j) = (h?, j?);
+        if j >= h {
+            self.err(
+                Diagnostic::error(jitter.span, format!("the jitter must be shorter than the period, found jitter = {} >= every = {}", Num(j), Num(h)))
+                    .with_label("the shortest interval every - jitter would not be positive")
+                    .with_secondary(every.span, "the nominal period")
+                    .with_help("the sampling intervals lie in [every - jitter, every + jitter]: write 0 <= jitter < every, or use `trigger aperiodic { sampling = h_min .. h_max; }` for intervals in any range"),
+            );
+            return None;
+        }
+        Some(Trigger::Jittered {
+            every: h,
+            jitter: j,
+        })
+    }
+
+    /// The period `every = h;` with h > 0.
+    fn period(&mut self, s: &Setting) -> Option<f64> {
+        let v = self.setting_scalar(s)?;
+        if v <= 0.0 {
+            self.err(Diagnostic::error(s.span, "the period must be positive"));
+            return None;
+        }
+        Some(v)
     }
 
     /// `sampling = h_min .. h_max;` with h_min > 0.

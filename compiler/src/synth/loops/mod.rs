@@ -13,7 +13,8 @@
 //! generated sensor code in each backend, its gate in `crate::sim::trigger`.
 //!
 //! Laws: [`continuous`] (no trigger), [`every_sample`] (periodic sampling,
-//! or aperiodic sampling without a threshold), [`event`] (event trigger with
+//! or aperiodic sampling without a threshold), [`jittered`] (periodic
+//! sampling with jitter, certified as [`every_sample`]'s loop), [`event`] (event trigger with
 //! a synthesized weight: two-step, co-design, regional), [`mixed`] (the mixed
 //! trigger on a signal). Paper-specific experiments are not laws: they are
 //! chosen from `super::experimental::EXPERIMENTS`.
@@ -21,6 +22,7 @@
 pub mod continuous;
 pub mod event;
 pub mod every_sample;
+pub mod jittered;
 pub mod mixed;
 
 use super::design::{Design, SynthError};
@@ -65,6 +67,7 @@ pub const LAWS: &[&dyn LoopLaw] = &[
     &event::TwoStep,
     &mixed::Mixed,
     &every_sample::EverySample,
+    &jittered::Jittered,
     &continuous::Continuous,
 ];
 
@@ -83,7 +86,7 @@ pub enum LoopDesign {
     /// The continuous loop: the core's certificate is the whole certificate.
     #[default]
     Continuous,
-    /// Every sample transmitted (periodic, or aperiodic without a threshold).
+    /// Every sample transmitted (periodic, jittered, or aperiodic without a threshold).
     EverySample(super::design::SampledDesign),
     /// An event trigger with a synthesized weight.
     Event(super::design::TriggerDesign),

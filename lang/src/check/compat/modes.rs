@@ -6,8 +6,11 @@ use crate::check::modes::Around;
 use crate::check::{Checker, Draft};
 use crate::diag::Diagnostic;
 use crate::modes::Modes;
+use crate::num::Num;
 use crate::span::{Span, Spanned};
-use crate::spec::{Objective, PeriodicDesign, Relaxation, SpannedObjective, Trigger, Weight};
+use crate::spec::{
+    jittered_intervals, Objective, PeriodicDesign, Relaxation, SpannedObjective, Trigger, Weight,
+};
 
 impl Checker<'_> {
     /// Reports what the compiler does not do with modes: objectives other
@@ -187,6 +190,14 @@ impl Checker<'_> {
                 return;
             }
             Trigger::Aperiodic { .. } => {}
+            Trigger::Jittered { every, jitter } => {
+                let (lo, hi) = jittered_intervals(*every, *jitter);
+                self.err(
+                    unsupported(t.span, "a jittered trigger is not supported with `modes`".into())
+                        .with_help(format!("write `trigger aperiodic {{ sampling = {} .. {}; }}`: the same sampling intervals, every sample transmitted, certified with `modes`", Num(lo), Num(hi))),
+                );
+                return;
+            }
             Trigger::Mixed { .. } => {
                 self.err(
                     unsupported(
