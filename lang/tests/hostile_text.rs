@@ -73,7 +73,7 @@ fn a_broken_declaration_hides_its_follow_on_errors() {
 fn a_mixed_trigger_rejects_negative_beta_and_rho() {
     let trigger = |beta: &str, rho: &str| {
         errors(&format!(
-            "{SPEC}trigger mixed {{ sampling = 0.001 .. 0.1; beta = {beta}; rho = {rho}; }}"
+            "{SPEC}trigger mixed {{ monitor = continuous; beta = {beta}; rho = {rho}; }}"
         ))
     };
     assert!(trigger("0.1", "0.001").is_empty());

@@ -132,7 +132,7 @@ fn answer(text: &str, dir: &Path) -> Result<(u8, &'static str), TestCaseError> {
         return Ok((0, "generated"));
     };
     let (mc, sweep) = (sim.monte_carlo.is_some(), sim.sweep.is_some());
-    let prepared = match tsfc::sim::prepare_run(&run) {
+    let prepared = match tsfc::driver::prepare_run(&run) {
         Ok(p) => p,
         Err(e) => return Ok((code(&e)?, "not prepared")),
     };
@@ -163,7 +163,13 @@ fn answer(text: &str, dir: &Path) -> Result<(u8, &'static str), TestCaseError> {
     if sweep {
         let cfg = tsfc::sim::sweep::Config { jobs: Some(1) };
         return Ok(
-            match tsfc::sim::sweep::run_sweep(&prepared, &[], &opts, &cfg) {
+            match tsfc::sim::sweep::run_sweep(
+                &prepared,
+                &[],
+                &opts,
+                &cfg,
+                &tsfc::driver::prepare::prepare_text,
+            ) {
                 Ok((table, _)) => (if table.any_failed() { 4 } else { 0 }, "swept"),
                 Err(e) => (code(&e)?, "sweep refused"),
             },
@@ -341,7 +347,7 @@ fn mutated_shard_files_never_panic_the_merge_nor_leave_out() {
     std::fs::create_dir_all(&root).expect("dir");
     let spec = root.join("mc.tsf");
     std::fs::write(&spec, mc).expect("spec");
-    let prepared = tsfc::sim::prepare(&spec).unwrap_or_else(|e| panic!("{e}"));
+    let prepared = tsfc::driver::prepare(&spec).unwrap_or_else(|e| panic!("{e}"));
     let originals: Vec<(String, String)> = (1..=2)
         .map(|k| {
             let cfg = Config {
