@@ -14,7 +14,7 @@ use tsfc::synth::{self, plan, Quantity, Reduction, Settings};
 fn layout(model: &TsModel, reduce: bool) -> (Vec<String>, Vec<String>) {
     let (mut plan, _) = plan::initial_plan(&model.spec, 0.1);
     // As the xi search does when the spec leaves xi free.
-    if let Some(l) = plan.get_mut::<Linf>() {
+    if let Some(l) = plan.linf_mut() {
         l.xi.get_or_insert(0.3);
     }
     let built = synth::build(model, &plan, model.spec.relaxation.node, 1e-7, reduce)
@@ -119,7 +119,7 @@ fn declared_saturation_is_always_inside_the_certificate() {
     // the gains are not those of the unsaturated design (6.2e6, issue 11).
     let model = common::model_of("msd.tsf", &msd("objective hinf(w -> z) minimize;"));
     let d = synth::synthesize(&model, &Settings::default()).expect("certified with the region");
-    assert!(d.plan.get::<Saturation>().is_some_and(|s| s.implied));
+    assert!(d.plan.saturation().is_some_and(|s| s.implied));
     assert!(d
         .notes
         .iter()
@@ -129,10 +129,7 @@ fn declared_saturation_is_always_inside_the_certificate() {
     // Stability: the region is implied, certified and noted.
     let model = common::model_of("msd.tsf", &msd("objective stability;"));
     let d = synth::synthesize(&model, &Settings::default()).expect("certifiable");
-    let sat = d
-        .plan
-        .get::<Saturation>()
-        .expect("implied saturation objective");
+    let sat = d.plan.saturation().expect("implied saturation objective");
     assert!(sat.implied && sat.levels == vec![0.7]);
     assert!(d.notes.iter().any(|n| n.contains("implied")));
     let cert = tsfc::certify::certify(&model, &d).expect("certify");
@@ -164,7 +161,7 @@ fn declared_saturation_is_always_inside_the_certificate() {
         &msd("objective stability;\nobjective input_norm(u) <= 0.5 for x0 = [0.3, 0];"),
     );
     let d = synth::synthesize(&model, &Settings::default()).expect("certifiable");
-    assert!(d.plan.get::<Saturation>().is_none());
+    assert!(d.plan.saturation().is_none());
     assert!(d.notes.iter().any(|n| n.contains("does not saturate")));
     // An input bound above the level is a spec error at check time.
     let e = common::errors_of(

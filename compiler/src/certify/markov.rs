@@ -5,7 +5,7 @@
 //! sum_k w_k G_{a i_k j_k} + c P_a Y_a P_a < 0,
 //! G_aij = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a,
 //!
-//! for every mode a and every condition of the relaxation (`synth/markov/pairs.rs`),
+//! for every mode a and every condition of the relaxation (the relaxation seam's conditions as data),
 //! with P_a > 0 and (tanaka) P_a Y_a P_a >= 0; margins under the rule of every
 //! certificate ([`super::RULE`]). The stored-precision re-check rebuilds the
 //! same conditions with the gains as generated code stores them.
@@ -17,11 +17,12 @@
 use super::stored::{membership_bound, stored, StoredPrecision};
 use super::{margins_of, summarize, Certificate, LmiMargin};
 use crate::model::TsModel;
-use crate::synth::markov::pairs::{conditions, PairCondition};
 use crate::synth::markov::problem::{
     condition_name, diagonal_shift, input_matrices, PerfMatrices, Performance,
 };
 use crate::synth::markov::ModesDesign;
+use crate::synth::relaxation::PairCondition;
+use crate::synth::relaxations::conditions;
 use crate::synth::{Design, SynthError};
 use nalgebra::DMatrix;
 use tsf_lang::modes::Modes;
@@ -204,7 +205,7 @@ fn margins(
     gains: &[Vec<DMatrix<f64>>],
     eps: f64,
 ) -> Result<Vec<LmiMargin>, SynthError> {
-    let Some((conds, _)) = conditions(model, model.spec.relaxation.node) else {
+    let Some(conds) = conditions(model, model.spec.relaxation.node).map(|c| c.list) else {
         return Err(SynthError::Unsupported(
             "this relaxation is not supported with `modes`".into(),
         ));

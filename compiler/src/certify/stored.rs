@@ -16,6 +16,7 @@
 use super::{loop_margins, margins_of, summarize, Values};
 use crate::model::TsModel;
 use crate::synth::objectives::Saturation;
+use crate::synth::solved::Solved;
 use crate::synth::{build, Design, SynthError};
 use nalgebra::DMatrix;
 use serde::Serialize;
@@ -170,7 +171,7 @@ pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthE
     // as M_j = F_j X, so M_j is replaced by (stored F_j) X.
     let stored_model = stored_model(model, precision);
     let mut plan = design.plan.clone();
-    if let Some(s) = plan.get_mut::<Saturation>() {
+    if let Some(s) = plan.saturation_mut() {
         s.levels = s.levels.iter().map(|v| stored(*v, precision)).collect();
     }
     let built = build(
@@ -182,14 +183,10 @@ pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthE
     )?;
     let x_value = std::cell::RefCell::new(None);
     let substitute_gains = |values: &mut Values| {
-        let x = values
-            .iter()
-            .find(|(n, _)| n == "X")
-            .map(|(_, v)| v.clone());
+        let x = values.x().cloned();
         if let Some(x) = &x {
             for (j, f) in gains.iter().enumerate() {
-                let name = format!("M{}", j + 1);
-                if let Some((_, m)) = values.iter_mut().find(|(n, _)| *n == name) {
+                if let Some(m) = values.gain_product_mut(j) {
                     *m = f * x;
                 }
             }

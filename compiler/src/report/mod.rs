@@ -565,7 +565,7 @@ fn problem_stats(log: &SolverLog) -> BTreeMap<String, serde_json::Value> {
 /// The certified region of attraction of design `d`'s shipped loop, and
 /// whether it contains the initial states of the objective and the scenario.
 fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttraction> {
-    let sat = d.plan.get::<crate::synth::objectives::Saturation>()?;
+    let sat = d.plan.saturation()?;
     // The region of the loop that ships: event-triggered, sampled
     // or continuous (no region when its level cannot be computed).
     let (p, c) = match d.loop_design.certificate().and_then(|l| l.region()) {

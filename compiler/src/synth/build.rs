@@ -11,6 +11,7 @@ use super::objectives::{self, Decay};
 use super::plan::Plan;
 use super::reduction::Reduction;
 use super::relaxations::Relaxer;
+use super::solved::names;
 use crate::model::TsModel;
 use nalgebra::{Cholesky, DMatrix, Dyn};
 use tsf_lang::spec::Relaxation;
@@ -82,13 +83,13 @@ pub fn build(
     let model = regional.as_ref().map_or(model, |(m, _)| m);
     let (n, m, r) = (model.n, model.m, model.r());
     let mut problem = Problem::new();
-    let x = problem.symmetric("X", n)?;
+    let x = problem.symmetric(names::X, n)?;
     let mv = match model.spec.given_gains() {
         Some(given) => given.into_iter().map(GainTerm::Given).collect(),
         None => (0..r)
             .map(|j| {
                 problem
-                    .full(&format!("M{}", j + 1), m, n)
+                    .full(&names::gain_product(j), m, n)
                     .map(GainTerm::Free)
             })
             .collect::<Result<Vec<_>, _>>()?,
@@ -118,7 +119,7 @@ pub fn build(
     lmis.strict("X > 0", Expr::var(x))?;
     let implied = plan
         .objectives()
-        .any(|o| o.implies_stability() || o.as_any().is::<Decay>());
+        .any(|o| o.implies_stability() || o.decay_rate().is_some());
     if !implied {
         Decay::stability().impose(&ctx, &mut lmis)?;
     }
@@ -130,7 +131,7 @@ pub fn build(
         // c the saturation objective's level, max(1, xi tau_bar^2 / phi): the
         // set the continuous claims speak of (a region comes with a
         // synthesized trigger weight, which the checker pairs with it).
-        let Some(sat) = plan.get::<objectives::Saturation>() else {
+        let Some(sat) = plan.saturation() else {
             return Err(BuildError::Unsupported(
                 "region: the regional continuous certificate needs `objective saturation region` (its level sizes E(P, c))".into(),
             ));

@@ -26,7 +26,8 @@
 use super::design::{Design, SynthError, TriggerDesign};
 use super::plan::{Goal, Plan};
 use super::search::Runner;
-use super::trigger::{self, certified_threshold, named, Factor, LoopVars, TriggerPlan};
+use super::solved::{names, Solved};
+use super::trigger::{self, certified_threshold, Factor, LoopVars, TriggerPlan};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use std::time::Instant;
@@ -98,12 +99,12 @@ fn gain_step_problem(
 ) -> Result<GainStepProblem, SynthError> {
     let internal = |e: LmiError| SynthError::Internal(format!("co-design gain step: {e}"));
     let (n, m, r) = (model.n, model.m, model.r());
-    let p = named(&last.values, "Ptr")?;
-    let y = named(&last.values, "Ytr")?;
+    let p = last.values.required(names::LOOP_P)?;
+    let y = last.values.required(names::LOOP_Y)?;
     let t = (!plan.levels.is_empty())
-        .then(|| named(&last.values, "T"))
+        .then(|| last.values.required(names::LOOP_SECTOR))
         .transpose()?;
-    let w_known = named(&last.values, "Upsilon")?;
+    let w_known = last.values.required(names::TRIGGER_WEIGHT)?;
     let mut problem = Problem::new();
     // One F and one G for every controller rule, without loss: every pair
     // (i, j) is imposed, so the conditions on (F_j, G_j) are the same for
@@ -123,7 +124,11 @@ fn gain_step_problem(
             Some(problem.scalar("nu_cd").map_err(internal)?),
         ),
         GainGoal::LowerXi { .. } => (
-            Factor::Var(problem.symmetric("Upsilon", n).map_err(internal)?),
+            Factor::Var(
+                problem
+                    .symmetric(names::TRIGGER_WEIGHT, n)
+                    .map_err(internal)?,
+            ),
             None,
         ),
     };
@@ -401,9 +406,9 @@ impl Runner<'_> {
                 achievable: vec!["use `weight = synthesize two_step;`".into()],
             });
         };
-        let x = named(&d.values, "X")?;
+        let x = d.values.required(names::X)?;
         for (j, f) in gains.iter().enumerate() {
-            d.values.push((format!("M{}", j + 1), f * &x));
+            d.values.push((names::gain_product(j), f * &x));
         }
         Ok(d)
     }

@@ -96,7 +96,7 @@ fn label(o: &dyn Objective) -> String {
         Some(Bound::Fixed(v)) => o.describe_bound(v),
         Some(Bound::Minimize) if kind == ObjectiveKind::DecayRate => format!("{kind} maximize"),
         Some(Bound::Minimize) => format!("{kind} minimize"),
-        _ => match o.as_any().downcast_ref::<Saturation>() {
+        _ => match o.saturation_region() {
             Some(s) if s.implied => "saturation region (implied by the `saturate` levels)".into(),
             Some(_) => "saturation region".into(),
             None => kind.to_string(),

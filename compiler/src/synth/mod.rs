@@ -33,6 +33,7 @@ mod sampled;
 pub mod sampling;
 mod search;
 pub mod signal_trigger;
+pub mod solved;
 pub mod trigger;
 pub mod vertices;
 
@@ -153,7 +154,7 @@ fn saturation_covered(model: &TsModel, d: &mut Design) -> Result<(), SynthError>
     let Some(levels) = &model.spec.saturation else {
         return Ok(());
     };
-    if let Some(s) = d.plan.get::<objectives::Saturation>() {
+    if let Some(s) = d.plan.saturation() {
         if s.implied {
             d.notes.push("saturation region implied by the declared `saturate` levels: the certificate covers the saturated loop on E(P, 1) (write `objective saturation region;` to say so, or bound `input_norm` below the levels)".into());
         }

@@ -5,12 +5,13 @@
 
 use super::achieved::{Achieved, Quantity};
 use super::blocks::{initial_set_block, nonstrict_psd};
+use super::objectives::{Decay, Linf, Saturation};
 use super::reduction::Values;
 use super::relaxation::Family;
 use super::relaxations::Relaxer;
+use super::solved::Solved;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
-use std::any::Any;
 use tsf_lang::spec::{InitialSet, ObjectiveKind, Target};
 use tsf_lmi::{Expr, LmiError, Problem, Var};
 
@@ -45,25 +46,15 @@ pub trait PlanView {
     fn without_sector(&self) -> Option<ObjectiveKind>;
 }
 
-/// Cloning and downcasting, implemented for every `Clone` objective.
+/// Cloning, implemented for every `Clone` objective.
 pub trait ObjectiveBase {
     /// A boxed copy.
     fn clone_box(&self) -> Box<dyn Objective>;
-    /// For typed access ([`super::Plan::get`]).
-    fn as_any(&self) -> &dyn Any;
-    /// For typed access ([`super::Plan::get_mut`]).
-    fn as_any_mut(&mut self) -> &mut dyn Any;
 }
 
 impl<T: Objective + Clone + 'static> ObjectiveBase for T {
     fn clone_box(&self) -> Box<dyn Objective> {
         Box::new(self.clone())
-    }
-    fn as_any(&self) -> &dyn Any {
-        self
-    }
-    fn as_any_mut(&mut self) -> &mut dyn Any {
-        self
     }
 }
 
@@ -130,6 +121,38 @@ pub trait Objective: ObjectiveBase + std::fmt::Debug + Send + Sync {
 
     /// Reads what it achieved from the solved variables.
     fn achieved(&self, _values: &Values, _out: &mut Achieved) {}
+
+    /// The certified saturation region it declares (the saturation family),
+    /// read by the searches, the loop certificates and the report.
+    fn saturation_region(&self) -> Option<&Saturation> {
+        None
+    }
+
+    /// Its rounded saturation levels changed (the certificate of stored numbers).
+    fn saturation_region_mut(&mut self) -> Option<&mut Saturation> {
+        None
+    }
+
+    /// The peak-to-peak bound with its level parameters phi and xi (the
+    /// L-inf family), which the xi and phi searches move.
+    fn peak_bound(&self) -> Option<&Linf> {
+        None
+    }
+
+    /// The same, for the searches to set xi, its bound or phi.
+    fn peak_bound_mut(&mut self) -> Option<&mut Linf> {
+        None
+    }
+
+    /// The decay rate it imposes (the decay family).
+    fn decay_rate(&self) -> Option<&Decay> {
+        None
+    }
+
+    /// The same, for the bisection to move alpha.
+    fn decay_rate_mut(&mut self) -> Option<&mut Decay> {
+        None
+    }
 }
 
 impl Clone for Box<dyn Objective> {
@@ -148,10 +171,7 @@ pub fn bound(t: Target) -> Bound {
 
 /// The value of a scalar variable, by name.
 pub fn scalar(values: &Values, name: &str) -> Option<f64> {
-    values
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, v)| v[(0, 0)])
+    values.value(name).map(|v| v[(0, 0)])
 }
 
 /// The value of a bound: the fixed number, or `read()` of the solved variable.

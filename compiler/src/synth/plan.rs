@@ -4,7 +4,7 @@
 
 pub use super::objective::{Bound, Goal, Objective};
 use super::objective::{BuildError, PlanView};
-use super::objectives::{self, Decay, Saturation};
+use super::objectives::{self, Decay, Linf, Saturation};
 use tsf_lang::spec::{ObjectiveKind, Spec};
 
 /// The objectives of one SDP, with numbers.
@@ -43,18 +43,31 @@ impl Plan {
         v
     }
 
-    /// The objective of type `T`, if the plan has one.
-    pub fn get<T: 'static>(&self) -> Option<&T> {
-        self.objectives
-            .iter()
-            .find_map(|o| o.as_any().downcast_ref::<T>())
+    /// The certified saturation region, if an objective declares one.
+    pub fn saturation(&self) -> Option<&Saturation> {
+        self.objectives().find_map(|o| o.saturation_region())
     }
 
-    /// The objective of type `T`, mutably.
-    pub fn get_mut<T: 'static>(&mut self) -> Option<&mut T> {
+    /// The saturation region, mutably.
+    pub fn saturation_mut(&mut self) -> Option<&mut Saturation> {
         self.objectives
             .iter_mut()
-            .find_map(|o| o.as_any_mut().downcast_mut::<T>())
+            .find_map(|o| o.saturation_region_mut())
+    }
+
+    /// The peak-to-peak (L-inf) bound, if the plan has one.
+    pub fn linf(&self) -> Option<&Linf> {
+        self.objectives().find_map(|o| o.peak_bound())
+    }
+
+    /// The peak-to-peak bound, mutably.
+    pub fn linf_mut(&mut self) -> Option<&mut Linf> {
+        self.objectives.iter_mut().find_map(|o| o.peak_bound_mut())
+    }
+
+    /// The imposed decay rate, if the plan has one.
+    pub fn decay(&self) -> Option<&Decay> {
+        self.objectives().find_map(|o| o.decay_rate())
     }
 
     /// The objective of family `kind`.
@@ -79,7 +92,7 @@ impl Plan {
     /// This plan with a decay rate alpha imposed.
     pub fn with_decay(&self, alpha: f64) -> Plan {
         let mut p = self.clone();
-        match p.get_mut::<Decay>() {
+        match p.objectives.iter_mut().find_map(|o| o.decay_rate_mut()) {
             Some(d) => d.alpha = alpha,
             None => {
                 let mut d = Decay::new(tsf_lang::spec::Target::Fixed(alpha));

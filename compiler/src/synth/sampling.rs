@@ -15,7 +15,8 @@ use super::advice::round_down;
 use super::design::{Design, SampledDesign, SolverLog, SynthError, TriggerPlan};
 use super::objectives::Saturation;
 use super::search::Runner;
-use super::trigger::{self, named};
+use super::solved::{names, Solved};
+use super::trigger;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use tsf_lang::spec::{Trigger, Weight};
@@ -55,15 +56,14 @@ pub fn uncovered(model: &TsModel) -> Option<String> {
 
 /// The sampled-loop problem for the gains of `design` with intervals `sampling`.
 pub fn plan_for(model: &TsModel, design: &Design, sampling: (f64, f64)) -> TriggerPlan {
-    let sat = design.plan.get::<Saturation>();
+    let sat = design.plan.saturation();
     let sector = match sat {
         Some(_) => (0..model.r())
             .map(|j| {
                 design
                     .values
-                    .iter()
-                    .find(|(n, _)| *n == format!("Z{}", j + 1))
-                    .map_or_else(|| DMatrix::zeros(model.m, model.n), |(_, z)| z * &design.p)
+                    .sector_product(j)
+                    .map_or_else(|| DMatrix::zeros(model.m, model.n), |z| z * &design.p)
             })
             .collect(),
         None => Vec::new(),
@@ -185,7 +185,7 @@ impl Runner<'_> {
         };
         Ok(Some(SampledDesign {
             plan: plan.clone(),
-            p: named(&all, "Ptr")?,
+            p: all.required(names::LOOP_P)?,
             values: all,
             reductions: built.reductions,
         }))

@@ -245,7 +245,7 @@ impl Runner<'_> {
     fn min_xi(&mut self, plan: &Plan, tau: f64) -> Result<Option<(Design, String)>, SynthError> {
         let with = |xi: f64| {
             let mut p = plan.clone();
-            if let Some(l) = p.get_mut::<Linf>() {
+            if let Some(l) = p.linf_mut() {
                 l.xi = Some(xi);
             }
             p
@@ -253,12 +253,12 @@ impl Runner<'_> {
         // gamma >= xi ((gamma - xi) I > 0): with a fixed bound gamma <= g the
         // search must stay below g, else the growing bracket can jump over the
         // feasible window [xi_min, g).
-        let cap = match plan.get::<Linf>().map(|l| l.target) {
+        let cap = match plan.linf().map(|l| l.target) {
             Some(Bound::Fixed(g)) => g * (1.0 - XI_CAP_REL),
             _ => 1e8,
         };
         let tol = self.settings.bisection_rel_tol;
-        let Some(linf) = plan.get::<Linf>() else {
+        let Some(linf) = plan.linf() else {
             return Ok(None);
         };
         let first_bound = ((XI_HINT_LEVEL_FACTOR - 1.0) * linf.phi / (tau * tau)).min(cap);
@@ -356,7 +356,7 @@ impl Runner<'_> {
         };
         let solve = |runner: &mut Self, xi: f64| -> Result<Option<Design>, SynthError> {
             let mut p = plan.clone();
-            if let Some(l) = p.get_mut::<Linf>() {
+            if let Some(l) = p.linf_mut() {
                 l.xi = Some(xi);
             }
             Ok(match runner.attempt(&p)? {
@@ -420,11 +420,11 @@ impl Runner<'_> {
     /// bound xi <= `bound`; its xi places the search, so an `AlmostSolved`
     /// iterate is taken.
     fn xi_hint(&mut self, plan: &Plan, bound: f64, tau: f64) -> Result<Option<f64>, SynthError> {
-        if plan.get::<Linf>().is_none() || tau <= 0.0 {
+        if plan.linf().is_none() || tau <= 0.0 {
             return Ok(None);
         }
         let mut p = plan.clone();
-        if let Some(l) = p.get_mut::<Linf>() {
+        if let Some(l) = p.linf_mut() {
             l.xi_bound = Some(bound);
             l.minimize_xi = true;
         }
@@ -452,24 +452,24 @@ impl Runner<'_> {
                 d
             }));
         }
-        let linf = plan.get::<Linf>();
+        let linf = plan.linf();
         let phi_free = linf.is_some_and(|l| !l.phi_fixed);
         let disturbed_saturation = plan
-            .get::<super::objectives::Saturation>()
+            .saturation()
             .is_some_and(|s| s.disturbance_bound.is_some());
         if linf.is_some_and(|l| l.xi.is_none()) && disturbed_saturation {
             if phi_free {
                 return Err(SynthError::Unsupported("L-inf with saturation and a bounded disturbance needs a fixed phi (`with phi = ...`): the linear-region level depends on xi / phi".into()));
             }
             let tau = plan
-                .get::<super::objectives::Saturation>()
+                .saturation()
                 .and_then(|s| s.disturbance_bound)
                 .unwrap_or(0.0);
             let Some((d, note)) = self.min_xi(plan, tau)? else {
                 return Ok(None);
             };
             let minimize = plan
-                .get::<Linf>()
+                .linf()
                 .is_some_and(|l| matches!(l.target, Bound::Minimize));
             let (mut d, scan) = if minimize {
                 self.xi_for_gamma(plan, d)?
@@ -498,7 +498,7 @@ impl Runner<'_> {
     fn linf_line_search(&mut self, plan: &Plan) -> Result<Option<Design>, SynthError> {
         let eval = |runner: &mut Self, phi: f64| -> Result<Option<Design>, SynthError> {
             let mut p = plan.clone();
-            if let Some(l) = p.get_mut::<Linf>() {
+            if let Some(l) = p.linf_mut() {
                 l.phi = phi;
             }
             Ok(match runner.attempt(&p)? {

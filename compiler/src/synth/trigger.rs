@@ -27,6 +27,7 @@ use super::objective::BuildError;
 use super::objectives::{Linf, Saturation};
 use super::reduction::Reduction;
 use super::search::Runner;
+use super::solved::{names, Solved};
 use super::vertices::{self, PlantVertex};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -291,10 +292,10 @@ fn declare_trigger_step<'a>(
     plan: &'a TriggerPlan,
 ) -> Result<LoopVars<'a>, LmiError> {
     let n = model.n;
-    let p = problem.symmetric("Ptr", n)?;
-    let y = problem.symmetric("Ytr", n)?;
+    let p = problem.symmetric(names::LOOP_P, n)?;
+    let y = problem.symmetric(names::LOOP_Y, n)?;
     let w = if plan.event {
-        Some(Factor::Var(problem.symmetric("Upsilon", n)?))
+        Some(Factor::Var(problem.symmetric(names::TRIGGER_WEIGHT, n)?))
     } else {
         None
     };
@@ -302,7 +303,7 @@ fn declare_trigger_step<'a>(
     let t = if plan.levels.is_empty() {
         None
     } else {
-        Some(Factor::Var(problem.diagonal("T", model.m)?))
+        Some(Factor::Var(problem.diagonal(names::LOOP_SECTOR, model.m)?))
     };
     let (gains, sector) = LoopVars::plan_gains(plan);
     Ok(LoopVars {
@@ -342,8 +343,8 @@ pub(super) fn impose(
 ) -> Result<TriggerBuilt, LmiError> {
     let (gamma, xi) = if plan.linf {
         (
-            Some(problem.scalar("gamma_tr")?),
-            Some(problem.scalar("xi_tr")?),
+            Some(problem.scalar(names::LOOP_GAMMA)?),
+            Some(problem.scalar(names::LOOP_XI)?),
         )
     } else {
         (None, None)
@@ -606,8 +607,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     else {
         return Err(unsupported("needs an aperiodic trigger"));
     };
-    let (Some(linf), Some(sat)) = (design.plan.get::<Linf>(), design.plan.get::<Saturation>())
-    else {
+    let (Some(linf), Some(sat)) = (design.plan.linf(), design.plan.saturation()) else {
         return Err(unsupported(
             "needs an L-inf objective and `objective saturation region` (the shipped method is Xu & Huang's setting)",
         ));
@@ -617,14 +617,6 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         return Err(unsupported("the L-inf output must not depend on u"));
     }
     let sig = &model.spec.disturbances[linf.from];
-    let value = |name: &str| {
-        design
-            .values
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v.clone())
-            .ok_or_else(|| unsupported(&format!("step-1 variable `{name}` missing")))
-    };
     let region = crate::model::region::premise_box(model).map_err(SynthError::Unsupported)?;
     // G_j = Z_j X^{-1} = Z_j P. With a premise region G = 0 (any G is a valid
     // choice of the generalized sector condition; the controller never uses
@@ -635,7 +627,11 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
     let sector = (0..model.r())
         .map(|j| match region {
             Some(_) => Ok(DMatrix::zeros(model.m, model.n)),
-            None => value(&format!("Z{}", j + 1)).map(|z| z * &design.p),
+            None => design
+                .values
+                .sector_product(j)
+                .map(|z| z * &design.p)
+                .ok_or_else(|| unsupported("step-1 sector variable Z_j missing")),
         })
         .collect::<Result<Vec<_>, _>>()?;
     // gamma >= xi; where step 1 is not balanced (gamma above xi, set by
@@ -738,7 +734,7 @@ pub fn scaled_plan(plan: &TriggerPlan, sigma: f64) -> TriggerPlan {
 /// original plan: every unknown but gamma and xi times sigma.
 fn unscale_values(values: &mut [(String, DMatrix<f64>)], sigma: f64) {
     for (name, v) in values.iter_mut() {
-        if name != "gamma_tr" && name != "xi_tr" {
+        if name != names::LOOP_GAMMA && name != names::LOOP_XI {
             *v *= sigma;
         }
     }
@@ -800,7 +796,7 @@ impl Runner<'_> {
             return Ok(None);
         };
         unscale_values(&mut all, sigma);
-        let xi = named(&all, "xi_tr")?[(0, 0)];
+        let xi = all.required(names::LOOP_XI)?[(0, 0)];
         // With a premise region the cap does not set the level (joint_level):
         // tighten it to the xi found, for the gain step of a co-design that
         // follows (its level is the cap's).
@@ -815,9 +811,9 @@ impl Runner<'_> {
                 ..plan.clone()
             },
             method: "two_step",
-            weight: named(&all, "Upsilon")?,
-            p: named(&all, "Ptr")?,
-            gamma: named(&all, "gamma_tr")?[(0, 0)],
+            weight: all.required(names::TRIGGER_WEIGHT)?,
+            p: all.required(names::LOOP_P)?,
+            gamma: all.required(names::LOOP_GAMMA)?[(0, 0)],
             xi,
             values: all,
             reductions: built.reductions,
@@ -920,16 +916,4 @@ pub fn certified_threshold(model: &TsModel) -> f64 {
         }) => t.ceiling(),
         _ => 0.0,
     }
-}
-
-/// The value of the variable `name` of a solved problem.
-pub(super) fn named(
-    values: &[(String, DMatrix<f64>)],
-    name: &str,
-) -> Result<DMatrix<f64>, SynthError> {
-    values
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, v)| v.clone())
-        .ok_or_else(|| SynthError::Internal(format!("internal error: `{name}` has no value")))
 }

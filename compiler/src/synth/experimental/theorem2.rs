@@ -103,10 +103,10 @@ pub fn plan_of(model: &TsModel) -> Result<Option<Theorem2Plan>, SynthError> {
         return Err(unsupported("needs an aperiodic trigger"));
     };
     let (plan, _) = super::super::plan::initial_plan(&model.spec, 0.1);
-    let Some(linf) = plan.get::<Linf>().cloned() else {
+    let Some(linf) = plan.linf().cloned() else {
         return Err(unsupported("needs an L-inf objective"));
     };
-    let Some(sat) = plan.get::<Saturation>().cloned() else {
+    let Some(sat) = plan.saturation().cloned() else {
         return Err(unsupported("needs `objective saturation region`"));
     };
     let Some(xi) = xi.or(linf.xi) else {

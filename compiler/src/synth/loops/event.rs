@@ -13,6 +13,7 @@ use crate::model::TsModel;
 use crate::synth::design::{Design, SynthError, TriggerDesign};
 use crate::synth::reduction::Reduction;
 use crate::synth::search::Runner;
+use crate::synth::solved::Solved;
 use crate::synth::{given, trigger, vertices, Quantity};
 use nalgebra::DMatrix;
 use serde::Serialize;
@@ -92,7 +93,7 @@ impl LoopCertificate for TriggerDesign {
         let mut values = self.values.clone();
         if let Some(s) = stored {
             // The weight as the sensor module stores it.
-            if let Some((_, v)) = values.iter_mut().find(|(n, _)| n == "Upsilon") {
+            if let Some(v) = values.trigger_weight_mut() {
                 *v = self.weight.map(s);
             }
         }

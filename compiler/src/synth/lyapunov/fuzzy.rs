@@ -34,6 +34,7 @@ use crate::synth::objectives::Decay;
 use crate::synth::plan::Plan;
 use crate::synth::relaxation::Family;
 use crate::synth::relaxations::Relaxer;
+use crate::synth::solved::names;
 use nalgebra::DMatrix;
 use serde::Serialize;
 use tsf_lang::spec::{Lyapunov, Relaxation};
@@ -95,16 +96,16 @@ pub fn build(
         )));
     }
     let mu = plan.mu.unwrap_or(DEFAULT_MU);
-    let alpha = plan.get::<Decay>().map_or(0.0, |d| d.alpha);
-    let name = if plan.get::<Decay>().is_some() {
+    let alpha = plan.decay().map_or(0.0, |d| d.alpha);
+    let name = if plan.decay().is_some() {
         "decay"
     } else {
         "stability"
     };
     let mut problem = Problem::new();
-    let g = problem.full("X", n, n)?;
+    let g = problem.full(names::X, n, n)?;
     let z = (0..r)
-        .map(|j| problem.full(&format!("M{}", j + 1), m, n))
+        .map(|j| problem.full(&names::gain_product(j), m, n))
         .collect::<Result<Vec<_>, _>>()?;
     let p = (0..r)
         .map(|k| problem.symmetric(&format!("P{}", k + 1), n))

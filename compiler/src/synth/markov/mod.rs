@@ -9,7 +9,8 @@
 //!
 //! G_a = He(P_a (A_i + B_ai F_aj)) + sum_b pi_ab P_b + 2 alpha P_a < 0,   (P)
 //!
-//! relaxed over rule pairs as [`pairs`] lists. Change of variables: X_a =
+//! relaxed over rule pairs as the relaxation seam lists them
+//! ([`super::relaxation::DoubleSum::conditions`]). Change of variables: X_a =
 //! P_a^{-1}, M_aj = F_aj X_a. Congruence with X_a gives
 //! He(A_i X_a + B_ai M_aj) + (pi_aa + 2 alpha) X_a + sum_{b != a} pi_ab X_a X_b^{-1} X_a,
 //! and the last sum is R_a S_a^{-1} R_a' with R_a = [X_a, ..., X_a] and
@@ -59,14 +60,16 @@
 //! X_a^{-1} and the design's F_aj, never (X), and recomputes lambda1,
 //! lambda2 from the P_a and c2 from them.
 
-pub mod pairs;
 pub mod problem;
 pub mod sampled;
 
 use super::achieved::{Achieved, Quantity};
 use super::design::{Design, SolverLog, SynthError};
 use super::plan::{initial_plan, Plan};
+use super::relaxation::Conditions;
+use super::relaxations;
 use super::search::Runner;
+use super::solved::Solved as _;
 use nalgebra::DMatrix;
 use problem::{diagonal_shift, names, FtbParams, Performance};
 use std::cell::Cell;
@@ -228,7 +231,9 @@ fn at_alpha(perf: &Performance, alpha: f64) -> Performance {
 /// Synthesizes the gains of every mode (the spec has `modes`).
 pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Design, SynthError> {
     let model = runner.model;
-    let Some((conds, slack)) = pairs::conditions(model, model.spec.relaxation.node) else {
+    let Some(Conditions { list: conds, slack }) =
+        relaxations::conditions(model, model.spec.relaxation.node)
+    else {
         return Err(SynthError::Unsupported(
             "this relaxation is not supported with `modes`".into(),
         ));
@@ -414,12 +419,7 @@ fn mode_solution(
         .vars()
         .map(|(name, v)| value(v).map(|m| (name.to_string(), m)))
         .collect::<Result<Vec<_>, _>>()?;
-    let scalar = |name: &str| {
-        values
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, m)| m[(0, 0)])
-    };
+    let scalar = |name: &str| values.value(name).map(|m| m[(0, 0)]);
     let (performance, objective) = match perf {
         Performance::None => (Performance::None, None),
         Performance::Hinf { from, to, gamma } => {

@@ -1,10 +1,10 @@
 //! The mode conditions in X variables, the SDP synthesis solves (see the
 //! module documentation of [`super`] for the derivation).
 
-use super::pairs::PairCondition;
 use crate::model::TsModel;
 use crate::synth::blocks::Channel;
 use crate::synth::objective::BuildError;
+use crate::synth::relaxation::PairCondition;
 use nalgebra::DMatrix;
 use tsf_lang::modes::{ModeDesign, Modes};
 use tsf_lmi::{Expr, Problem, Relation, Var};

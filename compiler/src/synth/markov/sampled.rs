@@ -53,6 +53,7 @@ use crate::synth::advice::round_down;
 use crate::synth::design::SynthError;
 use crate::synth::sampling::{longest_scale_from_above, write_sampling};
 use crate::synth::search::Runner;
+use crate::synth::solved::Solved;
 use nalgebra::DMatrix;
 use tsf_lang::modes::Modes;
 use tsf_lang::spec::Trigger;
@@ -431,13 +432,7 @@ fn attempt(
                 .map_err(internal)
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let get = |name: &str| {
-        values
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v.clone())
-            .ok_or_else(|| SynthError::Internal(format!("internal error: `{name}` has no value")))
-    };
+    let get = |name: &str| values.required(name);
     let per_mode = |f: fn(&str) -> String| {
         modes
             .modes

@@ -44,6 +44,14 @@ impl Decay {
 }
 
 impl Objective for Decay {
+    fn decay_rate(&self) -> Option<&Decay> {
+        Some(self)
+    }
+
+    fn decay_rate_mut(&mut self) -> Option<&mut Decay> {
+        Some(self)
+    }
+
     fn kind(&self) -> ObjectiveKind {
         ObjectiveKind::DecayRate
     }

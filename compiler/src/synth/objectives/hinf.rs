@@ -170,8 +170,8 @@ fn dead_zone(
 /// E(P, 1), from x(0) = 0 and from the saturation objective's x0 (if a
 /// point). `None` without both objectives.
 pub fn regional_note(d: &crate::synth::Design) -> Option<String> {
-    let sat = d.plan.get::<super::Saturation>()?;
-    d.plan.get::<Hinf>()?;
+    let sat = d.plan.saturation()?;
+    d.plan.find(ObjectiveKind::Hinf)?;
     let gamma = d.achieved.get(Quantity::HinfGamma)?;
     let g2 = gamma * gamma;
     let from_x0 = match &sat.contain {

@@ -63,6 +63,14 @@ impl Linf {
 }
 
 impl Objective for Linf {
+    fn peak_bound(&self) -> Option<&Linf> {
+        Some(self)
+    }
+
+    fn peak_bound_mut(&mut self) -> Option<&mut Linf> {
+        Some(self)
+    }
+
     fn kind(&self) -> ObjectiveKind {
         ObjectiveKind::Linf
     }

@@ -8,6 +8,7 @@
 use crate::model::TsModel;
 use crate::synth::blocks::{region_block, row_selector, var_row};
 use crate::synth::objective::{BuildError, Ctx, Lmis, Objective, PlanView, Sector};
+use crate::synth::solved::names;
 use nalgebra::DMatrix;
 use tsf_lang::spec::{InitialSet, ObjectiveKind};
 use tsf_lmi::Expr;
@@ -46,6 +47,14 @@ impl Saturation {
 }
 
 impl Objective for Saturation {
+    fn saturation_region(&self) -> Option<&Saturation> {
+        Some(self)
+    }
+
+    fn saturation_region_mut(&mut self) -> Option<&mut Saturation> {
+        Some(self)
+    }
+
     fn kind(&self) -> ObjectiveKind {
         ObjectiveKind::SaturationRegion
     }
@@ -54,7 +63,7 @@ impl Objective for Saturation {
         let (m, n) = (model.m, model.n);
         let s = lmis.problem.diagonal("S", m)?;
         let z = (0..model.r())
-            .map(|j| lmis.problem.full(&format!("Z{}", j + 1), m, n))
+            .map(|j| lmis.problem.full(&names::sector_product(j), m, n))
             .collect::<Result<Vec<_>, _>>()?;
         lmis.sector = Some(Sector { s, z });
         Ok(())

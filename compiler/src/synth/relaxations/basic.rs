@@ -1,7 +1,7 @@
 //! Tanaka & Wang's basic relaxation (*Fuzzy Control Systems Design and
 //! Analysis*, 2001): Q_ii < 0 and Q_ij + Q_ji < 0 for i < j.
 
-use crate::synth::relaxation::{DoubleSum, Family, Sink};
+use crate::synth::relaxation::{Conditions, DoubleSum, Family, PairCondition, Sink};
 use tsf_lmi::LmiError;
 
 /// The basic relaxation.
@@ -25,5 +25,27 @@ impl DoubleSum for Basic {
         }
         sink.dropped(fam, dropped);
         Ok(())
+    }
+
+    fn conditions(&self, r: usize, overlap: &dyn Fn(usize, usize) -> bool) -> Option<Conditions> {
+        let mut list = Vec::new();
+        for i in 0..r {
+            list.push(PairCondition::new(
+                format!("Q[{0},{0}]", i + 1),
+                vec![(i, i, 1.0)],
+                0.0,
+                true,
+            ));
+            for j in (i + 1..r).filter(|j| overlap(i, *j)) {
+                let label = format!("Q+Q'[{},{}]", i + 1, j + 1);
+                list.push(PairCondition::new(
+                    label,
+                    vec![(i, j, 1.0), (j, i, 1.0)],
+                    0.0,
+                    true,
+                ));
+            }
+        }
+        Some(Conditions { list, slack: false })
     }
 }

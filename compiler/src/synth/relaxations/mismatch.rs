@@ -3,7 +3,7 @@
 //! bound kappa is carried for the report; it does not relax the conditions
 //! yet (Arino & Sala's kappa-bounded relaxation is a separate relaxation).
 
-use crate::synth::relaxation::{DoubleSum, Family, Sink};
+use crate::synth::relaxation::{Conditions, DoubleSum, Family, PairCondition, Sink};
 use tsf_lmi::LmiError;
 
 /// Every plant/controller rule pair.
@@ -17,5 +17,17 @@ impl DoubleSum for Mismatch {
             }
         }
         Ok(())
+    }
+
+    fn conditions(&self, r: usize, overlap: &dyn Fn(usize, usize) -> bool) -> Option<Conditions> {
+        let list = (0..r)
+            .flat_map(|i| (0..r).map(move |j| (i, j)))
+            .filter(|&(i, j)| i == j || overlap(i, j))
+            .map(|(i, j)| {
+                let label = format!("Q[{},{}]", i + 1, j + 1);
+                PairCondition::new(label, vec![(i, j, 1.0)], 0.0, true)
+            })
+            .collect();
+        Some(Conditions { list, slack: false })
     }
 }

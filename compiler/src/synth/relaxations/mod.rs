@@ -12,7 +12,7 @@ mod tanaka;
 mod tuan;
 
 use super::reduction::Reduction;
-use super::relaxation::{DoubleSum, Family, Sink};
+use super::relaxation::{Conditions, DoubleSum, Family, Sink};
 use crate::model::TsModel;
 use tsf_lang::spec::{Relaxation, Trigger};
 use tsf_lmi::{LmiError, Problem};
@@ -29,6 +29,15 @@ fn double_sum(model: &TsModel, r: Relaxation) -> Box<dyn DoubleSum> {
         }
         Relaxation::MembershipMismatch { .. } => Box::new(mismatch::Mismatch),
     }
+}
+
+/// The conditions of the spec's `relaxation` over the rules of `model` as
+/// data ([`DoubleSum::conditions`]), for problems that build their blocks
+/// themselves (the Markov modes); `None` for a relaxation without that form
+/// (the checker refuses those with modes).
+pub fn conditions(model: &TsModel, relaxation: Relaxation) -> Option<Conditions> {
+    let overlap = |i: usize, j: usize| super::relaxation::overlap(model, i, j);
+    double_sum(model, relaxation).conditions(model.r(), &overlap)
 }
 
 /// The mismatch bound kappa the certificate relies on: the spec's

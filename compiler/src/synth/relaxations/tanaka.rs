@@ -5,7 +5,7 @@
 
 use crate::synth::blocks::nonstrict_psd;
 use crate::synth::reduction::Reduction;
-use crate::synth::relaxation::{DoubleSum, Family, Sink};
+use crate::synth::relaxation::{Conditions, DoubleSum, Family, PairCondition, Sink};
 use tsf_lmi::{Expr, LmiError};
 
 /// The relaxation with `s` simultaneously firing rules.
@@ -65,6 +65,25 @@ impl DoubleSum for Tanaka {
             }
         }
         Ok(())
+    }
+
+    fn conditions(&self, r: usize, overlap: &dyn Fn(usize, usize) -> bool) -> Option<Conditions> {
+        let k = (self.s as f64 - 1.0).max(0.0);
+        let mut list = Vec::new();
+        for i in 0..r {
+            let label = format!("Q+(s-1)Y[{0},{0}]", i + 1);
+            list.push(PairCondition::new(label, vec![(i, i, 1.0)], k, true));
+            for j in (i + 1..r).filter(|j| overlap(i, *j)) {
+                let label = format!("(Q+Q')/2-Y[{},{}]", i + 1, j + 1);
+                list.push(PairCondition::new(
+                    label,
+                    vec![(i, j, 0.5), (j, i, 0.5)],
+                    -1.0,
+                    false,
+                ));
+            }
+        }
+        Some(Conditions { list, slack: true })
     }
 }
 
