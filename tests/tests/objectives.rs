@@ -7,7 +7,6 @@ use common::shipped;
 use nalgebra::DVector;
 use tsf_lang::spec::Spec;
 use tsfc::model::TsModel;
-use tsfc::synth::objectives::{Linf, Saturation};
 use tsfc::synth::{self, plan, Quantity, Reduction, Settings};
 
 /// (variable names, constraint names) of the problem built for `model`'s plan.

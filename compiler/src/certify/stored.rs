@@ -15,7 +15,6 @@
 
 use super::{loop_margins, margins_of, summarize, Values};
 use crate::model::TsModel;
-use crate::synth::objectives::Saturation;
 use crate::synth::solved::Solved;
 use crate::synth::{build, Design, SynthError};
 use nalgebra::DMatrix;

@@ -15,7 +15,6 @@
 use super::achieved::Quantity;
 use super::design::{Design, SynthError};
 use super::objective::{Bound, Objective};
-use super::objectives::Saturation;
 use super::plan::Plan;
 use super::search::Runner;
 use crate::model::TsModel;

@@ -13,7 +13,6 @@
 
 use super::advice::round_down;
 use super::design::{Design, SampledDesign, SolverLog, SynthError, TriggerPlan};
-use super::objectives::Saturation;
 use super::search::Runner;
 use super::solved::{names, Solved};
 use super::trigger;

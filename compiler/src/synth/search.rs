@@ -6,7 +6,6 @@ use super::build::build;
 use super::design::{Design, Settings, SolverLog, SynthError};
 use super::lyapunov::fuzzy;
 use super::objective::GainTerm;
-use super::objectives::Linf;
 use super::plan::{Bound, Goal, Plan};
 use crate::model::TsModel;
 use std::time::{Duration, Instant};

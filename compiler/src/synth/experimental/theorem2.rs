@@ -22,7 +22,6 @@
 use crate::model::TsModel;
 use crate::synth::blocks::{region_block, var_row};
 use crate::synth::design::{Settings, SynthError};
-use crate::synth::objectives::{Linf, Saturation};
 use crate::synth::relaxation::Family;
 use crate::synth::relaxations::Relaxer;
 use crate::synth::sampled::{lambda, Block12, Terms, Vertex};

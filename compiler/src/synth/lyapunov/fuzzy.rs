@@ -30,7 +30,6 @@ use crate::model::TsModel;
 use crate::synth::blocks::{common_b, nonstrict_psd};
 use crate::synth::build::Built;
 use crate::synth::objective::{BuildError, GainTerm};
-use crate::synth::objectives::Decay;
 use crate::synth::plan::Plan;
 use crate::synth::relaxation::Family;
 use crate::synth::relaxations::Relaxer;
