@@ -18,7 +18,7 @@ use super::objective::{Bound, Objective};
 use super::plan::Plan;
 use super::search::Runner;
 use crate::model::TsModel;
-use tsf_lang::spec::{ObjectiveKind, TriggerSynthesis};
+use tsf_lang::spec::ObjectiveKind;
 
 /// One objective's verdict for the given gains.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,19 +73,6 @@ impl std::fmt::Display for Verdict {
 /// Whether the rules give their gains (then tsfc analyzes, not synthesizes).
 pub fn analysis(model: &TsModel) -> bool {
     model.spec.given_gains().is_some()
-}
-
-/// Why the given gains cannot be analyzed as the spec asks, if so (the
-/// checker reports it with spans first; this is the last line of defence).
-pub(super) fn unsupported(model: &TsModel) -> Option<String> {
-    let method = match model.spec.trigger_synthesis {
-        Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2",
-        Some(TriggerSynthesis::Codesign { .. }) => "co-design",
-        _ => return None,
-    };
-    analysis(model).then(|| {
-        format!("given gains cannot be analyzed with {method} weight synthesis (it designs the gains together with the trigger weight): write `weight = synthesize;`")
-    })
 }
 
 /// An objective in the spec's words.

@@ -82,17 +82,11 @@ pub fn synthesize_logged(
 
 fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
     let (model, settings) = (runner.model, runner.settings);
-    if let Some(why) = given::unsupported(model) {
-        return Err(SynthError::Unsupported(why));
-    }
     if let Some(modes) = &model.spec.modes {
         return markov::synthesize(runner, modes);
     }
     if let Some(x) = experimental::experiment_of(model) {
         return Err(x.run(model, settings));
-    }
-    if let Some(why) = sampling::uncovered(model) {
-        return Err(SynthError::Unsupported(why));
     }
     let analysis = given::analysis(model);
     let (mut plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);

@@ -18,7 +18,7 @@ use super::solved::{names, Solved};
 use super::trigger;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
-use tsf_lang::spec::{Trigger, Weight};
+use tsf_lang::spec::Trigger;
 
 /// Sampling intervals [h_min, h_max] of a loop that transmits every sample,
 /// if the spec's trigger is one (periodic, or aperiodic without a threshold
@@ -31,24 +31,6 @@ pub fn wanted(model: &TsModel) -> Option<(f64, f64)> {
             threshold: None,
             ..
         } if !trigger::wanted(model) => Some(*sampling),
-        _ => None,
-    }
-}
-
-/// Why the spec's trigger is outside every certificate tsfc can build, if it
-/// is: compile refuses such a design instead of calling it certified.
-pub fn uncovered(model: &TsModel) -> Option<String> {
-    match model.spec.trigger.as_ref().map(|t| &t.node)? {
-        Trigger::Mixed { monitor, .. } if monitor.sampling().is_some() => Some(
-            "the `trigger mixed` law (||e|| >= beta ||sigma|| + rho) at aperiodic sampling instants (`sampling = ..`) is not covered by a certificate yet: the certificate covers the continuous loop only; write `monitor = continuous;` with `on = <signal>;` (a signal that is a linear image of the PDC command is certified), or use `trigger aperiodic { sampling = ..; threshold nu = ..; weight = synthesize; }` (certified event trigger) or `trigger periodic { every = ..; }`".into(),
-        ),
-        Trigger::Aperiodic {
-            threshold: Some(_),
-            weight: Weight::Given(_),
-            ..
-        } => Some(
-            "an event trigger with a given weight is not covered by a certificate yet: write `weight = synthesize;` (the weight is then designed and certified with the threshold)".into(),
-        ),
         _ => None,
     }
 }

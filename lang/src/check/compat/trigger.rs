@@ -1,8 +1,9 @@
 //! Trigger laws: which laws a certificate covers, what a synthesized trigger
-//! weight needs, and what the premise `region` needs. The compiler's side of
-//! these rules (kept there as a last line of defence) is `synth/sampling.rs`
-//! (`uncovered`), `synth/trigger.rs`, `synth/signal_trigger.rs`,
-//! `synth/given.rs`, `synth/build.rs` and `synth/experimental/theorem2.rs`.
+//! weight needs, and what the premise `region` needs. Synthesis keeps only
+//! the guards its code needs to read the data these rules promise
+//! (`synth/trigger.rs`, `synth/signal_trigger.rs`, `synth/build.rs`,
+//! `synth/experimental/theorem2.rs`); the laws no certificate covers and
+//! given gains with a co-designed weight are refused here only.
 
 use super::Around;
 use crate::ast::Setting;
