@@ -20,6 +20,7 @@ use crate::model::TsModel;
 use crate::synth::markov::problem::{
     condition_name, diagonal_shift, input_matrices, PerfMatrices, Performance,
 };
+use crate::synth::markov::sampled::ModesSampled;
 use crate::synth::markov::ModesDesign;
 use crate::synth::relaxation::PairCondition;
 use crate::synth::relaxations::conditions;
@@ -203,6 +204,7 @@ fn margins(
     modes: &Modes,
     md: &ModesDesign,
     gains: &[Vec<DMatrix<f64>>],
+    sampled: Option<&ModesSampled>,
     eps: f64,
 ) -> Result<Vec<LmiMargin>, SynthError> {
     let Some(conds) = conditions(model, model.spec.relaxation.node).map(|c| c.list) else {
@@ -221,7 +223,7 @@ fn margins(
     }
     let mut out = margins_of(&problem, &nonstrict, &values, &[], &|_| {})?;
     out.extend(finite_time_margin(md));
-    if let Some(s) = &md.sampled {
+    if let Some(s) = sampled {
         // The sampled loop, every vertex (h_min too), with the same `gains`.
         let problem =
             crate::synth::markov::sampled::build(model, modes, gains, s.sampling, eps, false)
@@ -254,9 +256,10 @@ pub fn certify(
     modes: &Modes,
     md: &ModesDesign,
 ) -> Result<Certificate, SynthError> {
-    let mut cert = summarize(margins(model, modes, md, &md.gains, design.eps)?);
+    let sampled = design.loop_design.sampled_modes();
+    let mut cert = summarize(margins(model, modes, md, &md.gains, sampled, design.eps)?);
     if cert.ok {
-        let s = stored_check(model, modes, md, design.eps)?;
+        let s = stored_check(model, modes, md, sampled, design.eps)?;
         if !s.certified {
             cert.ok = false;
             cert.worst = s.worst_lmi.clone();
@@ -273,6 +276,7 @@ fn stored_check(
     model: &TsModel,
     modes: &Modes,
     md: &ModesDesign,
+    sampled: Option<&ModesSampled>,
     eps: f64,
 ) -> Result<StoredPrecision, SynthError> {
     let precision = model.spec.precision;
@@ -290,7 +294,7 @@ fn stored_check(
         .filter(|v| v.is_finite() && *v != 0.0)
         .map(|v| ((stored(v, precision) - v) / v).abs())
         .fold(0.0, f64::max);
-    let lmis = margins(model, modes, md, &gains, eps)?;
+    let lmis = margins(model, modes, md, &gains, sampled, eps)?;
     let mut worst_membership = None;
     for (a, mode) in modes.modes.iter().enumerate() {
         let prefix = format!("mode {} ", mode.name);

@@ -136,7 +136,7 @@ pub struct ModeSampledReport {
 
 /// The `sampled_loop` section of a mode design with a sampled loop.
 pub fn sampled_loop(model: &TsModel, design: &Design) -> Option<SampledReport> {
-    let s = design.modes.as_ref()?.sampled.as_ref()?;
+    let s = design.loop_design.sampled_modes()?;
     let modes = model.spec.modes.as_ref()?;
     Some(SampledReport {
         sampling: [s.sampling.0, s.sampling.1],

@@ -145,12 +145,8 @@ impl Design {
     /// (fault-free or with Markov modes), if the design ships one.
     pub fn sampling(&self) -> Option<(f64, f64)> {
         let law = self.loop_design.certificate();
-        law.and_then(|l| l.every_sample()).or_else(|| {
-            self.modes
-                .as_ref()
-                .and_then(|m| m.sampled.as_ref())
-                .map(|s| s.sampling)
-        })
+        law.and_then(|l| l.every_sample())
+            .or_else(|| self.loop_design.sampled_modes().map(|s| s.sampling))
     }
 }
 

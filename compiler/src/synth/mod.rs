@@ -83,7 +83,12 @@ pub fn synthesize_logged(
 fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
     let (model, settings) = (runner.model, runner.settings);
     if let Some(modes) = &model.spec.modes {
-        return markov::synthesize(runner, modes);
+        // The mode design is the core; its loop law closes the shipped loop.
+        let mut d = markov::synthesize(runner, modes)?;
+        let (plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
+        let start = loops::Start { plan, goal };
+        d.loop_design = loops::law_of(model).design(runner, &mut d, &start)?;
+        return Ok(d);
     }
     if let Some(x) = experimental::experiment_of(model) {
         return Err(x.run(model, settings));

@@ -16,7 +16,8 @@
 //! or aperiodic sampling without a threshold), [`jittered`] (periodic
 //! sampling with jitter, certified as [`every_sample`]'s loop), [`event`] (event trigger with
 //! a synthesized weight: two-step, co-design, regional), [`mixed`] (the mixed
-//! trigger on a signal). Paper-specific experiments are not laws: they are
+//! trigger on a signal), [`modes`] (the sampled loop of a design with Markov
+//! modes). Paper-specific experiments are not laws: they are
 //! chosen from `super::experimental::EXPERIMENTS`.
 
 pub mod continuous;
@@ -24,6 +25,7 @@ pub mod event;
 pub mod every_sample;
 pub mod jittered;
 pub mod mixed;
+pub mod modes;
 
 use super::design::{Design, SynthError};
 use super::reduction::Reduction;
@@ -63,6 +65,7 @@ pub struct Start {
 
 /// Every loop law, in the order they are asked ([`law_of`]).
 pub const LAWS: &[&dyn LoopLaw] = &[
+    &modes::SampledModes,
     &event::Codesign,
     &event::TwoStep,
     &mixed::Mixed,
@@ -92,13 +95,16 @@ pub enum LoopDesign {
     Event(super::design::TriggerDesign),
     /// The mixed trigger on a signal.
     Mixed(super::signal_trigger::SignalTrigger),
+    /// The sampled loop of a design with Markov modes (its certificate is
+    /// per mode: [`LoopDesign::certificate`] is `None`).
+    SampledModes(super::markov::sampled::ModesSampled),
 }
 
 impl LoopDesign {
     /// The law's certificate and report (`None` for the continuous loop).
     pub fn certificate(&self) -> Option<&dyn LoopCertificate> {
         match self {
-            LoopDesign::Continuous => None,
+            LoopDesign::Continuous | LoopDesign::SampledModes(_) => None,
             LoopDesign::EverySample(s) => Some(s),
             LoopDesign::Event(t) => Some(t),
             LoopDesign::Mixed(m) => Some(m),
@@ -117,6 +123,14 @@ impl LoopDesign {
     pub fn every_sample(&self) -> Option<&super::design::SampledDesign> {
         match self {
             LoopDesign::EverySample(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The sampled loop of a mode design, if it ships one.
+    pub fn sampled_modes(&self) -> Option<&super::markov::sampled::ModesSampled> {
+        match self {
+            LoopDesign::SampledModes(s) => Some(s),
             _ => None,
         }
     }

@@ -102,9 +102,6 @@ pub struct ModesDesign {
     pub gains: Vec<Vec<DMatrix<f64>>>,
     /// The relaxation's slack in P variables, P_a Y_a P_a, per mode (tanaka).
     pub slack: Vec<Option<DMatrix<f64>>>,
-    /// The certified sampled loop (periodic or threshold-free aperiodic
-    /// trigger), for these gains.
-    pub sampled: Option<sampled::ModesSampled>,
 }
 
 /// The finite-time numbers of a design, from its P_a: lambda1, lambda2 the
@@ -346,13 +343,6 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
         }
         (Err(e), _) => return Err(e),
     };
-    let mut solved = solved;
-    let mut loop_note = None;
-    if let Some(h) = sampled::wanted(&model.spec) {
-        let (s, note) = sampled::certify_loop(runner, modes, &solved.modes, h)?;
-        solved.modes.sampled = Some(s);
-        loop_note = Some(note);
-    }
     let (plan, _) = initial_plan(&model.spec, settings.default_phi);
     let achieved = achieved_of(&solved.modes, bracket);
     let mut notes = vec![conditions_note(modes, &solved.modes.performance)];
@@ -361,7 +351,6 @@ pub(super) fn synthesize(runner: &mut Runner<'_>, modes: &Modes) -> Result<Desig
             "fault-blind gains co-designed with the sampled loop at h_max = {h} s: the continuous conditions and the sampled-loop conditions in descriptor form (one X = P2^-1 for every mode, descriptor ratio delta = {delta}) in one SDP; the sampled loop then re-certified by the analysis below"
         ));
     }
-    notes.extend(loop_note);
     if solved.almost {
         notes.push("the solver reached only reduced accuracy on the chosen SDP; the certificate re-checks every condition".into());
     }
@@ -456,7 +445,6 @@ fn mode_solution(
         p: Vec::new(),
         gains: Vec::new(),
         slack: Vec::new(),
-        sampled: None,
     };
     for v in &built.modes {
         let x = value(v.x)?;
