@@ -675,6 +675,19 @@ fn no_trigger_law_is_certified_with_an_infinite_or_outside_bound() {
     laws.push(law_spec(
         "trigger aperiodic { sampling = 1e-300 .. 1e300; }",
     ));
+    for (every, jitter) in [("1e-300", "0"), ("0.01", "0.009"), ("1e300", "1e299")] {
+        laws.push(law_spec(&format!(
+            "trigger jittered {{ every = {every}; jitter = {jitter}; }}"
+        )));
+    }
+    // The sampled loop with Markov modes (its own loop law).
+    for every in ["1e-300", "0.01", "1e300"] {
+        let law = format!(
+            "modes {{ mode nominal {{ }} mode weak {{ effectiveness = 0.5; }} rates = [-1e-3, 1e-3; 1e300, -1e300]; }}\n\
+             trigger periodic {{ every = {every}; }}"
+        );
+        laws.push(law_spec(&law).replace(", F = -3", ""));
+    }
     for law in [
         "trigger aperiodic { sampling = 0.001 .. 1e300; threshold nu = 1e300; weight = synthesize; }",
         "trigger aperiodic { sampling = 0.001 .. 0.01; threshold nu = 1e-300; weight = synthesize; }",

@@ -6,6 +6,16 @@ fn decimal(k: i64, e: i32) -> f64 {
     format!("{k}e{e}").parse().unwrap_or(f64::NAN)
 }
 
+/// A duration or rate in an advice, four decimals (`0.0123`), or four
+/// significant digits in exponent form below 1e-3 (`1.034e-5`, never `0.0000`).
+pub fn about(x: f64) -> String {
+    if x.abs() >= 1e-3 || x == 0.0 {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
 /// The largest value `<= x` with three significant digits.
 pub fn round_down(x: f64) -> f64 {
     if !(x.is_finite() && x > 0.0) {
@@ -34,6 +44,13 @@ pub fn round_up(x: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn tiny_intervals_are_not_printed_as_zero() {
+        assert_eq!(super::about(0.01234), "0.0123");
+        assert_eq!(super::about(1.0341e-5), "1.034e-5");
+        assert_eq!(super::about(0.0), "0.0000");
+    }
+
     use super::{round_down, round_up};
 
     #[test]

@@ -11,7 +11,7 @@
 //! sampling, synthesis is refused with the longest sampling interval that is
 //! (bisection, re-solved at the advised value).
 
-use super::advice::round_down;
+use super::advice::{about, round_down};
 use super::design::{Design, SampledDesign, SolverLog, SynthError, TriggerPlan};
 use super::search::Runner;
 use super::solved::{names, Solved};
@@ -239,8 +239,8 @@ impl Runner<'_> {
         Err(SynthError::Infeasible {
             message: format!("the sampled loop is not certified: the gains of the continuous design are not certified for {what}"),
             achievable: vec![format!(
-                "the longest certified sampling interval is about {:.4} s: write {write} (certified), or weaken the objectives that set the gains",
-                sampling.1 * lo
+                "the longest certified sampling interval is about {} s: write {write} (certified), or weaken the objectives that set the gains",
+                about(sampling.1 * lo)
             )],
         })
     }

@@ -49,7 +49,7 @@
 use super::problem::input_matrices;
 use super::ModesDesign;
 use crate::model::TsModel;
-use crate::synth::advice::round_down;
+use crate::synth::advice::{about, round_down};
 use crate::synth::design::SynthError;
 use crate::synth::sampling::{longest_scale_from_above, write_sampling};
 use crate::synth::search::Runner;
@@ -502,8 +502,8 @@ pub(in crate::synth) fn certify_loop(
     Err(SynthError::Infeasible {
         message: format!("the sampled loop is not certified: {gains} are not certified for {what} under the Markov chain"),
         achievable: vec![format!(
-            "the longest certified sampling interval is about {:.4} s: {write}, or weaken the objectives that set the gains",
-            sampling.1 * reach
+            "the longest certified sampling interval is about {} s: {write}, or weaken the objectives that set the gains",
+            about(sampling.1 * reach)
         )],
     })
 }
