@@ -362,7 +362,7 @@ mod tests {
         let (spec, diags) = tsf_lang::check_source(&src);
         let modes = spec
             .and_then(|s| s.modes)
-            .unwrap_or_else(|| panic!("{diags:#?}"));
+            .unwrap_or_else(|| panic!("{diags:#?}")); // ok: test
         let exact = with_exact_rows(&modes);
         // Row 1 is more negative than its rates: the exact diagonal is used.
         assert_eq!(exact.rates[(0, 0)], -1_000_000.0);

@@ -95,7 +95,7 @@ mod tests {
         assert_eq!(v.x(), Some(&DMatrix::identity(2, 2)));
         assert_eq!(v.sector_product(1).map(|z| z[(0, 1)]), Some(3.0));
         assert!(v.sector_product(0).is_none());
-        *v.gain_product_mut(0).expect("M1") += DMatrix::from_element(1, 2, 1.0);
+        *v.gain_product_mut(0).expect("M1") += DMatrix::from_element(1, 2, 1.0); // ok: test
         assert_eq!(v.value("M1").map(|m| m[(0, 0)]), Some(1.0));
         assert!(v.required(names::TRIGGER_WEIGHT).is_err());
     }

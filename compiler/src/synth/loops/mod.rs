@@ -10,7 +10,7 @@
 //! them), the sampling it certifies, its certified region and its report
 //! section. Check-time refusals of a law live with its check
 //! (`lang/src/check/trigger.rs`); its sensor tables in the tables stage, its
-//! generated sensor code in each backend, its gate in `crate::sim::trigger`.
+//! generated sensor code in each backend, its gate in the simulator.
 //!
 //! Laws: [`continuous`] (no trigger), [`every_sample`] (periodic sampling,
 //! or aperiodic sampling without a threshold), [`jittered`] (periodic
