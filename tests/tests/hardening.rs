@@ -861,3 +861,34 @@ fn merge_reads_regular_files_only() {
         }
     }
 }
+
+/// Found by the 10,000-case feature campaign: a mixed trigger monitored
+/// continuously from x0 = 1e300 compared overflowed squared norms (inf >=
+/// inf), fired at every instant and simulated 0.02 s of 2 s in a minute.
+/// Such an initial state is refused; one within the range runs.
+#[test]
+fn a_huge_initial_state_is_refused_not_simulated_forever() {
+    let text = |x0: &str| {
+        format!(
+            "tsf 1; controller fs; state x1, x2; input u; A = [0, 1; 1, -1]; B = [0; 1];\n\
+             signal s = x1 + x2;\n\
+             premise x1 range -2 .. 2 {{ all = trap(-3, -3, 3, 3); }}\n\
+             rule R: x1 is all => A = [0, 1; 1, -1], F = [-2, -2];\nobjective stability;\n\
+             trigger mixed {{ on = s; beta = 0.1; rho = 0.001; monitor = continuous; }}\n\
+             simulate {{ x0 = [{x0}, 0]; time = 0 .. 2 step 0.01; }}\n"
+        )
+    };
+    let dir = scratch("huge-x0");
+    let prepared = prepare(&spec_file(&dir, &text("1e300"))).unwrap_or_else(|e| panic!("{e}"));
+    let opts = tsfc::sim::Options::default();
+    let e = tsfc::sim::simulate(&prepared, &opts).expect_err("refused");
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert!(e.to_string().contains("beyond 1e150"), "{e}");
+    // Just inside the range: the run ends (the state leaves the premise
+    // region, which the metrics say), every sample simulated.
+    let prepared = prepare(&spec_file(&dir, &text("1e149"))).unwrap_or_else(|e| panic!("{e}"));
+    let out = tsfc::sim::simulate(&prepared, &opts).unwrap_or_else(|e| panic!("{e}"));
+    assert!(out.metrics.samples >= 201, "{:?}", out.metrics);
+    assert!(out.metrics.failed);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -12,6 +12,13 @@ pub const MAX_STEPS: u64 = 10_000_000;
 /// whole run; a system that needs more is too stiff for it.
 pub const MAX_ADAPTIVE_STEPS: u64 = 10 * MAX_STEPS;
 
+/// Largest magnitude of a state component the simulator integrates. The
+/// trigger gates and the metrics square norms, and f64 squares overflow past
+/// about 1.3e154: beyond this a run would compare infinities (a mixed trigger
+/// then fires at every instant and the run crawls), so the initial state is
+/// refused and a run that grows past it stops as failed.
+pub const MAX_STATE_MAGNITUDE: f64 = 1e150;
+
 /// Most steps of a Monte Carlo campaign over all its runs (each run is also
 /// bounded by [`MAX_STEPS`]): `runs * steps per run`, about a day of one core.
 pub const MAX_CAMPAIGN_STEPS: u64 = 100_000_000_000;

@@ -146,7 +146,9 @@ impl Metrics {
     pub fn failures(&self) -> Vec<String> {
         let mut out = Vec::new();
         if let Some(t) = self.nonfinite_at_s {
-            out.push(format!("the state became NaN or infinite at t = {t} s"));
+            out.push(format!(
+                "the state became NaN, infinite or beyond 1e150 in magnitude at t = {t} s"
+            ));
         }
         if self.diverged {
             let ratio = self.lyapunov_ratio.unwrap_or(f64::NAN);

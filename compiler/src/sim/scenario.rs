@@ -3,7 +3,7 @@
 
 use super::controller::{law, runtime_terms, Law};
 use super::integrator::{Dopri5, Rk4, Stepper};
-use super::limits::step_count;
+use super::limits::{step_count, MAX_STATE_MAGNITUDE};
 use super::metrics::{Metrics, MismatchTally, RateTally, RunFacts, Sample, Tally, Trace};
 use super::modes::{Actuation, ModeProcess, ModeTally};
 use super::plant::Plant;
@@ -228,6 +228,12 @@ pub fn plan<'a>(
     if let Some(bad) = x0.iter().find(|v| !v.is_finite()) {
         return Err(SimError::usage(format!(
             "the initial state has a non-finite component ({bad}); every component of x0 must be a finite number"
+        )));
+    }
+    if let Some(big) = x0.iter().find(|v| v.abs() > MAX_STATE_MAGNITUDE) {
+        return Err(SimError::usage(format!(
+            "the initial state has a component of magnitude {}, beyond {MAX_STATE_MAGNITUDE:e}: the simulator's norms would overflow (docs/limits.md); scale the states",
+            tsf_lang::num::Num(*big)
         )));
     }
     if x0.len() == n {
@@ -667,7 +673,11 @@ impl<'a> Run<'a> {
             self.k += 1;
         }
         self.at_jump = jumps;
-        if !self.x.iter().all(|v| v.is_finite()) {
+        if !self
+            .x
+            .iter()
+            .all(|v| v.is_finite() && v.abs() <= MAX_STATE_MAGNITUDE)
+        {
             self.nonfinite_at = Some(self.t);
         }
         self.progress.update(self.t);
