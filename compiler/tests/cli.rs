@@ -541,18 +541,22 @@ fn simulate_exits_4_when_the_run_fails_and_0_when_it_does_not() {
         stderr.contains("error: the state left the premise region"),
         "{stderr}"
     );
-    // x0 = [1e160, 0]: never "converged", the state goes non-finite.
+    // x0 = [1e160, 0]: beyond the simulator's state range, a usage error.
     let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.5", "--x0", "1e160,0"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("beyond 1e150"), "{stderr}");
+    // x0 = [1e149, 0]: never "converged", the state leaves the range.
+    let (code, stderr) = simulate(&spec, &dir, &["--horizon", "0.5", "--x0", "1e149,0"]);
     assert_eq!(code, Some(4), "{stderr}");
     assert!(stderr.contains("not converged"), "{stderr}");
-    assert!(stderr.contains("NaN or infinite"), "{stderr}");
+    assert!(stderr.contains("NaN, infinite or beyond 1e150"), "{stderr}");
     let metrics: serde_json::Value = serde_json::from_slice(
         &std::fs::read(dir.join("inverted_pendulum.metrics.json")).expect("outputs are written"),
     )
     .expect("JSON");
     assert_eq!(metrics["converged"], false);
     assert_eq!(metrics["failed"], true);
-    assert_eq!(metrics["initial_state_norm"], 1e160);
+    assert_eq!(metrics["initial_state_norm"], 1e149);
     let help = tsfc().args(["simulate", "--help"]).output().expect("runs");
     assert!(String::from_utf8_lossy(&help.stdout).contains("4 the run went non-finite"));
     let _ = std::fs::remove_dir_all(&dir);

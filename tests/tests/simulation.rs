@@ -390,20 +390,27 @@ fn bad_overrides_are_usage_errors() {
 
 #[test]
 fn a_huge_initial_state_is_never_converged() {
-    // x0 = [1e160, 0] used to report "final ||x|| = inf (converged, tol inf)".
-    let opts = Options {
+    // x0 = [1e160, 0] used to report "final ||x|| = inf (converged, tol inf)";
+    // it is now refused (beyond 1e150), and 1e149 runs and fails.
+    let refused = Options {
         x0: Some(vec![1e160, 0.0]),
+        ..horizon(1.0)
+    };
+    let e = simulate(prepared("inverted_pendulum.tsf"), &refused).expect_err("beyond 1e150");
+    assert_eq!(e.exit_code(), 2, "{e}");
+    let opts = Options {
+        x0: Some(vec![1e149, 0.0]),
         ..horizon(1.0)
     };
     let m = run("inverted_pendulum.tsf", &opts).metrics;
     assert!(!m.converged, "{m:?}");
     assert!(m.failed && !m.failures().is_empty(), "{m:?}");
-    assert_eq!(m.initial_state_norm, 1e160, "the norm does not overflow");
+    assert_eq!(m.initial_state_norm, 1e149, "the norm does not overflow");
     assert!(m.convergence_tolerance.is_finite());
     assert!(m.settle_time_s.is_none());
     assert!(
         m.out_of_region_samples > 0,
-        "sinc(1e160) is far outside 2/pi .. 1"
+        "sinc(1e149) is far outside 2/pi .. 1"
     );
 }
 
