@@ -36,6 +36,8 @@ pub mod scenario;
 pub mod signal;
 pub mod source;
 pub mod sweep;
+#[cfg(test)]
+mod tape_agreement;
 pub use crate::tape;
 pub mod trigger;
 
