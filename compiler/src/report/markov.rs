@@ -61,14 +61,7 @@ pub fn sections(
                 name: mode.name.clone(),
                 p: rows(&md.p[a]),
                 gains: if certified {
-                    md.gains[a]
-                        .iter()
-                        .zip(&model.rules)
-                        .map(|(f, r)| Gain {
-                            rule: r.name.clone(),
-                            f: rows(f),
-                        })
-                        .collect()
+                    Gain::of_rules(model, &md.gains[a])
                 } else {
                     Vec::new()
                 },

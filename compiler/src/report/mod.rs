@@ -31,6 +31,20 @@ pub struct Gain {
     pub f: Vec<Vec<f64>>,
 }
 
+impl Gain {
+    /// The gains F_j of `model`'s rules, named by rule.
+    pub fn of_rules(model: &TsModel, gains: &[nalgebra::DMatrix<f64>]) -> Vec<Gain> {
+        gains
+            .iter()
+            .zip(&model.rules)
+            .map(|(f, r)| Gain {
+                rule: r.name.clone(),
+                f: rows(f),
+            })
+            .collect()
+    }
+}
+
 /// `solver` section.
 #[derive(Debug, Serialize)]
 pub struct SolverInfo {
@@ -376,16 +390,7 @@ pub fn report(
         objectives: design.map(|d| objectives(model, d)).unwrap_or_default(),
         gains: if certified {
             design
-                .map(|d| {
-                    d.gains
-                        .iter()
-                        .zip(&model.rules)
-                        .map(|(f, r)| Gain {
-                            rule: r.name.clone(),
-                            f: rows(f),
-                        })
-                        .collect()
-                })
+                .map(|d| Gain::of_rules(model, &d.gains))
                 .unwrap_or_default()
         } else {
             Vec::new()
