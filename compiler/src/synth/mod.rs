@@ -25,6 +25,7 @@ pub mod lyapunov;
 pub mod markov;
 pub mod objective;
 pub mod objectives;
+pub mod pair_stability;
 pub mod plan;
 pub mod reduction;
 pub mod relaxation;

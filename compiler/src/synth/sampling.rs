@@ -13,12 +13,14 @@
 
 use super::advice::{about, round_down};
 use super::design::{Design, SampledDesign, SolverLog, SynthError, TriggerPlan};
+use super::pair_stability;
 use super::search::Runner;
 use super::solved::{names, Solved};
 use super::trigger;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
-use tsf_lang::spec::Trigger;
+use tsf_lang::limits::MAX_MISMATCH_RULES;
+use tsf_lang::spec::{Relaxation, Trigger};
 
 /// Sampling intervals [h_min, h_max] of a loop that transmits every sample,
 /// if the spec's trigger is one (periodic, or aperiodic without a threshold
@@ -158,6 +160,12 @@ pub(super) fn write_sampling(sampling: (f64, f64), advice: f64) -> String {
     }
 }
 
+/// The first line of a refusal (its message without the advice).
+fn refusal_line(e: &SynthError) -> String {
+    let text = e.to_string();
+    text.lines().next().map_or_else(String::new, str::to_string)
+}
+
 impl Runner<'_> {
     /// One sampled-loop SDP: the design, or None when not solved.
     fn sampled_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<SampledDesign>, SynthError> {
@@ -213,10 +221,7 @@ impl Runner<'_> {
             format!("sampling intervals in [{}, {}] s", sampling.0, sampling.1)
         };
         let Some(lo) = longest_scale(|s| Ok(self.sampled_attempt(&at(s))?.is_some()))? else {
-            return Err(SynthError::Infeasible {
-                message: format!("the gains of the {} design are not certified for {what}, nor for intervals 1024 times shorter", if super::objectives::discrete::period(self.model).is_some() { "discrete-time" } else { "continuous" }),
-                achievable: vec!["weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger".into()],
-            });
+            return Err(self.no_interval_refusal(design, &what));
         };
         if let Some(h) = super::objectives::discrete::period(self.model) {
             return Err(self.discrete_refusal(h, h * lo));
@@ -243,6 +248,86 @@ impl Runner<'_> {
                 about(sampling.1 * lo)
             )],
         })
+    }
+
+    /// The refusal when not even intervals 1024 times shorter certify the
+    /// gains of `design`. When a plant/controller pair is not Hurwitz, no
+    /// interval can ([`pair_stability`]): the refusal names the pair and its
+    /// eigenvalue and advises gains designed for every pair, re-solved (and
+    /// certified) before it is advised.
+    fn no_interval_refusal(&mut self, design: &Design, what: &str) -> SynthError {
+        let kind = if super::objectives::discrete::period(self.model).is_some() {
+            "discrete-time"
+        } else {
+            "continuous"
+        };
+        let head = format!(
+            "the gains of the {kind} design are not certified for {what}, nor for intervals 1024 times shorter"
+        );
+        let weaken = "weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger";
+        match pair_stability::worst(self.model, &design.gains) {
+            // NaN (no eigenvalues) is named too: `!(x < 0)`.
+            Some(w) if !(w.abscissa < 0.0) => SynthError::Infeasible {
+                message: format!(
+                    "{head}: the sampled loop holds the memberships of the last sample, so its conditions impose every plant/controller rule pair, and {}: no sampling interval certifies these gains",
+                    w.describe(self.model)
+                ),
+                achievable: vec![self.every_pair_advice()],
+            },
+            worst => SynthError::Infeasible {
+                message: match worst {
+                    Some(w) => format!(
+                        "{head}; every plant/controller pair A_i + B_i F_j is stable (the least stable: {}), but no one Lyapunov matrix certifies them all",
+                        w.describe(self.model)
+                    ),
+                    None => head,
+                },
+                achievable: vec![weaken.into()],
+            },
+        }
+    }
+
+    /// Advice for gains that leave a plant/controller pair unstable: the
+    /// relaxation that designs the gains for every pair,
+    /// `membership_mismatch(kappa = 1)`, tried on the whole synthesis (with
+    /// its sampled loop) and advised only as what it gave.
+    fn every_pair_advice(&mut self) -> String {
+        let every = Relaxation::MembershipMismatch { kappa: 1.0 };
+        let write = format!("`relaxation {every};`");
+        let already = matches!(self.model.spec.relaxation.node, Relaxation::MembershipMismatch { kappa } if kappa >= 1.0);
+        if already
+            || self.model.r() > MAX_MISMATCH_RULES
+            || self.model.spec.modes.is_some()
+            || super::lyapunov::fuzzy::phi(self.model).is_some()
+        {
+            return "weaken the objectives that set the gains: every pair must be stable under the held memberships".into();
+        }
+        let mut model = self.model.clone();
+        model.spec.relaxation.node = every;
+        let mut runner = Runner {
+            model: &model,
+            settings: self.settings,
+            log: SolverLog::default(),
+            accept_almost: false,
+        };
+        let tried = super::synthesize_with(&mut runner);
+        self.log.count_also(&runner.log);
+        let verdict = match (&tried, self.settings.verifier) {
+            (Ok(d), Some(verify)) => verify(&model, d).map_or(Some(false), Some),
+            _ => None,
+        };
+        match (tried, verdict) {
+            (Ok(_), Some(true)) => format!(
+                "write {write}: it designs the gains for every plant/controller pair (re-solved: certified with the sampled loop), or weaken the objectives that set the gains"
+            ),
+            (Ok(_), _) => format!(
+                "{write} designs the gains for every plant/controller pair; re-solved, its sampled loop synthesizes but no certificate verdict was available here: try it, or weaken the objectives that set the gains"
+            ),
+            (Err(e), _) => format!(
+                "{write} (gains for every plant/controller pair) was tried and is refused too ({}): weaken the objectives that set the gains",
+                refusal_line(&e)
+            ),
+        }
     }
 
     /// The refusal of a discrete-time design whose gains (designed for the
