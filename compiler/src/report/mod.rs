@@ -45,6 +45,64 @@ impl Gain {
     }
 }
 
+/// The gains and P of a refused design, not certified, kept so it can be
+/// inspected: `gains` and `P` as the certified report writes them.
+#[derive(Debug, Serialize)]
+pub struct CandidateReport {
+    /// What refused it (the refusal's first line).
+    pub refused_by: String,
+    /// The gains F_j by rule (NOT certified).
+    pub gains: Vec<Gain>,
+    /// The continuous design's Lyapunov matrix P.
+    #[serde(rename = "P")]
+    pub p: Vec<Vec<f64>>,
+    /// Every plant rule i under every controller rule j's gain: the largest
+    /// real part of the eigenvalues of A_i + B_i F_j (a sampled or
+    /// event-triggered loop needs every one negative).
+    pub pairs: Vec<PairReport>,
+}
+
+/// The stability of one plant/controller rule pair.
+#[derive(Debug, Serialize)]
+pub struct PairReport {
+    /// Plant rule.
+    pub plant: String,
+    /// Controller rule (whose gain is applied).
+    pub controller: String,
+    /// max Re eig(A_i + B_i F_j) (null when the eigenvalues did not converge).
+    pub abscissa: Option<f64>,
+}
+
+impl CandidateReport {
+    /// The candidate of gains `gains` and `p`, refused by `refused_by`.
+    pub fn of(
+        model: &TsModel,
+        gains: &[nalgebra::DMatrix<f64>],
+        p: &nalgebra::DMatrix<f64>,
+        refused_by: String,
+    ) -> CandidateReport {
+        let name = |k: usize| {
+            model
+                .rules
+                .get(k)
+                .map_or_else(String::new, |r| r.name.clone())
+        };
+        CandidateReport {
+            refused_by,
+            gains: Gain::of_rules(model, gains),
+            p: rows(p),
+            pairs: crate::synth::pair_stability::abscissae(model, gains)
+                .into_iter()
+                .map(|pair| PairReport {
+                    plant: name(pair.plant),
+                    controller: name(pair.controller),
+                    abscissa: pair.abscissa.is_finite().then_some(pair.abscissa),
+                })
+                .collect(),
+        }
+    }
+}
+
 /// `solver` section.
 #[derive(Debug, Serialize)]
 pub struct SolverInfo {
@@ -241,6 +299,10 @@ pub struct Report {
     pub notes: Vec<String>,
     /// Diagnosis when not certified.
     pub diagnosis: Option<Diagnosis>,
+    /// The design a refused compile reached (absent when certified, or when
+    /// no gains were found): gains, P and every rule pair's stability.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub candidate: Option<CandidateReport>,
     /// Estimated region of attraction E(P, 1) under actuator saturation (with
     /// a synthesized trigger: P of the event-triggered loop's functional).
     pub region_of_attraction: Option<RegionOfAttraction>,
@@ -415,6 +477,19 @@ pub fn report(
             })
             .unwrap_or_default(),
         notes: design.map(|d| d.notes.clone()).unwrap_or_default(),
+        candidate: match (outcome, &diagnosis) {
+            (Ok((d, c)), Some(why)) if !c.ok => Some(CandidateReport::of(
+                model,
+                &d.gains,
+                &d.p,
+                why.message.clone(),
+            )),
+            (Err(_), _) => log
+                .candidate
+                .as_ref()
+                .map(|c| CandidateReport::of(model, &c.gains, &c.p, c.refused_by.clone())),
+            _ => None,
+        },
         diagnosis,
         model_consistency: model.consistency.as_ref().map(|c| ConsistencyReport {
             points: c.points,

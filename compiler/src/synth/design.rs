@@ -83,6 +83,22 @@ pub struct SolverLog {
     /// SDPs whose verdict came from a second run without the solver's
     /// equilibration (the first stopped on a numerical failure at once).
     pub unscaled_retries: usize,
+    /// The last design a refused synthesis reached (its gains were found,
+    /// a later step refused them), for the failed report.
+    pub candidate: Option<Candidate>,
+}
+
+/// Gains and Lyapunov matrix that a later step of the synthesis refused
+/// (the sampled or event-triggered loop, the saturation level): kept so the
+/// refused design can be inspected.
+#[derive(Debug, Clone)]
+pub struct Candidate {
+    /// PDC gains F_j, in rule order.
+    pub gains: Vec<DMatrix<f64>>,
+    /// The continuous design's Lyapunov matrix P.
+    pub p: DMatrix<f64>,
+    /// The refusal's first line.
+    pub refused_by: String,
 }
 
 impl SolverLog {
@@ -252,6 +268,14 @@ impl From<BuildError> for SynthError {
             BuildError::Unsupported(m) => SynthError::Unsupported(m),
             e @ BuildError::Lmi(_) => SynthError::Internal(e.to_string()),
         }
+    }
+}
+
+impl SynthError {
+    /// The first line of the refusal (its message without the advice).
+    pub fn first_line(&self) -> String {
+        let text = self.to_string();
+        text.lines().next().map_or_else(String::new, str::to_string)
     }
 }
 

@@ -42,7 +42,9 @@ pub use crate::util::matrix::rows;
 pub use achieved::{Achieved, Quantity};
 pub use blocks::common_b;
 pub use build::{build, Built};
-pub use design::{Design, SampledDesign, Settings, SolverLog, SynthError, TriggerDesign, Verifier};
+pub use design::{
+    Candidate, Design, SampledDesign, Settings, SolverLog, SynthError, TriggerDesign, Verifier,
+};
 pub use given::Verdict;
 pub use objective::BuildError;
 pub use plan::{Bound, Goal, Plan};
@@ -88,7 +90,8 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
         let mut d = markov::synthesize(runner, modes)?;
         let (plan, goal) = plan::initial_plan(&model.spec, settings.default_phi);
         let start = loops::Start { plan, goal };
-        d.loop_design = loops::law_of(model).design(runner, &mut d, &start)?;
+        let law = loops::law_of(model).design(runner, &mut d, &start);
+        d.loop_design = kept(runner, &d, law)?;
         return Ok(d);
     }
     if let Some(x) = experimental::experiment_of(model) {
@@ -111,7 +114,8 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
                 f.region = lyapunov::region::verify(model, &d.gains, &f.p, &f.phi);
                 d.notes.push(lyapunov::region::note(f));
             }
-            saturation_covered(model, &mut d)?;
+            let covered = saturation_covered(model, &mut d);
+            kept(runner, &d, covered)?;
             if let Some(note) = objectives::hinf::regional_note(&d) {
                 d.notes.push(note);
             }
@@ -122,7 +126,8 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
                 d.verdicts = given::together(&d);
             }
             let start = loops::Start { plan, goal };
-            d.loop_design = loops::law_of(model).design(runner, &mut d, &start)?;
+            let law = loops::law_of(model).design(runner, &mut d, &start);
+            d.loop_design = kept(runner, &d, law)?;
             Ok(d)
         }
         Ok(None) | Err(SynthError::Solver { .. }) if analysis => Err(runner.alone(&plan)),
@@ -144,6 +149,23 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
         }
         Err(e) => Err(e),
     }
+}
+
+/// `step`'s result; when it refuses `d`, the gains and P are kept in the
+/// runner's log as the failed report's candidate.
+fn kept<T>(
+    runner: &mut Runner<'_>,
+    d: &Design,
+    step: Result<T, SynthError>,
+) -> Result<T, SynthError> {
+    if let Err(e) = &step {
+        runner.log.candidate = Some(design::Candidate {
+            gains: d.gains.clone(),
+            p: d.p.clone(),
+            refused_by: e.first_line(),
+        });
+    }
+    step
 }
 
 /// Declared `saturate` levels must be inside the certificate: by the

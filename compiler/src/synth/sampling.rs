@@ -160,12 +160,6 @@ pub(super) fn write_sampling(sampling: (f64, f64), advice: f64) -> String {
     }
 }
 
-/// The first line of a refusal (its message without the advice).
-fn refusal_line(e: &SynthError) -> String {
-    let text = e.to_string();
-    text.lines().next().map_or_else(String::new, str::to_string)
-}
-
 impl Runner<'_> {
     /// One sampled-loop SDP: the design, or None when not solved.
     fn sampled_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<SampledDesign>, SynthError> {
@@ -325,7 +319,7 @@ impl Runner<'_> {
             ),
             (Err(e), _) => format!(
                 "{write} (gains for every plant/controller pair) was tried and is refused too ({}): weaken the objectives that set the gains",
-                refusal_line(&e)
+                e.first_line()
             ),
         }
     }
