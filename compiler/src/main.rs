@@ -327,18 +327,28 @@ fn simulate(
             }
         }
     }
-    let run = || -> Result<(tsfc::sim::Outcome, Vec<PathBuf>), tsfc::sim::SimError> {
+    type Ran = (tsfc::sim::Outcome, Vec<PathBuf>, Option<String>);
+    let run = || -> Result<Ran, tsfc::sim::SimError> {
         let prepared = prepare(path, report, out)?;
+        let start = x0
+            .clone()
+            .or_else(|| prepared.model.spec.simulate.as_ref().map(|s| s.x0.clone()));
+        let outside = prepared
+            .region
+            .as_ref()
+            .zip(start.as_deref())
+            .and_then(|(u, x)| tsfc::driver::summary::outside_region(u, x));
         let opts = tsfc::sim::Options {
             x0,
             horizon,
             progress: true,
             ..tsfc::sim::Options::default()
         };
-        tsfc::sim::simulate_to(&prepared, &opts, out)
+        let (outcome, files) = tsfc::sim::simulate_to(&prepared, &opts, out)?;
+        Ok((outcome, files, outside))
     };
     match run() {
-        Ok((outcome, files)) => {
+        Ok((outcome, files, outside)) => {
             let m = &outcome.metrics;
             eprintln!(
                 "simulated `{}`: {} samples, {} transmissions, final ||x|| = {:.3e} ({}converged, tol {:.3e}), max |u| = [{}], {:.2} s",
@@ -371,7 +381,7 @@ fn simulate(
             for f in files {
                 eprintln!("  wrote                {}", f.display());
             }
-            for w in m.warnings() {
+            for w in outside.into_iter().chain(m.warnings()) {
                 eprintln!("warning: {w}");
             }
             let failures = m.failures();

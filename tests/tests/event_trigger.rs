@@ -288,6 +288,7 @@ pub(crate) fn prepared() -> &'static Prepared {
             tables: tsfc::tables::tables(model, design, cert, SPEC, "").expect("tables"),
             p: design.p.clone(),
             trigger_weight: design.loop_design.event().map(|t| t.weight.clone()),
+            region: design.certified_region().map(|(p, c)| p / c),
             source: tsfc::sim::source::SpecSource {
                 name: SPEC.into(),
                 text,

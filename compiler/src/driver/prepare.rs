@@ -43,11 +43,13 @@ pub fn prepare_run(run: &Run) -> Result<Prepared, SimError> {
     // `weight = synthesize` falls back to P / lambda_max(P) (see
     // `trigger::trigger_weight`).
     let trigger_weight = design.loop_design.event().map(|t| t.weight.clone());
+    let region = design.certified_region().map(|(p, c)| p / c);
     Ok(Prepared {
         model,
         tables,
         p: design.p,
         trigger_weight,
+        region,
         source,
     })
 }

@@ -47,6 +47,13 @@ struct ReportView {
     sampled_loop: Option<SampledView>,
     stored_precision: Option<StoredView>,
     modes: Option<Vec<ModeView>>,
+    region_of_attraction: Option<RegionView>,
+}
+
+#[derive(Debug, Deserialize)]
+struct RegionView {
+    #[serde(rename = "U")]
+    u: Vec<Vec<f64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -205,11 +212,16 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
         sensor: crate::tables::Sensor::None,
         modes,
     };
+    let region = match &r.region_of_attraction {
+        Some(roa) => Some(matrix(&roa.u, n, n, "region of attraction U")?),
+        None => None,
+    };
     Ok(Prepared {
         model: model.clone(),
         tables,
         p,
         trigger_weight,
+        region,
         source: source::SpecSource {
             name: front.source.name.clone(),
             text: front.source.text.clone(),

@@ -71,6 +71,14 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
     for n in &r.notes {
         let _ = writeln!(s, "  note                 {n}");
     }
+    let scenario = r
+        .region_of_attraction
+        .as_ref()
+        .zip(model.spec.simulate.as_ref());
+    if let Some(w) = scenario.and_then(|(roa, sim)| outside_level(roa.scenario_x0_level?, &sim.x0))
+    {
+        let _ = writeln!(s, "  warning              {w}");
+    }
     if let Some(d) = &r.diagnosis {
         let _ = writeln!(s, "  {}", d.message);
         for a in &d.achievable {
@@ -89,4 +97,29 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
     let _ = writeln!(s, "  report               {}", report_path.display());
     let _ = model;
     s
+}
+
+/// The warning when the initial state `x0` of a scenario lies outside the
+/// certified region of attraction {x : x'Ux <= 1} (None inside it).
+pub fn outside_region(u: &nalgebra::DMatrix<f64>, x0: &[f64]) -> Option<String> {
+    if u.nrows() != x0.len() || u.ncols() != x0.len() {
+        return None;
+    }
+    let x = nalgebra::DVector::from_column_slice(x0);
+    outside_level((x.transpose() * u * &x)[(0, 0)], x0)
+}
+
+/// [`outside_region`] from the level x0'Ux0.
+fn outside_level(level: f64, x0: &[f64]) -> Option<String> {
+    let shown = x0
+        .iter()
+        .map(|v| format!("{v}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    (!(level <= 1.0)).then(|| {
+        format!(
+            "the scenario starts outside the certified region of attraction: x0 = [{shown}] is at level x0'Ux0 = {level:.4e} > 1 (U = P/c of the certificate); the certificate covers this direction up to x0 scaled by {:.4e}, so nothing is certified about this run",
+            1.0 / level.sqrt()
+        )
+    })
 }

@@ -646,12 +646,7 @@ fn problem_stats(log: &SolverLog) -> BTreeMap<String, serde_json::Value> {
 /// whether it contains the initial states of the objective and the scenario.
 fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttraction> {
     let sat = d.plan.saturation()?;
-    // The region of the loop that ships: event-triggered, sampled
-    // or continuous (no region when its level cannot be computed).
-    let (p, c) = match d.loop_design.certificate().and_then(|l| l.region()) {
-        Some(region) => region,
-        None => (&d.p, sat.level(&d.plan).ok()?),
-    };
+    let (p, c) = d.certified_region()?;
     // The certified region E(P, c) as E(U, 1).
     let u = p / c;
     let p = &u;

@@ -120,6 +120,10 @@ pub struct Prepared {
     pub p: DMatrix<f64>,
     /// The design's trigger weight, if it has one.
     pub trigger_weight: Option<DMatrix<f64>>,
+    /// The certified region of attraction {x : x'Ux <= 1} as U, when the
+    /// design certifies one (saturation region): a scenario that starts
+    /// outside it is warned about.
+    pub region: Option<DMatrix<f64>>,
     /// The spec's text, for errors that point into it.
     pub source: source::SpecSource,
 }

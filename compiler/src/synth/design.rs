@@ -164,6 +164,18 @@ impl Design {
         law.and_then(|l| l.every_sample())
             .or_else(|| self.loop_design.sampled_modes().map(|s| s.sampling))
     }
+
+    /// The certified region E(P, c) = {x : x'Px <= c} of the loop that ships
+    /// under a saturation region, as (P, c): the loop law's region
+    /// (event-triggered, sampled), else the continuous design's level. None
+    /// without a saturation region, or when the level cannot be computed.
+    pub fn certified_region(&self) -> Option<(&DMatrix<f64>, f64)> {
+        let sat = self.plan.saturation()?;
+        match self.loop_design.certificate().and_then(|l| l.region()) {
+            Some(region) => Some(region),
+            None => Some((&self.p, sat.level(&self.plan).ok()?)),
+        }
+    }
 }
 
 /// The certificate of the sampled loop for the gains of a [`Design`]: every

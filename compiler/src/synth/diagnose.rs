@@ -3,6 +3,7 @@
 
 use super::advice::{round_down, round_up};
 use super::design::SynthError;
+use super::objective::Bound;
 use super::plan::Goal;
 use super::plan::Plan;
 use super::search::Runner;
@@ -42,11 +43,19 @@ pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
                     .map(|b| b.0)
                     .filter(|_| search == Goal::MaxDecay)
                     .or_else(|| headline.and_then(|q| d.achieved.get(q)));
-                match best {
-                    Some(b) if search == Goal::MaxDecay => format!("infeasible with {bound}; the largest feasible decay rate with the other objectives is {b:.6}{approx}: write {}", describe(kind, round_down(b))),
-                    Some(b) => format!("infeasible with {bound}; the smallest feasible bound with the other objectives is {b:.6}{approx}: write {}", describe(kind, round_up(b))),
-                    None => format!("{kind}: no value found"),
-                }
+                let (found, advised) = match best {
+                    Some(b) if search == Goal::MaxDecay => (format!("infeasible with {bound}; the largest feasible decay rate with the other objectives is {b:.6}{approx}"), round_down(b)),
+                    Some(b) => (format!("infeasible with {bound}; the smallest feasible bound with the other objectives is {b:.6}{approx}"), round_up(b)),
+                    None => {
+                        achievable.push(format!("{kind}: no value found"));
+                        continue;
+                    }
+                };
+                let write = describe(kind, advised);
+                format!(
+                    "{found}: {}",
+                    resolved(runner, plan, (kind, advised), &write, &describe)
+                )
             }
             Ok(None) => format!("{kind}: infeasible whatever its value together with the others"),
             Err(e) => format!("{kind}: could not be optimized ({e})"),
@@ -67,6 +76,53 @@ pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
         message,
         achievable,
     }
+}
+
+/// The advice `write` (`kind` bounded by `advised`), re-solved on the
+/// whole plan before it is printed: "write ... (re-solved: feasible)";
+/// when the plan still fails with it, what binds instead (a minimized
+/// objective the solver could not finish is bounded at the value the
+/// relaxed problem reached, re-solved too); else that the advice alone
+/// does not suffice.
+fn resolved(
+    runner: &mut Runner<'_>,
+    plan: &Plan,
+    (kind, advised): (ObjectiveKind, f64),
+    write: &str,
+    describe: &dyn Fn(ObjectiveKind, f64) -> String,
+) -> String {
+    let with = plan.bounding(kind, advised);
+    if matches!(runner.run(&with, with.goal()), Ok(Some(_))) {
+        return format!("write {write} (re-solved: feasible)");
+    }
+    // The minimization itself may be what fails (solver trouble at the
+    // optimum): bound the minimized quantity at what the feasibility
+    // problem reaches instead.
+    let minimized = plan
+        .objectives()
+        .find(|o| o.target() == Some(Bound::Minimize))
+        .map(|o| (o.kind(), o.headline()));
+    if let Some((m, Some(q))) = minimized {
+        let free = with.unoptimized();
+        if let Ok(Some(d)) = runner.run(&free, free.goal()) {
+            if let Some(g) = d.achieved.get(q) {
+                let cap = round_up(g);
+                let both = free.bounding(m, cap);
+                if matches!(runner.run(&both, both.goal()), Ok(Some(_))) {
+                    return format!(
+                        "re-solved with {write}, the minimization of {m} still fails: write {write} and {} in place of `minimize` (re-solved: feasible)",
+                        describe(m, cap)
+                    );
+                }
+            }
+        }
+    }
+    let others = plan
+        .objectives()
+        .filter(|o| o.kind() != kind)
+        .map(|o| o.kind().to_string())
+        .collect::<Vec<_>>();
+    format!("{write} alone does not make the objectives feasible (re-solved, also with nothing minimized): {} bind(s) too at that value; relax one of them", if others.is_empty() { "the relaxation".to_string() } else { others.join(", ") })
 }
 
 /// Objectives that put an initial set inside E(P, 1) (x0' P x0 <= 1).
@@ -96,6 +152,11 @@ fn coupling(runner: &mut Runner<'_>, plan: &Plan) -> Option<String> {
         .iter()
         .map(|o| o.kind())
         .filter(|k| WITH_INITIAL_SET.contains(k))
+        // An implied saturation region without `for x0` anchors nothing.
+        .filter(|k| {
+            *k != ObjectiveKind::SaturationRegion
+                || plan.saturation().is_some_and(|s| s.contain.is_some())
+        })
         .map(|k| k.to_string())
         .collect();
     let why = if anchored.is_empty() {

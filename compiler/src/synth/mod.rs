@@ -119,15 +119,15 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
             if let Some(note) = objectives::hinf::regional_note(&d) {
                 d.notes.push(note);
             }
-            if let Some(w) = gain_warning(model, &d) {
-                d.notes.push(w);
-            }
             if analysis {
                 d.verdicts = given::together(&d);
             }
             let start = loops::Start { plan, goal };
             let law = loops::law_of(model).design(runner, &mut d, &start);
             d.loop_design = kept(runner, &d, law)?;
+            if let Some(w) = gain_warning(model, &d) {
+                d.notes.push(w);
+            }
             Ok(d)
         }
         Ok(None) | Err(SynthError::Solver { .. }) if analysis => Err(runner.alone(&plan)),
@@ -196,36 +196,66 @@ fn saturation_covered(model: &TsModel, d: &mut Design) -> Result<(), SynthError>
 }
 
 /// Gains this many times above what the smallest `saturate` level allows at
-/// the edge of the modelled region draw a warning.
+/// the edge of the modelled region (the rules' operating points) draw a warning.
 pub const GAIN_WARNING_FACTOR: f64 = 100.0;
 
-/// A warning when max_j ||F_j||_2 r, with r the largest operating-point norm
-/// (the edge of the region the rules model), exceeds the smallest `saturate`
-/// level by [`GAIN_WARNING_FACTOR`]: the actuator then saturates on almost
-/// every sample (certified or not, such a loop is rarely what was meant).
+/// Gains this many times above the smallest `saturate` level at the edge of
+/// the certified set E(P, c) draw a warning: the set is where the design is
+/// meant to work, so a smaller factor than [`GAIN_WARNING_FACTOR`].
+pub const CERTIFIED_SET_GAIN_FACTOR: f64 = 10.0;
+
+/// A warning when the gains ask for far more than the smallest `saturate`
+/// level: the actuator then saturates on almost every sample (certified or
+/// not, such a loop is rarely what was meant). Measured, for every rule kind,
+/// at the edge of the certified set E(P, c) when the design has one
+/// (max over x'Px <= c of |(F_j x)_k| = sqrt(c F_jk P^-1 F_jk'), against
+/// [`CERTIFIED_SET_GAIN_FACTOR`]), else at the largest operating-point norm
+/// r (||F_j||_2 r, against [`GAIN_WARNING_FACTOR`]).
 fn gain_warning(model: &TsModel, d: &Design) -> Option<String> {
     let levels = model.spec.saturation.as_ref()?;
     let level = levels.iter().copied().fold(f64::INFINITY, f64::min);
+    let largest = |demand: &dyn Fn(&nalgebra::DMatrix<f64>) -> f64| {
+        d.gains
+            .iter()
+            .map(demand)
+            .enumerate()
+            .fold(
+                (0, 0.0),
+                |best, (j, g)| if g > best.1 { (j, g) } else { best },
+            )
+    };
+    let rule = |j: usize| model.rules.get(j).map_or("?", |r| r.name.as_str());
+    if let Some((p, c)) = d.certified_region() {
+        let p_inv = p.clone().try_inverse()?;
+        let (j, demand) = largest(&|f| {
+            f.row_iter()
+                .map(|row| {
+                    (c * (row * &p_inv * row.transpose())[(0, 0)])
+                        .max(0.0)
+                        .sqrt()
+                })
+                .fold(0.0, f64::max)
+        });
+        return (demand > CERTIFIED_SET_GAIN_FACTOR * level).then(|| {
+            format!(
+                "warning: the gain of rule `{}` asks for |u| up to {demand:.3e} at the edge of the certified set E(P, c), {:.0} times the `saturate` level {level}: the actuator saturates on most of the certified set; bound the input (`objective input_norm(u) <= ..`) or weaken the objectives that set the gains",
+                rule(j),
+                demand / level
+            )
+        });
+    }
     let r = model
         .rules
         .iter()
         .filter_map(|rule| rule.at.as_ref())
         .map(|x| x.iter().map(|v| v * v).sum::<f64>().sqrt())
         .fold(0.0, f64::max);
-    let (j, gain) = d
-        .gains
-        .iter()
-        .map(|f| f.clone().svd(false, false).singular_values.max())
-        .enumerate()
-        .fold(
-            (0, 0.0),
-            |best, (j, g)| if g > best.1 { (j, g) } else { best },
-        );
+    let (j, gain) = largest(&|f| f.clone().svd(false, false).singular_values.max());
     let demand = gain * r;
     (r > 0.0 && demand > GAIN_WARNING_FACTOR * level).then(|| {
         format!(
-            "warning: the gain of rule {} (||F|| = {gain:.3e}) asks for |u| up to {demand:.3e} at the edge of the modelled region (||x|| = {r:.3}), {:.0} times the `saturate` level {level}: the actuator saturates on almost every sample; bound the input (`objective input_norm(u) <= ..`) or the gains",
-            model.rules[j].name,
+            "warning: the gain of rule `{}` (||F|| = {gain:.3e}) asks for |u| up to {demand:.3e} at the edge of the modelled region (||x|| = {r:.3}), {:.0} times the `saturate` level {level}: the actuator saturates on almost every sample; bound the input (`objective input_norm(u) <= ..`) or the gains",
+            rule(j),
             demand / level
         )
     })

@@ -103,6 +103,29 @@ impl Plan {
         p
     }
 
+    /// This plan with `kind` bounded by `value` (a decay rate: imposed).
+    pub fn bounding(&self, kind: ObjectiveKind, value: f64) -> Plan {
+        let mut p = self.clone();
+        for o in &mut p.objectives {
+            if o.kind() == kind {
+                o.set_target(Bound::Fixed(value));
+            }
+        }
+        p
+    }
+
+    /// This plan with every minimized quantity a free variable (its
+    /// constraints stay): feasibility only.
+    pub fn unoptimized(&self) -> Plan {
+        let mut p = self.clone();
+        for o in &mut p.objectives {
+            if o.target() == Some(Bound::Minimize) {
+                o.set_target(Bound::Free);
+            }
+        }
+        p
+    }
+
     /// This plan with `kind` optimized instead of bounded: it becomes minimized
     /// (a decay rate: maximized by the caller), and every other minimized
     /// quantity becomes a free variable, so its constraints (e.g. the

@@ -61,8 +61,10 @@ impl Objective for Decay {
     }
 
     fn set_target(&mut self, target: Bound) {
-        if target == Bound::Minimize {
-            self.alpha = 0.0;
+        match target {
+            Bound::Minimize => self.alpha = 0.0,
+            Bound::Fixed(a) => self.alpha = a,
+            Bound::Free => {}
         }
         self.target = target;
     }
