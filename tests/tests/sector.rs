@@ -31,7 +31,10 @@ fn errors(text: &str) -> Vec<String> {
         .diagnostics
         .iter()
         .filter(|d| d.is_error())
-        .map(|d| d.message.clone())
+        .map(|d| match &d.help {
+            Some(h) => format!("{} (help: {h})", d.message),
+            None => d.message.clone(),
+        })
         .collect()
 }
 
@@ -185,13 +188,13 @@ fn lorenz_with(rest: &str) -> String {
 
 #[test]
 fn bad_sector_specs_are_errors_naming_the_cause() {
-    let cases: [(&str, &str); 7] = [
+    let cases: [(&str, &str); 8] = [
         // x1^2 is not affine in the premise x1.
         (
             "premise x1 range -25 .. 25;\nrules sector;\n",
             "",
         ),
-        ("premise x2 range -1 .. 1;\nrules sector;\n", "of `A(x)` is not affine"),
+        ("premise x2 range -1 .. 1;\nrules sector;\n", "`A(x)[2, 1]` (0-based, as the language indexes) is not affine"),
         ("premise x1;\nrules sector;\n", "sector premise `x1` has no range"),
         (
             "premise x1 range -25 .. 25 { a = tri(-25, -25, 25); b = tri(-25, 25, 25); }\nrules sector;\n",
@@ -205,6 +208,11 @@ fn bad_sector_specs_are_errors_naming_the_cause() {
         (
             "premise x1 range -25 .. 25;\npremise z = 2 * x1 range -50 .. 50;\nrules sector;\n",
             "not independent",
+        ),
+        // The advice names the premises whose removal leaves independent products.
+        (
+            "premise x1 range -25 .. 25;\npremise z = 2 * x1 range -50 .. 50;\nrules sector;\n",
+            "`x1` or `z` is a function of the other premises",
         ),
     ];
     for (rest, want) in cases {
@@ -224,7 +232,7 @@ fn bad_sector_specs_are_errors_naming_the_cause() {
     let errs = errors(sq);
     assert!(
         errs.iter()
-            .any(|e| e.contains("entry (1, 1) of `A(x)` is not affine")),
+            .any(|e| e.contains("entry `A(x)[0, 0]` (0-based, as the language indexes) is not affine")),
         "{errs:?}"
     );
     // Declaring the square as its own premise makes it exact.

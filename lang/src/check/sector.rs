@@ -290,7 +290,7 @@ impl Checker<'_> {
             .iter()
             .map(|&k| premises[k].range.unwrap_or((-1.0, 1.0)))
             .collect();
-        let (mut rows, mut ys, mut xs) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut rows, mut ys, mut xs, mut ts) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for i in 1..=wanted as u64 {
             let x: Vec<f64> = sample_box
                 .iter()
@@ -304,6 +304,7 @@ impl Checker<'_> {
                     .map(|(v, (lo, hi))| (2.0 * v - lo - hi) / (hi - lo))
                     .collect();
                 rows.push((0..monomials).map(|s| monomial(s, &t)).collect::<Vec<_>>());
+                ts.push(t);
                 ys.push(y);
                 xs.push(x);
             }
@@ -327,12 +328,28 @@ impl Checker<'_> {
         }
         let phi = Mat::from_fn(rows.len(), monomials, |r, c| rows[r][c]);
         let svd = phi.clone().svd(true, true);
-        let (smax, smin) = svd
-            .singular_values
-            .iter()
-            .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
-        if smin.is_nan() || smax.is_nan() || smin <= 1e-9 * smax {
+        if !independent(&svd.singular_values) {
             let names: Vec<&str> = idx.iter().map(|&k| premises[k].name.as_str()).collect();
+            // The premises whose removal leaves independent products.
+            let removable: Vec<String> = (0..p)
+                .filter(|&drop| {
+                    let keep: Vec<usize> = (0..p).filter(|&q| q != drop).collect();
+                    let sub = Mat::from_fn(ts.len(), 1 << keep.len(), |r, c| {
+                        let t: Vec<f64> = keep.iter().map(|&q| ts[r][q]).collect();
+                        monomial(c, &t)
+                    });
+                    independent(&sub.svd(false, false).singular_values)
+                })
+                .map(|k| format!("`{}`", names[k]))
+                .collect();
+            let help = if removable.is_empty() {
+                "a premise that is a function of the others adds no information: remove it".to_string()
+            } else {
+                format!(
+                    "{} is a function of the other premises: remove that premise (any one of them); the entries that used it are then fitted through the others and their products (each entry must be affine in each remaining premise, so a product such as s * c needs no premise of its own)",
+                    removable.join(" or ")
+                )
+            };
             self.err(
                 Diagnostic::error(
                     span,
@@ -342,9 +359,7 @@ impl Checker<'_> {
                     "the products of ({}) are linearly dependent",
                     names.join(", ")
                 ))
-                .with_help(
-                    "a premise that is a function of the others adds no information: remove it",
-                ),
+                .with_help(help),
             );
             return Built::Failed;
         }
@@ -411,7 +426,7 @@ impl Checker<'_> {
                         return Err(Box::new(
                             Diagnostic::error(
                                 mm.expr.span,
-                                format!("entry ({}, {}) of `{name}(x)` is not affine in each sector premise", r + 1, c + 1),
+                                format!("entry `{name}(x)[{r}, {c}]` (0-based, as the language indexes) is not affine in each sector premise"),
                             )
                             .with_label(format!("relative residual {err:.2e} (tolerance {FIT_TOLERANCE:.0e}) at x = [{x}]"))
                             .with_help("it has a nonlinear term no premise names: declare that term as a premise with its range, e.g. `premise z = <term> range lo .. hi;`"),
@@ -507,4 +522,13 @@ impl Checker<'_> {
             })
             .collect()
     }
+}
+
+/// Whether singular values show full column rank (smallest above 1e-9 of the
+/// largest, none NaN).
+fn independent(singular: &nalgebra::DVector<f64>) -> bool {
+let (smax, smin) = singular
+    .iter()
+    .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
+!(smin.is_nan() || smax.is_nan() || smin <= 1e-9 * smax)
 }
