@@ -178,7 +178,11 @@ fn msd_free(objectives: &str) -> String {
 /// The value a diagnosis line advises (`write <kind> <= v`).
 fn advised(line: &str) -> f64 {
     let at = line.rfind("<= ").expect("an advised bound") + 3;
-    line[at..].trim().parse().expect("a number")
+    let number: String = line[at..]
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || matches!(c, '.' | 'e' | '-' | '+'))
+        .collect();
+    number.parse().expect("a number")
 }
 
 #[test]

@@ -232,7 +232,8 @@ fn bad_sector_specs_are_errors_naming_the_cause() {
     let errs = errors(sq);
     assert!(
         errs.iter()
-            .any(|e| e.contains("entry `A(x)[0, 0]` (0-based, as the language indexes) is not affine")),
+            .any(|e| e
+                .contains("entry `A(x)[0, 0]` (0-based, as the language indexes) is not affine")),
         "{errs:?}"
     );
     // Declaring the square as its own premise makes it exact.

@@ -24,6 +24,7 @@ mod mismatch_kappa;
 mod mixed_trigger;
 mod model_consistency;
 mod monte_carlo;
+mod newcomer;
 mod objectives;
 mod plots;
 mod region;

@@ -51,7 +51,7 @@ pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
                         continue;
                     }
                 };
-                let write = describe(kind, advised);
+                let write = format!("`{}`", describe(kind, advised));
                 format!(
                     "{found}: {}",
                     resolved(runner, plan, (kind, advised), &write, &describe)
@@ -110,7 +110,7 @@ fn resolved(
                 let both = free.bounding(m, cap);
                 if matches!(runner.run(&both, both.goal()), Ok(Some(_))) {
                     return format!(
-                        "re-solved with {write}, the minimization of {m} still fails: write {write} and {} in place of `minimize` (re-solved: feasible)",
+                        "re-solved with {write}, the minimization of {m} still fails: write {write} and `{}` in place of `minimize` (re-solved: feasible)",
                         describe(m, cap)
                     );
                 }

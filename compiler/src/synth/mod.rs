@@ -209,8 +209,9 @@ pub const CERTIFIED_SET_GAIN_FACTOR: f64 = 10.0;
 /// not, such a loop is rarely what was meant). Measured, for every rule kind,
 /// at the edge of the certified set E(P, c) when the design has one
 /// (max over x'Px <= c of |(F_j x)_k| = sqrt(c F_jk P^-1 F_jk'), against
-/// [`CERTIFIED_SET_GAIN_FACTOR`]), else at the largest operating-point norm
-/// r (||F_j||_2 r, against [`GAIN_WARNING_FACTOR`]).
+/// [`CERTIFIED_SET_GAIN_FACTOR`]), and at the largest operating-point norm
+/// r when the rules have operating points (||F_j||_2 r, against
+/// [`GAIN_WARNING_FACTOR`]); the first that exceeds its factor is said.
 fn gain_warning(model: &TsModel, d: &Design) -> Option<String> {
     let levels = model.spec.saturation.as_ref()?;
     let level = levels.iter().copied().fold(f64::INFINITY, f64::min);
@@ -225,7 +226,7 @@ fn gain_warning(model: &TsModel, d: &Design) -> Option<String> {
             )
     };
     let rule = |j: usize| model.rules.get(j).map_or("?", |r| r.name.as_str());
-    if let Some((p, c)) = d.certified_region() {
+    let certified = d.certified_region().and_then(|(p, c)| {
         let p_inv = p.clone().try_inverse()?;
         let (j, demand) = largest(&|f| {
             f.row_iter()
@@ -236,13 +237,16 @@ fn gain_warning(model: &TsModel, d: &Design) -> Option<String> {
                 })
                 .fold(0.0, f64::max)
         });
-        return (demand > CERTIFIED_SET_GAIN_FACTOR * level).then(|| {
+        (demand > CERTIFIED_SET_GAIN_FACTOR * level).then(|| {
             format!(
                 "warning: the gain of rule `{}` asks for |u| up to {demand:.3e} at the edge of the certified set E(P, c), {:.0} times the `saturate` level {level}: the actuator saturates on most of the certified set; bound the input (`objective input_norm(u) <= ..`) or weaken the objectives that set the gains",
                 rule(j),
                 demand / level
             )
-        });
+        })
+    });
+    if certified.is_some() {
+        return certified;
     }
     let r = model
         .rules

@@ -268,16 +268,25 @@ impl Runner<'_> {
                 ),
                 achievable: vec![self.every_pair_advice()],
             },
-            worst => SynthError::Infeasible {
-                message: match worst {
+            worst => {
+                let message = match worst {
                     Some(w) => format!(
-                        "{head}; every plant/controller pair A_i + B_i F_j is stable (the least stable: {}), but no one Lyapunov matrix certifies them all",
+                        "{head}; every plant/controller pair A_i + B_i F_j is stable (the least stable: {}), but no one Lyapunov matrix certifies them all with the held memberships",
                         w.describe(self.model)
                     ),
                     None => head,
-                },
-                achievable: vec![weaken.into()],
-            },
+                };
+                let advice = self.every_pair_advice();
+                let achievable = if advice.starts_with("write") {
+                    vec![advice]
+                } else {
+                    vec![advice, self.slower_decay_advice().unwrap_or_else(|| weaken.into())]
+                };
+                SynthError::Infeasible {
+                    message,
+                    achievable,
+                }
+            }
         }
     }
 
@@ -298,30 +307,68 @@ impl Runner<'_> {
         }
         let mut model = self.model.clone();
         model.spec.relaxation.node = every;
+        match self.resynthesized(&model) {
+            Ok(true) => format!(
+                "write {write}: it designs the gains for every plant/controller pair (re-solved: certified with the sampled loop), or weaken the objectives that set the gains"
+            ),
+            Ok(false) => format!(
+                "{write} designs the gains for every plant/controller pair; re-solved, it synthesizes but is not certified: weaken the objectives that set the gains"
+            ),
+            Err(e) => format!(
+                "{write} (gains for every plant/controller pair) was tried and is refused too ({}): weaken the objectives that set the gains",
+                e.first_line()
+            ),
+        }
+    }
+
+    /// A fixed decay rate that the whole synthesis (with its sampled loop)
+    /// certifies: the spec's rate halved, at most 4 times, each re-solved;
+    /// None without a fixed decay rate or when none certifies.
+    fn slower_decay_advice(&mut self) -> Option<String> {
+        let at = self.model.spec.objectives.iter().position(|o| {
+            matches!(
+                o.node,
+                tsf_lang::spec::Objective::DecayRate(tsf_lang::spec::Target::Fixed(_))
+            )
+        })?;
+        let tsf_lang::spec::Objective::DecayRate(tsf_lang::spec::Target::Fixed(alpha)) =
+            self.model.spec.objectives[at].node
+        else {
+            return None;
+        };
+        let mut rate = alpha;
+        for _ in 0..4 {
+            rate = round_down(rate / 2.0);
+            let mut model = self.model.clone();
+            model.spec.objectives[at].node =
+                tsf_lang::spec::Objective::DecayRate(tsf_lang::spec::Target::Fixed(rate));
+            if matches!(self.resynthesized(&model), Ok(true)) {
+                return Some(format!(
+                    "or write `decay_rate >= {rate}` (re-solved: certified with the sampled loop; the rate sets the gains)"
+                ));
+            }
+        }
+        None
+    }
+
+    /// The whole synthesis of `model` (its continuous design and its loop),
+    /// its SDPs counted in this runner's log: Ok(true) when the certificate's
+    /// verdict holds, Ok(false) when synthesized but not certified (or no
+    /// verdict is available), the refusal otherwise.
+    fn resynthesized(&mut self, model: &TsModel) -> Result<bool, SynthError> {
         let mut runner = Runner {
-            model: &model,
+            model,
             settings: self.settings,
             log: SolverLog::default(),
             accept_almost: false,
         };
         let tried = super::synthesize_with(&mut runner);
         self.log.count_also(&runner.log);
-        let verdict = match (&tried, self.settings.verifier) {
-            (Ok(d), Some(verify)) => verify(&model, d).map_or(Some(false), Some),
-            _ => None,
-        };
-        match (tried, verdict) {
-            (Ok(_), Some(true)) => format!(
-                "write {write}: it designs the gains for every plant/controller pair (re-solved: certified with the sampled loop), or weaken the objectives that set the gains"
-            ),
-            (Ok(_), _) => format!(
-                "{write} designs the gains for every plant/controller pair; re-solved, its sampled loop synthesizes but no certificate verdict was available here: try it, or weaken the objectives that set the gains"
-            ),
-            (Err(e), _) => format!(
-                "{write} (gains for every plant/controller pair) was tried and is refused too ({}): weaken the objectives that set the gains",
-                e.first_line()
-            ),
-        }
+        let d = tried?;
+        Ok(match self.settings.verifier {
+            Some(verify) => verify(model, &d).unwrap_or(false),
+            None => false,
+        })
     }
 
     /// The refusal of a discrete-time design whose gains (designed for the

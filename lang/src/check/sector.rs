@@ -343,7 +343,8 @@ impl Checker<'_> {
                 .map(|k| format!("`{}`", names[k]))
                 .collect();
             let help = if removable.is_empty() {
-                "a premise that is a function of the others adds no information: remove it".to_string()
+                "a premise that is a function of the others adds no information: remove it"
+                    .to_string()
             } else {
                 format!(
                     "{} is a function of the other premises: remove that premise (any one of them); the entries that used it are then fitted through the others and their products (each entry must be affine in each remaining premise, so a product such as s * c needs no premise of its own)",
@@ -527,8 +528,8 @@ impl Checker<'_> {
 /// Whether singular values show full column rank (smallest above 1e-9 of the
 /// largest, none NaN).
 fn independent(singular: &nalgebra::DVector<f64>) -> bool {
-let (smax, smin) = singular
-    .iter()
-    .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
-!(smin.is_nan() || smax.is_nan() || smin <= 1e-9 * smax)
+    let (smax, smin) = singular
+        .iter()
+        .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
+    !(smin.is_nan() || smax.is_nan() || smin <= 1e-9 * smax)
 }

@@ -54,7 +54,16 @@ pub fn shipped(name: &str) -> TsModel {
 
 /// A shipped spec's model and its compile with the default settings.
 pub fn compile_shipped(name: &str) -> (TsModel, tsfc::driver::compile::Compiled) {
-    let model = shipped(name);
+    compile_model(name, shipped(name))
+}
+
+/// A source text's model and its compile with the default settings (the
+/// certificate's verdict handed to synthesis, as `tsfc compile` does).
+pub fn compile_text(name: &str, text: &str) -> (TsModel, tsfc::driver::compile::Compiled) {
+    compile_model(name, model_of(name, text))
+}
+
+fn compile_model(name: &str, model: TsModel) -> (TsModel, tsfc::driver::compile::Compiled) {
     let info = tsfc::report::SpecInfo {
         path: name.into(),
         sha256: String::new(),
