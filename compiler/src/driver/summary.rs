@@ -116,7 +116,7 @@ fn outside_level(level: f64, x0: &[f64]) -> Option<String> {
         .map(|v| format!("{v}"))
         .collect::<Vec<_>>()
         .join(", ");
-    (!(level <= 1.0)).then(|| {
+    (level > 1.0 || level.is_nan()).then(|| {
         format!(
             "the scenario starts outside the certified region of attraction: x0 = [{shown}] is at level x0'Ux0 = {level:.4e} > 1 (U = P/c of the certificate); the certificate covers this direction up to x0 scaled by {:.4e}, so nothing is certified about this run",
             1.0 / level.sqrt()

@@ -260,8 +260,8 @@ impl Runner<'_> {
         );
         let weaken = "weaken the objectives that set the gains (large gains need fast sampling), or declare a faster trigger";
         match pair_stability::worst(self.model, &design.gains) {
-            // NaN (no eigenvalues) is named too: `!(x < 0)`.
-            Some(w) if !(w.abscissa < 0.0) => SynthError::Infeasible {
+            // NaN (no eigenvalues) is named too.
+            Some(w) if w.abscissa >= 0.0 || w.abscissa.is_nan() => SynthError::Infeasible {
                 message: format!(
                     "{head}: the sampled loop holds the memberships of the last sample, so its conditions impose every plant/controller rule pair, and {}: no sampling interval certifies these gains",
                     w.describe(self.model)
