@@ -16,6 +16,29 @@ pub fn about(x: f64) -> String {
     }
 }
 
+/// The value nearest `x` on the side of `target` (between them, `x`
+/// included) with three significant digits; `x` itself when it is 0, not
+/// finite, or already `target`.
+pub fn round_toward(x: f64, target: f64) -> f64 {
+    if !x.is_finite() || x == 0.0 || x == target {
+        return x;
+    }
+    let e = x.abs().log10().floor() as i32 - 2;
+    let scaled = x / 10f64.powi(e);
+    let k = if target > x {
+        scaled.ceil()
+    } else {
+        scaled.floor()
+    } as i64;
+    let v = decimal(k, e);
+    // Never past the target (a narrowing stays around it).
+    if (target > x && v > target) || (target < x && v < target) {
+        target
+    } else {
+        v
+    }
+}
+
 /// The largest value `<= x` with three significant digits.
 pub fn round_down(x: f64) -> f64 {
     if !(x.is_finite() && x > 0.0) {
@@ -51,7 +74,27 @@ mod tests {
         assert_eq!(super::about(0.0), "0.0000");
     }
 
-    use super::{round_down, round_up};
+    use super::{round_down, round_toward, round_up};
+
+    #[test]
+    fn round_toward_stays_between_the_value_and_the_target() {
+        for (x, t) in [
+            (0.540302, 1.0),
+            (-1.23456, 0.0),
+            (1.98765, 0.0),
+            (0.77, 1.0),
+            (-2.0, 0.0),
+        ] {
+            let r = round_toward(x, t);
+            assert!(
+                (x..=t).contains(&r) || (t..=x).contains(&r),
+                "{x} -> {t}: {r}"
+            );
+            assert!((r - x).abs() <= 0.01 * x.abs(), "{x}: {r}");
+        }
+        assert_eq!(round_toward(0.540302, 1.0), 0.541);
+        assert_eq!(round_toward(-1.23456, 0.0), -1.23);
+    }
 
     #[test]
     fn round_down_never_rounds_up_and_prints_short() {

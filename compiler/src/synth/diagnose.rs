@@ -65,6 +65,13 @@ pub(super) fn diagnose(runner: &mut Runner<'_>, plan: &Plan) -> SynthError {
     if let Some(line) = coupling(runner, plan) {
         achievable.push(line);
     }
+    // No bound's value helps (or there is none): the box of a sector model
+    // may be what binds.
+    if !achievable.iter().any(|l| l.contains("write `")) {
+        if let Some(line) = super::narrowed::advice(runner, plan) {
+            achievable.push(line);
+        }
+    }
     let message = if fixed.is_empty() && super::lyapunov::fuzzy::phi(runner.model).is_some() {
         format!("infeasible: no PDC controller with a fuzzy Lyapunov function in the Finsler form (mu in {:?}) meets the objectives under this relaxation and these phi", super::lyapunov::fuzzy::MU_GRID)
     } else if fixed.is_empty() {

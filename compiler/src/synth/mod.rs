@@ -23,6 +23,7 @@ pub mod given;
 pub mod loops;
 pub mod lyapunov;
 pub mod markov;
+mod narrowed;
 pub mod objective;
 pub mod objectives;
 pub mod pair_stability;

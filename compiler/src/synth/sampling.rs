@@ -294,7 +294,7 @@ impl Runner<'_> {
     /// relaxation that designs the gains for every pair,
     /// `membership_mismatch(kappa = 1)`, tried on the whole synthesis (with
     /// its sampled loop) and advised only as what it gave.
-    fn every_pair_advice(&mut self) -> String {
+    pub(super) fn every_pair_advice(&mut self) -> String {
         let every = Relaxation::MembershipMismatch { kappa: 1.0 };
         let write = format!("`relaxation {every};`");
         let already = matches!(self.model.spec.relaxation.node, Relaxation::MembershipMismatch { kappa } if kappa >= 1.0);
@@ -324,7 +324,7 @@ impl Runner<'_> {
     /// A fixed decay rate that the whole synthesis (with its sampled loop)
     /// certifies: the spec's rate halved, at most 4 times, each re-solved;
     /// None without a fixed decay rate or when none certifies.
-    fn slower_decay_advice(&mut self) -> Option<String> {
+    pub(super) fn slower_decay_advice(&mut self) -> Option<String> {
         let at = self.model.spec.objectives.iter().position(|o| {
             matches!(
                 o.node,

@@ -820,6 +820,66 @@ impl Runner<'_> {
         }))
     }
 
+    /// The refusal when the gains of `design` are not certified for the
+    /// spec's sampling even with every sample transmitted (nu = 0): the
+    /// unstable plant/controller pair when there is one (no interval can
+    /// certify it), else the longest h_max (intervals scaled together) that
+    /// certifies with nu = 0, re-solved at the spec's threshold too.
+    fn no_threshold_refusal(
+        &mut self,
+        design: &Design,
+        base: &TriggerPlan,
+        target: f64,
+        sampling: &str,
+    ) -> SynthError {
+        let message = format!(
+            "event trigger: the gains of the continuous design are not certified for {sampling} even with nu = 0 (every sample transmitted)"
+        );
+        if let Some(w) = super::pair_stability::worst(self.model, &design.gains)
+            .filter(|w| w.abscissa >= 0.0 || w.abscissa.is_nan())
+        {
+            return SynthError::Infeasible {
+                message: format!(
+                    "{message}: the loop holds the memberships of the last transmission, so its conditions impose every plant/controller rule pair, and {}: no sampling interval certifies these gains",
+                    w.describe(self.model)
+                ),
+                achievable: vec![self.every_pair_advice()],
+            };
+        }
+        let (h_min, h_max) = base.sampling;
+        let at = |s: f64, nu: f64| TriggerPlan {
+            sampling: (h_min * s, h_max * s),
+            nu,
+            ..base.clone()
+        };
+        let scale = super::sampling::longest_scale_from_above(|s| {
+            Ok(self.trigger_attempt(&at(s, 0.0))?.is_some())
+        });
+        let advice = match scale {
+            Ok(Some(s)) => {
+                let h = round_down(h_max * s);
+                let s = h / h_max;
+                let write = super::sampling::write_sampling(base.sampling, h);
+                match self.trigger_attempt(&at(s, target)) {
+                    Ok(Some(_)) => format!(
+                        "the longest certified h_max is about {h} s (intervals scaled together): write {write} (re-solved: certified with nu = {target}), or weaken the objectives that set the gains"
+                    ),
+                    _ => format!(
+                        "with every sample transmitted the longest certified h_max is about {h} s ({write}, re-solved), but not with nu = {target} there: lower the threshold too, or weaken the objectives that set the gains"
+                    ),
+                }
+            }
+            _ => format!(
+                "not even intervals 1024 times shorter certify with nu = 0: weaken the objectives that set the gains{}",
+                self.slower_decay_advice().map_or_else(String::new, |a| format!("; {a}"))
+            ),
+        };
+        SynthError::Infeasible {
+            message,
+            achievable: vec![advice],
+        }
+    }
+
     /// The trigger for the gains of `design` at the spec's certified threshold
     /// (the adaptive ceiling `max`, else `nu`; 0 without a threshold). When that
     /// threshold is not certified, the largest one that is (bisection) goes into
@@ -848,12 +908,7 @@ impl Runner<'_> {
             base.sampling.0, base.sampling.1
         );
         if target == 0.0 || self.trigger_attempt(&with(0.0))?.is_none() {
-            return Err(SynthError::Infeasible {
-                message: format!(
-                    "event trigger: the gains of the continuous design are not certified for {sampling} even with nu = 0 (every sample transmitted)"
-                ),
-                achievable: vec!["shorten h_max or weaken the objectives that set the gains".into()],
-            });
+            return Err(self.no_threshold_refusal(design, &base, target, &sampling));
         }
         let (mut lo, mut hi) = (0.0, target);
         while hi - lo > TRIGGER_NU_REL_TOL * hi {
