@@ -30,47 +30,104 @@ fn refusal(c: &Compiled) -> String {
         .join("\n")
 }
 
-/// The spec text of the first "write `...`" of the advice.
-fn advice(text: &str) -> Option<String> {
-    let at = text.find("write `")? + "write `".len();
-    let end = text[at..].find('`')?;
-    Some(text[at..at + end].to_string())
+/// Every spec snippet the first advice line that has one asks to write:
+/// backticked after "write", separated by ", " or " and ".
+fn snippets(text: &str) -> Vec<String> {
+    for line in text.lines() {
+        let Some(at) = line.find("write `") else {
+            continue;
+        };
+        let mut out = Vec::new();
+        let mut rest = &line[at + "write ".len()..];
+        while let Some(open) = rest.strip_prefix('`') {
+            let Some(end) = open.find('`') else { break };
+            out.push(open[..end].trim_end_matches(';').to_string());
+            rest = &open[end + 1..];
+            rest = rest
+                .strip_prefix(", ")
+                .or_else(|| rest.strip_prefix(" and "))
+                .unwrap_or("");
+        }
+        return out;
+    }
+    Vec::new()
 }
 
 /// `spec` with the advice `snippet` applied: a relaxation or trigger item
-/// replaces the spec's (or is added after `rules`); an objective bound
-/// replaces the objective of the same kind.
+/// replaces the spec's (or is added after `rules`); `premise NAME range A ..
+/// B` replaces that premise's range; an objective bound (`kind <= v` or
+/// `kind >= v`) replaces the number of the objective of that kind.
 fn apply(spec: &str, snippet: &str) -> String {
-    let (starts, line) = if snippet.starts_with("relaxation") || snippet.starts_with("trigger") {
+    let mut lines: Vec<String> = spec.lines().map(str::to_string).collect();
+    let find = |lines: &[String], start: &str| {
+        lines.iter().position(|l| l.trim_start().starts_with(start))
+    };
+    // `line` with the text from `from` to the first `stop` replaced.
+    let splice = |line: &str, from: usize, stop: &[char], with: &str| {
+        let to = from + line[from..].find(stop).unwrap_or(line.len() - from);
+        format!("{}{with}{}", &line[..from], &line[to..])
+    };
+    if snippet.starts_with("relaxation") || snippet.starts_with("trigger") {
         let word = snippet.split_whitespace().next().unwrap_or_default();
-        (format!("{word} "), snippet.to_string())
+        let item = if snippet.ends_with('}') {
+            snippet.to_string()
+        } else {
+            format!("{snippet};")
+        };
+        match find(&lines, &format!("{word} ")) {
+            Some(at) => lines[at] = item,
+            None => {
+                let at = find(&lines, "rules").expect("a `rules` line");
+                lines.insert(at + 1, item);
+            }
+        }
+    } else if let Some(rest) = snippet.strip_prefix("premise ") {
+        let (name, range) = rest
+            .split_once(" range ")
+            .expect("premise NAME range A .. B");
+        let at = find(&lines, &format!("premise {name} ")).expect("the premise");
+        let from = lines[at].find(" range ").expect("a declared range") + " range ".len();
+        let braced = lines[at].contains('{');
+        let with = if braced {
+            format!("{range} ")
+        } else {
+            range.to_string()
+        };
+        lines[at] = splice(&lines[at], from, &[';', '{'], &with);
     } else {
         let kind: String = snippet
             .chars()
             .take_while(|c| c.is_alphanumeric() || *c == '_')
             .collect();
-        (format!("objective {kind}"), format!("objective {snippet};"))
-    };
-    let mut replaced = false;
-    let mut out: Vec<String> = spec
-        .lines()
-        .map(|l| {
-            if l.trim_start().starts_with(&starts) {
-                replaced = true;
-                line.clone()
-            } else {
-                l.to_string()
-            }
-        })
-        .collect();
-    if !replaced {
-        let at = out
-            .iter()
-            .position(|l| l.starts_with("rules"))
-            .expect("the spec has a `rules` line");
-        out.insert(at + 1, line);
+        let op = if snippet.contains("<=") { "<=" } else { ">=" };
+        let value = snippet.rsplit(op).next().expect("a bound").trim();
+        let at = find(&lines, &format!("objective {kind}")).expect("the objective");
+        let from = lines[at].find(op).expect("a bounded objective") + op.len() + 1;
+        lines[at] = splice(&lines[at], from, &[';', ' '], value);
     }
-    out.join("\n") + "\n"
+    lines.join("\n") + "\n"
+}
+
+/// The advice applied as the test reads it.
+#[test]
+fn advice_snippets_apply_to_the_spec_text() {
+    let spec = "premise q = x4 * sin(x3) range -2 .. 2;\nrules sector;\n\
+                objective linf(w -> y) <= 20 with phi = 0.05;\nobjective decay_rate >= 50;\n\
+                trigger periodic { every = 0.01; }\n";
+    let advice = "x\ny: write `premise q range -0.5 .. 0.5`, `linf <= 20.4` and `decay_rate >= 6.17` (re-solved)";
+    let mut out = spec.to_string();
+    for s in snippets(advice) {
+        out = apply(&out, &s);
+    }
+    let out = apply(&out, "relaxation membership_mismatch(kappa = 1)");
+    let out = apply(&out, "trigger periodic { every = 0.00703; }");
+    assert_eq!(
+        out,
+        "premise q = x4 * sin(x3) range -0.5 .. 0.5;\nrules sector;\n\
+         relaxation membership_mismatch(kappa = 1);\n\
+         objective linf(w -> y) <= 20.4 with phi = 0.05;\nobjective decay_rate >= 6.17;\n\
+         trigger periodic { every = 0.00703; }\n"
+    );
 }
 
 /// Compiles `spec`, applying the printed advice until it certifies (at
@@ -88,9 +145,11 @@ fn follow(name: &str, spec: &str, rounds: usize) -> (String, Vec<String>, Compil
             !seen.contains(&text),
             "{name}: the same refusal twice after its advice was applied:\n{text}"
         );
-        let snippet =
-            advice(&text).unwrap_or_else(|| panic!("{name}: no advice to apply:\n{text}"));
-        spec = apply(&spec, &snippet);
+        let asked = snippets(&text);
+        assert!(!asked.is_empty(), "{name}: no advice to apply:\n{text}");
+        for snippet in asked {
+            spec = apply(&spec, &snippet);
+        }
         seen.push(text);
     }
     panic!("{name}: not certified after {rounds} rounds of advice: {seen:#?}");
@@ -98,7 +157,7 @@ fn follow(name: &str, spec: &str, rounds: usize) -> (String, Vec<String>, Compil
 
 #[test]
 fn the_advice_leads_from_a_first_spec_to_a_certified_design() {
-    for (name, at_least) in [("duffing.tsf", 1), ("ball_beam.tsf", 2)] {
+    for (name, at_least) in [("duffing.tsf", 1), ("ball_beam.tsf", 2), ("tora.tsf", 1)] {
         let (spec, refusals, c) = follow(name, &newcomer(name), 4);
         assert!(
             refusals.len() >= at_least,
