@@ -446,6 +446,7 @@ fn eval_sym(s: &Sym, x: &[f64]) -> f64 {
                 Func::Atan => math::atan(v),
                 Func::Abs => v.abs(),
                 Func::Sinc => math::sinc(v),
+                Func::Exprel => math::exprel(v),
             }
         }
     }
