@@ -8,6 +8,7 @@ mod c_codegen;
 mod common;
 mod compat;
 mod diagnostics;
+mod exprel;
 mod event_trigger;
 mod fuzz;
 mod fuzz_features;
