@@ -693,7 +693,10 @@ fn zero_over_zero_premise_is_refused_by_check_and_compile() {
             "{err}"
         );
         assert!(err.contains("premise_zero_over_zero.tsf:31:13"), "{err}");
-        assert!(err.contains("help: a removable singularity: write it with `exprel`"), "{err}");
+        assert!(
+            err.contains("help: a removable singularity: write it with `exprel`"),
+            "{err}"
+        );
     }
     assert!(!dir.join("cstr_zero_over_zero.c").exists());
 }

@@ -1428,7 +1428,11 @@ int main(void) {
         -1e300,
     ];
     for b in [0.5f64, -0.5] {
-        args.extend([b, f64::from_bits(b.to_bits() - 1), f64::from_bits(b.to_bits() + 1)]);
+        args.extend([
+            b,
+            f64::from_bits(b.to_bits() - 1),
+            f64::from_bits(b.to_bits() + 1),
+        ]);
     }
     for _ in 0..100_000 {
         args.push(rng.uniform(-0.5, 0.5));
@@ -1437,7 +1441,10 @@ int main(void) {
         args.push(rng.uniform(-40.0, 40.0));
     }
     let input = dir.join("exprel_args.txt");
-    let text: String = args.iter().map(|v| format!("{:x}\n", v.to_bits())).collect();
+    let text: String = args
+        .iter()
+        .map(|v| format!("{:x}\n", v.to_bits()))
+        .collect();
     std::fs::write(&input, text).expect("write args");
     let exe = dir.join("exprel_drive");
     build(&cc, &[drv, runtime], &exe, &["-O2", "-ffp-contract=off"]);
@@ -1462,7 +1469,9 @@ int main(void) {
         let f: f64 = f.parse().expect("float");
         let rf = math::exprelf(v as f32);
         assert!(
-            f as f32 == rf || (f.is_nan() && rf.is_nan()) || (f as f32).to_bits().abs_diff(rf.to_bits()) <= 1,
+            f as f32 == rf
+                || (f.is_nan() && rf.is_nan())
+                || (f as f32).to_bits().abs_diff(rf.to_bits()) <= 1,
             "exprelf({v:e}) = {f:e} in C, {rf:e} in the runtime"
         );
     }

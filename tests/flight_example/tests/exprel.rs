@@ -17,7 +17,11 @@ fn limit(x: &[f64; 2]) -> f64 {
         .iter()
         .zip(&TABLE.gains)
         .map(|(c, f)| {
-            let hp = if c[0] > 0.5 * (1.0 + e * e) { mp } else { 1.0 - mp };
+            let hp = if c[0] > 0.5 * (1.0 + e * e) {
+                mp
+            } else {
+                1.0 - mp
+            };
             let hs = if c[1] > 0.5 * e * e { ms } else { 1.0 - ms };
             hp * hs * (f[0][0] * x[0] + f[0][1] * x[1])
         })
@@ -31,7 +35,10 @@ fn u_at_e2_zero_is_the_limit() {
     let mut c = Controller::new();
     let u = c.step(&x)[0];
     assert!(!c.fault() && !c.no_rule_fired(), "{:?}", c.flags());
-    assert!((u - want).abs() <= 1e-12 * want.abs().max(1.0), "u = {u}, limit {want}");
+    assert!(
+        (u - want).abs() <= 1e-12 * want.abs().max(1.0),
+        "u = {u}, limit {want}"
+    );
     let near = c.step(&[0.3, 1e-9])[0];
     assert!((near - u).abs() <= 1e-6, "u(1e-9) = {near}, u(0) = {u}");
     let neg = c.step(&[0.3, -0.0])[0];
