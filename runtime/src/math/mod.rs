@@ -713,8 +713,10 @@ pub const EXPREL_COEFFS: [f64; 15] = [
 /// value overflows a little later, near `v = 716`).
 pub fn exprel(v: f64) -> f64 {
     if fabs(v) < EXPREL_SMALL {
-        let mut p = EXPREL_COEFFS[EXPREL_COEFFS.len() - 1];
-        for c in EXPREL_COEFFS.iter().rev().skip(1) {
+        // From 0: the first step gives c_14 exactly (0 * v + c_14), as the
+        // C runtime's start at c_14.
+        let mut p = 0.0;
+        for c in EXPREL_COEFFS.iter().rev() {
             let t = p * v;
             p = t + c;
         }
