@@ -675,3 +675,28 @@ fn compile_of_an_adaptive_spec_writes_its_code() {
         let _ = std::fs::remove_dir_all(&d);
     }
 }
+
+/// Issue 33: a sector premise that is 0/0 at the equilibrium is refused by
+/// `check` and `compile` (exit 1) at the division, file:line:col, with
+/// `exprel` as the fix; nothing is written.
+#[test]
+fn zero_over_zero_premise_is_refused_by_check_and_compile() {
+    let spec = fixture("tests/bad/premise_zero_over_zero.tsf");
+    let check = tsfc().arg("check").arg(&spec).output().expect("runs");
+    let dir = tmp_dir("zero_over_zero");
+    let compile = compile_into(&spec, &dir, &[]);
+    for out in [&check, &compile] {
+        assert_eq!(out.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("premise `s` is not finite at x = 0 (0/0)"),
+            "{err}"
+        );
+        assert!(err.contains("premise_zero_over_zero.tsf:31:13"), "{err}");
+        assert!(
+            err.contains("help: a removable singularity: write it with `exprel`"),
+            "{err}"
+        );
+    }
+    assert!(!dir.join("cstr_zero_over_zero.c").exists());
+}

@@ -77,6 +77,27 @@ fn sinc_is_the_runtime_sinc() {
 }
 
 #[test]
+fn exprel_is_the_runtime_exprel() {
+    // Both branches (|v| < 0.5: the series; (exp(v) - 1)/v), bit for bit.
+    assert_eq!(eval("exprel(0)").unwrap(), vec![1.0]);
+    assert_eq!(eval("exprel(-0)").unwrap(), vec![1.0]);
+    for v in [
+        0.0, 1e-9, -1e-5, 0.3, -0.49, 0.5, -0.5, -1.0, 2.5, 100.0, -800.0,
+    ] {
+        let got = eval(&format!("exprel({v:e})")).unwrap()[0];
+        assert_eq!(
+            got.to_bits(),
+            tsf_runtime::math::exprel(v).to_bits(),
+            "exprel({v})"
+        );
+    }
+    let e = eval("exprel(1)").unwrap()[0];
+    assert!((e - (std::f64::consts::E - 1.0)).abs() < 1e-15, "{e}");
+    // Element-wise, like the other functions of one scalar.
+    assert_eq!(eval("exprel([0, 0])").unwrap(), vec![1.0, 1.0]);
+}
+
+#[test]
 fn errors_are_diagnostics() {
     assert!(eval("[1, 2] + [1; 2]")
         .unwrap_err()

@@ -181,6 +181,48 @@ int tsf_periodic_decide(uint32_t *count, uint32_t every) {
     return fire;
 }
 
+/* ------------------------------------------- binary64 (e^v - 1)/v */
+
+/* tsf-runtime's math::EXPREL_COEFFS: 1/(k+1)!, k = 0..14 (the same
+   literals). */
+static const double tsf_exprel_c[15] = {
+    1.0,
+    0.5,
+    0.16666666666666666,
+    0.041666666666666664,
+    0.008333333333333333,
+    0.001388888888888889,
+    0.0001984126984126984,
+    2.48015873015873e-05,
+    2.7557319223985893e-06,
+    2.755731922398589e-07,
+    2.505210838544172e-08,
+    2.08767569878681e-09,
+    1.6059043836821613e-10,
+    1.1470745597729725e-11,
+    7.647163731819816e-13,
+};
+
+/* tsf-runtime's math::exprel: |v| < 0.5 (math::EXPREL_SMALL) the degree-14
+   Taylor polynomial by Horner, one product per statement (bit for bit the
+   Rust runtime's); otherwise (exp(v) - 1)/v with libm's exp (as tsf_exp);
+   +inf gives +inf, -inf 0, NaN NaN. */
+static double tsf_exprel_f64(double v) {
+    if (fabs(v) < 0.5) {
+        double p = tsf_exprel_c[14];
+        int k;
+        for (k = 13; k >= 0; k--) {
+            const double t = p * v;
+            p = t + tsf_exprel_c[k];
+        }
+        return p;
+    }
+    if (v == HUGE_VAL) {
+        return v; /* +inf: (inf - 1)/inf would be NaN */
+    }
+    return (exp(v) - 1.0) / v;
+}
+
 /* ------------------------------------------------- the two instantiations */
 
 #define TSF_RUNTIME_INSTANCE
@@ -413,6 +455,12 @@ TSF_R TSF_FN(tsf_sinc)(TSF_R v) {
         return TSF_C(1.0 - d2 / 6.0);
     }
     return TSF_C(sin(d) / d);
+}
+
+/* (e^v - 1)/v, 1 at 0: tsf_exprel_f64 in double, rounded once to the real
+   type (as math::exprelf). */
+TSF_R TSF_FN(tsf_exprel)(TSF_R v) {
+    return TSF_C(tsf_exprel_f64((double)v));
 }
 
 /* The runtime's atan in binary64, rounded once to the real type (as atanf). */

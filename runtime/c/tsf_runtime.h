@@ -137,13 +137,17 @@ typedef struct tsf_adaptive_lawf {
 } tsf_adaptive_lawf;
 
 /* Elementary functions of premise code (see the top of this file).
-   tsf_sinc(v) = sin(v)/v, 1 - v*v/6 for |v| < 2^-13 (math::SINC_SMALL). */
+   tsf_sinc(v) = sin(v)/v, 1 - v*v/6 for |v| < 2^-13 (math::SINC_SMALL).
+   tsf_exprel(v) = (e^v - 1)/v, 1 at 0: for |v| < 0.5 (math::EXPREL_SMALL)
+   the runtime's degree-14 Taylor polynomial (bit for bit), otherwise
+   (exp(v) - 1)/v with libm's exp; +inf -> +inf, -inf -> 0. */
 double tsf_exp(double v);
 double tsf_sqrt(double v);
 double tsf_sin(double v);
 double tsf_cos(double v);
 double tsf_fabs(double v);
 double tsf_sinc(double v);
+double tsf_exprel(double v);
 double tsf_atan(double v);
 float tsf_expf(float v);
 float tsf_sqrtf(float v);
@@ -151,6 +155,7 @@ float tsf_sinf(float v);
 float tsf_cosf(float v);
 float tsf_fabsf(float v);
 float tsf_sincf(float v);
+float tsf_exprelf(float v);
 float tsf_atanf(float v);
 
 /* sum_k a[k] b[k], accumulated in index order from the first product (0 if

@@ -55,10 +55,12 @@ pub trait Real:
     fn cos(self) -> Self;
     /// `sin(v)/v` with 1 at 0, see [`crate::math::sinc`].
     fn sinc(self) -> Self;
+    /// `(e^v - 1)/v` with 1 at 0, see [`crate::math::exprel`].
+    fn exprel(self) -> Self;
 }
 
 macro_rules! impl_real {
-    ($t:ty, $bits:ty, $scale:expr, $exp:expr, $sqrt:expr, $atan:expr, $sin:expr, $cos:expr, $sinc:expr) => {
+    ($t:ty, $bits:ty, $scale:expr, $exp:expr, $sqrt:expr, $atan:expr, $sin:expr, $cos:expr, $sinc:expr, $exprel:expr) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -111,6 +113,10 @@ macro_rules! impl_real {
             fn sinc(self) -> Self {
                 $sinc(self)
             }
+            #[inline]
+            fn exprel(self) -> Self {
+                $exprel(self)
+            }
         }
     };
 }
@@ -129,7 +135,8 @@ impl_real!(
     crate::math::atan,
     crate::math::sin,
     crate::math::cos,
-    crate::math::sinc
+    crate::math::sinc,
+    crate::math::exprel
 );
 impl_real!(
     f32,
@@ -140,5 +147,6 @@ impl_real!(
     crate::math::atanf,
     crate::math::sinf,
     crate::math::cosf,
-    crate::math::sincf
+    crate::math::sincf,
+    crate::math::exprelf
 );

@@ -307,7 +307,7 @@ fn write_sensor_files(dir: &Path, t: &Tables, files: &CFiles) -> PathBuf {
     c
 }
 
-fn write_files(dir: &Path, t: &Tables, files: &CFiles) -> PathBuf {
+pub(crate) fn write_files(dir: &Path, t: &Tables, files: &CFiles) -> PathBuf {
     let (h, c) = c_file_names(t);
     std::fs::write(dir.join(h), &files.header).expect("write header");
     let c = dir.join(c);
@@ -446,6 +446,7 @@ fn eval_sym(s: &Sym, x: &[f64]) -> f64 {
                 Func::Atan => math::atan(v),
                 Func::Abs => v.abs(),
                 Func::Sinc => math::sinc(v),
+                Func::Exprel => math::exprel(v),
             }
         }
     }
@@ -1374,4 +1375,106 @@ fn sensor_c_atan_is_the_runtimes() {
             println!("atan [{tag}, float = {float}]: {checked} arguments bit-identical");
         }
     }
+}
+
+/// The C runtime's `tsf_exprel` against the Rust runtime's `math::exprel`:
+/// bit for bit on the series branch (|v| < 0.5, the same coefficients and
+/// Horner), within 4 ulp where both call an exp (libm's in C), the special
+/// values equal; `tsf_exprelf` is `exprelf`'s rounding of the same values.
+#[test]
+fn c_exprel_is_the_runtimes() {
+    let cc = c_compiler();
+    let dir = work_dir("exprel");
+    let runtime = write_runtime(&dir);
+    let drv = dir.join("exprel_drive.c");
+    std::fs::write(
+        &drv,
+        r#"#include "tsf_runtime.h"
+#include <stdio.h>
+#include <string.h>
+
+int main(void) {
+    unsigned long long b;
+    while (scanf("%llx", &b) == 1) {
+        double d, r;
+        float f;
+        memcpy(&d, &b, sizeof d);
+        r = tsf_exprel(d);
+        f = tsf_exprelf((float)d);
+        memcpy(&b, &r, sizeof b);
+        printf("%016llx %.9g\n", b, (double)f);
+    }
+    return 0;
+}
+"#,
+    )
+    .expect("write driver");
+    let mut rng = Rng::new(0xe4e1);
+    let mut args: Vec<f64> = vec![
+        0.0,
+        -0.0,
+        5e-324,
+        -5e-324,
+        f64::MIN_POSITIVE,
+        1e-300,
+        1e-9,
+        -1e-9,
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        709.0,
+        710.0,
+        -745.0,
+        -1e300,
+    ];
+    for b in [0.5f64, -0.5] {
+        args.extend([
+            b,
+            f64::from_bits(b.to_bits() - 1),
+            f64::from_bits(b.to_bits() + 1),
+        ]);
+    }
+    for _ in 0..100_000 {
+        args.push(rng.uniform(-0.5, 0.5));
+    }
+    for _ in 0..50_000 {
+        args.push(rng.uniform(-40.0, 40.0));
+    }
+    let input = dir.join("exprel_args.txt");
+    let text: String = args
+        .iter()
+        .map(|v| format!("{:x}\n", v.to_bits()))
+        .collect();
+    std::fs::write(&input, text).expect("write args");
+    let exe = dir.join("exprel_drive");
+    build(&cc, &[drv, runtime], &exe, &["-O2", "-ffp-contract=off"]);
+    let out = run_driver(&exe, &input);
+    let (mut series, mut worst) = (0usize, 0u64);
+    for (line, &v) in out.lines().zip(&args) {
+        let (bits, f) = line.split_once(' ').expect("two fields");
+        let c = f64::from_bits(u64::from_str_radix(bits, 16).expect("bits"));
+        let r = math::exprel(v);
+        if v.abs() < math::EXPREL_SMALL || !r.is_finite() {
+            assert!(
+                c.to_bits() == r.to_bits() || (c.is_nan() && r.is_nan()),
+                "exprel({v:e}) = {c:e} in C, {r:e} in the runtime"
+            );
+            series += 1;
+        } else {
+            let d = c.to_bits().abs_diff(r.to_bits());
+            worst = worst.max(d);
+            // One ulp between the two exps, up to ~2.5 after `- 1` near |v| = 0.5.
+            assert!(d <= 4, "exprel({v:e}) = {c:e} in C, {r:e} in the runtime");
+        }
+        let f: f64 = f.parse().expect("float");
+        let rf = math::exprelf(v as f32);
+        assert!(
+            f as f32 == rf
+                || (f.is_nan() && rf.is_nan())
+                || (f as f32).to_bits().abs_diff(rf.to_bits()) <= 1,
+            "exprelf({v:e}) = {f:e} in C, {rf:e} in the runtime"
+        );
+    }
+    assert_eq!(out.lines().count(), args.len());
+    println!("exprel C vs runtime: {series} bit-identical (series branch and specials), exp branch max {worst} ulp");
 }

@@ -9,6 +9,7 @@ mod common;
 mod compat;
 mod diagnostics;
 mod event_trigger;
+mod exprel;
 mod fuzz;
 mod fuzz_features;
 mod fuzz_pipeline;

@@ -4,8 +4,10 @@
 //! gives 0; a rule whose local model is attached to the wrong sets does not.
 //! Above [`MISMATCH_TOLERANCE`] the model stage warns, naming the rules that
 //! fire where the mismatch is worst. Only the premise region counts (states
-//! whose premise values leave the declared ranges are skipped).
+//! whose premise values leave the declared ranges are skipped). A grid state
+//! where a premise or A(x), B(x) is not finite is an error (`finite.rs`).
 
+use super::finite;
 use super::premise::{premise_values, rule_weight, PremiseLayout, TermSpec};
 use super::LocalModel;
 use crate::tape::lower::{Lowerer, Scope};
@@ -42,7 +44,7 @@ pub struct Consistency {
 
 /// Grid bounds: from the smallest to the largest operating-point coordinate,
 /// or the box a sector model was fitted on (its rules have no operating point).
-fn bounds(spec: &Spec, rules: &[LocalModel], n: usize) -> Vec<(f64, f64)> {
+pub(super) fn bounds(spec: &Spec, rules: &[LocalModel], n: usize) -> Vec<(f64, f64)> {
     if let Some(s) = &spec.sector {
         return s.sample_box.clone();
     }
@@ -138,15 +140,26 @@ pub(super) fn check(
     let mut x = vec![0.0; grid.len()];
     let mut h = vec![0.0; rules.len()];
     let mut blend = Vec::new();
+    let mut not_finite = None;
     loop {
         for ((v, &i), a) in x.iter_mut().zip(&idx).zip(&grid) {
             *v = a[i];
         }
         let fast = compiled.as_mut().is_some_and(|c| c.eval(&x));
-        let fired = match (fast, &compiled) {
-            (true, Some(c)) => normalized_weights(c.premises(), &ranges, terms, &mut h),
-            _ => premise_values(spec, &x)
-                .is_ok_and(|z| normalized_weights(&z, &ranges, terms, &mut h)),
+        // A state where a premise or matrix is not finite (or the tape
+        // faults: a division by 0) is diagnosed by the interpreter.
+        let (fired, mut suspicious) = match (fast, &compiled) {
+            (true, Some(c)) => (
+                normalized_weights(c.premises(), &ranges, terms, &mut h),
+                c.out.iter().any(|v| !v.is_finite()),
+            ),
+            _ => match premise_values(spec, &x) {
+                Ok(z) => (
+                    normalized_weights(&z, &ranges, terms, &mut h),
+                    z.iter().any(|v| !v.is_finite()),
+                ),
+                Err(_) => (false, true),
+            },
         };
         if fired {
             worst.points += 1;
@@ -160,10 +173,14 @@ pub(super) fn check(
                             interpreted = v;
                             (interpreted.as_slice(), interpreted.shape())
                         }
-                        Err(_) => continue,
+                        Err(_) => {
+                            suspicious = true;
+                            continue;
+                        }
                     },
                     (None, None) => continue,
                 };
+                suspicious |= exact.iter().any(|v| !v.is_finite());
                 let rel = blend_distance(&h, locals, exact, shape, &mut blend) / scales[k];
                 if rel > worst.worst {
                     worst.worst = rel;
@@ -172,6 +189,9 @@ pub(super) fn check(
                     worst_h = h.clone();
                 }
             }
+        }
+        if suspicious && not_finite.is_none() {
+            not_finite = finite::diagnose_at(spec, &x);
         }
         // Odometer over the grid.
         let mut k = 0;
@@ -193,6 +213,10 @@ pub(super) fn check(
         .filter(|(_, h)| **h > 0.01)
         .map(|(r, h)| (r.name.clone(), *h))
         .collect();
+    if let Some(d) = not_finite {
+        diags.push(d);
+        return None;
+    }
     if worst.worst > MISMATCH_TOLERANCE {
         diags.push(warning(spec, &worst, &targets));
     }

@@ -1,10 +1,12 @@
 //! The model stage: a checked [`Spec`] becomes a [`TsModel`]: local linear
 //! models per rule, the premise layout, the rule premises as runtime terms,
-//! the coverage check and the consistency of the blended model with A(x), B(x).
+//! the coverage check, the consistency of the blended model with A(x), B(x)
+//! and the finiteness of the premises and A(x), B(x) where the controller runs.
 
 mod consistency;
 mod coverage;
 pub mod explain;
+mod finite;
 mod local;
 mod premise;
 pub mod region;
@@ -77,6 +79,12 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
     let terms = premise::rule_terms(&spec, &premises);
     let centers = premise::rule_centers(&spec, &premises, &terms);
     premise::check_operating_points(&spec, &premises, &terms, diags);
+    if finite::origin_in_box(&consistency::bounds(&spec, &rules, spec.n())) {
+        let origin = vec![0.0; spec.n()];
+        if let Some(d) = finite::diagnose_at(&spec, &origin) {
+            diags.push(d);
+        }
+    }
     if diags.iter().filter(|d| d.is_error()).count() > errors_before {
         return None;
     }
@@ -104,6 +112,9 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
         }
     }
     let consistency = consistency::check(&spec, &rules, &premises, &terms, diags);
+    if diags.iter().filter(|d| d.is_error()).count() > errors_before {
+        return None;
+    }
     let model = TsModel {
         consistency,
         n: spec.n(),

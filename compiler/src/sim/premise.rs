@@ -25,6 +25,7 @@ fn unary(f: Func) -> Unary {
         Func::Atan => Unary::Atan,
         Func::Abs => Unary::Abs,
         Func::Sinc => Unary::Sinc,
+        Func::Exprel => Unary::Exprel,
     }
 }
 

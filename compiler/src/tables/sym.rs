@@ -26,10 +26,13 @@ pub enum Func {
     /// sin(v)/v with 1 at 0 (the runtime's `math::sinc`, with its
     /// small-argument branch)
     Sinc,
+    /// (e^v - 1)/v with 1 at 0 (the runtime's `math::exprel`, with its
+    /// series branch)
+    Exprel,
 }
 
 impl Func {
-    /// The name used in the language, the runtime and C's math.h (sinc is ours).
+    /// The name used in the language, the runtime and C's math.h (sinc and exprel are ours).
     pub fn name(self) -> &'static str {
         match self {
             Func::Sin => "sin",
@@ -39,6 +42,7 @@ impl Func {
             Func::Atan => "atan",
             Func::Abs => "fabs",
             Func::Sinc => "sinc",
+            Func::Exprel => "exprel",
         }
     }
 
@@ -51,6 +55,7 @@ impl Func {
             Func::Atan => v.atan(),
             Func::Abs => v.abs(),
             Func::Sinc => tsf_runtime::math::sinc(v),
+            Func::Exprel => tsf_runtime::math::exprel(v),
         }
     }
 }
@@ -452,6 +457,7 @@ impl Ctx<'_> {
             "atan" => Some(Func::Atan),
             "abs" => Some(Func::Abs),
             "sinc" => Some(Func::Sinc),
+            "exprel" => Some(Func::Exprel),
             _ => None,
         };
         if let Some(f) = func {

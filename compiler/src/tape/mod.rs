@@ -53,6 +53,8 @@ pub enum Unary {
     Sign,
     /// The runtime's `sinc`.
     Sinc,
+    /// The runtime's `exprel`.
+    Exprel,
 }
 
 impl Unary {
@@ -70,6 +72,7 @@ impl Unary {
             Unary::Abs => v.abs(),
             Unary::Sign => tsf_runtime::math::sign(v),
             Unary::Sinc => tsf_runtime::math::sinc(v),
+            Unary::Exprel => tsf_runtime::math::exprel(v),
         }
     }
 
@@ -86,6 +89,7 @@ impl Unary {
             "abs" => Unary::Abs,
             "sign" => Unary::Sign,
             "sinc" => Unary::Sinc,
+            "exprel" => Unary::Exprel,
             _ => return None,
         })
     }

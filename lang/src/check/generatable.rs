@@ -24,6 +24,7 @@ pub const GENERATABLE_FUNCTIONS: &[&str] = &[
     "atan",
     "abs",
     "sinc",
+    "exprel",
     "sum",
     "mean",
     "dot",
@@ -199,6 +200,7 @@ mod tests {
     fn generatable_premises_are_accepted() {
         for e in [
             "sinc(x1) + atan(x1) * exp(-abs(x1))",
+            "exp(0.5) * exprel(x1)",
             "sqrt(1 + x1 ^ 2) / cos(0.5)",
             "norm([x1; 2 * x1])",
             "sum([x1; x1]) + mean([x1, 1]) + dot([x1; 1], [1; x1])",

@@ -27,6 +27,7 @@ pub(crate) const BUILTINS: &[&str] = &[
     "abs",
     "sign",
     "sinc",
+    "exprel",
     "norm",
     "dot",
     "cross",
@@ -189,7 +190,8 @@ impl Call<'_> {
             "log" => f64::ln,
             "abs" => f64::abs,
             "sign" => tsf_runtime::math::sign,
-            // The runtime's sinc, so that model and generated code agree.
+            // The runtime's exprel and sinc, so that model and generated code agree.
+            "exprel" => tsf_runtime::math::exprel,
             _ => tsf_runtime::math::sinc,
         };
         Ok(elementwise(&self.a[0], f))
@@ -327,9 +329,8 @@ pub(super) fn builtin(name: &str, ns: Span, a: &[Mat], s: &[Span], sp: Span, mod
             Ok(scalar(a[0].trace()))
         }
         "transpose" => want(1).map(|_| a[0].transpose()),
-        "sqrt" | "sin" | "cos" | "tan" | "atan" | "exp" | "log" | "abs" | "sign" | "sinc" => {
-            call.unary()
-        }
+        "sqrt" | "sin" | "cos" | "tan" | "atan" | "exp" | "log" | "abs" | "sign" | "sinc"
+        | "exprel" => call.unary(),
         "atan2" | "min" | "max" => call.binary(),
         "norm" => want(1).map(|_| scalar(a[0].norm())),
         "sum" => want(1).map(|_| scalar(a[0].sum())),

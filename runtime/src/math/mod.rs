@@ -1,7 +1,7 @@
 //! Elementary functions for `no_std` without libm: [`exp`], [`sqrt`], [`atan`]
-//! (and [`atan2`]), [`sin`], [`cos`] (and [`sinc`]), each for `f64`, with
-//! `f32` variants ([`expf`], [`sqrtf`], [`atanf`], [`sinf`], [`cosf`],
-//! [`sincf`]) that evaluate the `f64` function and round once.
+//! (and [`atan2`]), [`sin`], [`cos`] (and [`sinc`]), [`exprel`], each for
+//! `f64`, with `f32` variants ([`expf`], [`sqrtf`], [`atanf`], [`sinf`],
+//! [`cosf`], [`sincf`], [`exprelf`]) that evaluate the `f64` function and round once.
 //!
 //! The algorithms are described step by step so that the C generator can emit
 //! the same arithmetic (every operation below is one IEEE-754 binary64
@@ -19,6 +19,7 @@
 //! | `atan2`| < 2 ulp | via `atan(y/x)` plus quadrant fix |
 //! | `sin`, `cos` | <= 1 ulp | every finite argument (Cody-Waite below `2^20 pi/2`, Payne-Hanek above); NaN/inf -> NaN |
 //! | `sinc` | <= 2 ulp | `sin(v)/v`; `1 - v^2/6` for `|v| < 2^-13` |
+//! | `exprel` | <= 2 ulp | `(exp(v) - 1)/v`; its Taylor polynomial (degree 14) for `|v| < 0.5` |
 //! | `f32` variants | < 1 ulp (f32) | one extra rounding of a < 1 ulp f64 value |
 //!
 //! C's `<math.h>` `exp`/`atan` are usually within 1 ulp of the true value as
@@ -673,6 +674,60 @@ pub fn sinc(v: f64) -> f64 {
     }
 }
 
+/// Below this `|v|`, [`exprel`] evaluates its Taylor series ([`EXPREL_COEFFS`]);
+/// at and above it, `(exp(v) - 1)/v`.
+pub const EXPREL_SMALL: f64 = 0.5;
+
+/// Taylor coefficients of `exprel(v) = sum_k v^k / (k+1)!`, `k = 0..=14`:
+/// `1/(k+1)!` as binary64 literals (each the correctly rounded quotient; the
+/// C runtime's `tsf_exprel_c` holds the same literals).
+pub const EXPREL_COEFFS: [f64; 15] = [
+    1.0,
+    0.5,
+    0.16666666666666666,
+    0.041666666666666664,
+    0.008333333333333333,
+    0.001388888888888889,
+    0.0001984126984126984,
+    2.48015873015873e-05,
+    2.7557319223985893e-06,
+    2.755731922398589e-07,
+    2.505210838544172e-08,
+    2.08767569878681e-09,
+    1.6059043836821613e-10,
+    1.1470745597729725e-11,
+    7.647163731819816e-13,
+];
+
+/// `exprel(v) = (e^v - 1)/v`, 1 at 0 (binary64).
+///
+/// `|v| < 0.5` ([`EXPREL_SMALL`]): the Taylor polynomial of degree 14,
+/// `sum_{k=0}^{14} v^k/(k+1)!`, by Horner from the highest coefficient
+/// ([`EXPREL_COEFFS`]; `p = p*v + c_k`, one product then one sum, no fused
+/// multiply-add). Its truncation error is below
+/// `0.5^15/16! / (1 - 0.5/17) < 1.6e-18` absolute, and `exprel(v) >= 0.78`
+/// there, so below `2^-58` relative (under 2^-54 as required). Otherwise
+/// `(exp(v) - 1)/v` with [`exp`] (the C runtime calls libm's `exp` there, as
+/// `tsf_exp` does). NaN gives NaN, `+inf` gives `+inf`, `-inf` gives 0;
+/// once `exp(v)` overflows (`v > 709.78`) the result is `+inf` (the true
+/// value overflows a little later, near `v = 716`).
+pub fn exprel(v: f64) -> f64 {
+    if fabs(v) < EXPREL_SMALL {
+        // From 0: the first step gives c_14 exactly (0 * v + c_14), as the
+        // C runtime's start at c_14.
+        let mut p = 0.0;
+        for c in EXPREL_COEFFS.iter().rev() {
+            let t = p * v;
+            p = t + c;
+        }
+        p
+    } else if v == f64::INFINITY {
+        v
+    } else {
+        (exp(v) - 1.0) / v
+    }
+}
+
 /// Absolute value by clearing the sign bit (usable without `std`).
 #[inline]
 fn fabs(x: f64) -> f64 {
@@ -702,6 +757,8 @@ f32_via_f64! {
     cosf => cos;
     /// `sin(x)/x` for `f32`: `sinc(x as f64) as f32`.
     sincf => sinc;
+    /// `(e^x - 1)/x` for `f32`: `exprel(x as f64) as f32`.
+    exprelf => exprel;
 }
 
 #[cfg(test)]

@@ -291,3 +291,129 @@ fn f32_variants_vs_std() {
     println!("f32: exp {we}, sqrt {ws}, atan {wa}, sin/cos {wt} ulp");
     assert!(we <= 1 && ws == 0 && wa <= 1 && wt <= 1);
 }
+
+/// A double-double `(hi, lo)`, `hi + lo` exact to ~2^-106 relative.
+type Dd = (f64, f64);
+
+fn dd_add(a: Dd, b: Dd) -> Dd {
+    let s = a.0 + b.0;
+    let bb = s - a.0;
+    let e = (a.0 - (s - bb)) + (b.0 - bb) + a.1 + b.1;
+    let hi = s + e;
+    (hi, e - (hi - s))
+}
+
+fn dd_mul_f(a: Dd, v: f64) -> Dd {
+    let p = a.0 * v;
+    let e = a.0.mul_add(v, -p) + a.1 * v;
+    let hi = p + e;
+    (hi, e - (hi - p))
+}
+
+fn dd_div_f(a: Dd, d: f64) -> Dd {
+    let q = a.0 / d;
+    let r = (-q).mul_add(d, a.0) + a.1;
+    let q2 = r / d;
+    let hi = q + q2;
+    (hi, q2 - (hi - q))
+}
+
+/// `exprel(v)` from its Taylor series in double-double (60 terms), rounded
+/// once: an independent reference for `|v| <= 2` (no Horner, no shared
+/// coefficients: the terms are `v^k/(k+1)!` built by the recurrence).
+fn exprel_series_dd(v: f64) -> f64 {
+    let (mut term, mut sum): (Dd, Dd) = ((1.0, 0.0), (1.0, 0.0));
+    for k in 1..60 {
+        term = dd_div_f(dd_mul_f(term, v), (k + 1) as f64);
+        sum = dd_add(sum, term);
+    }
+    sum.0 + sum.1
+}
+
+/// `exprel(v)` from std's `exp_m1` (an independent libm implementation),
+/// the quotient corrected by its remainder: the error is `exp_m1`'s (< 1 ulp).
+fn exprel_std(v: f64) -> f64 {
+    if v == 0.0 {
+        return 1.0;
+    }
+    let e = v.exp_m1();
+    let q = e / v;
+    if !q.is_finite() {
+        return q;
+    }
+    q + (-q).mul_add(v, e) / v
+}
+
+#[test]
+fn exprel_vs_independent_references() {
+    let r = rng(7);
+    let half = EXPREL_SMALL;
+    let edges = [
+        half,
+        next_up(half),
+        next_down(half),
+        next_down(next_down(half)),
+        1e-300,
+        5e-324,
+        2.2250738585072014e-308,
+        1e-17,
+        1e-9,
+        1.4901161193847656e-08,
+        0.25,
+        1.0,
+        2.0,
+    ];
+    let small: std::vec::Vec<f64> = [0.0, -0.0]
+        .into_iter()
+        .chain(edges.iter().flat_map(|&h| [h, -h]))
+        .chain((0..400_000).map(|_| r.uniform(-0.5, 0.5)))
+        .chain((0..200_000).map(|_| r.uniform(-2.0, 2.0)))
+        .chain((0..100_000).map(|_| r.uniform(-1e-6, 1e-6)))
+        .chain((0..50_000).map(|_| f64::from_bits(r.next() >> 13) * 0.5f64.powi(8)))
+        .collect();
+    check(
+        "exprel (series branch vs series dd)",
+        exprel,
+        exprel_series_dd,
+        &mut small.iter().copied().filter(|v| v.abs() < half),
+        1,
+    );
+    check(
+        "exprel (series dd)",
+        exprel,
+        exprel_series_dd,
+        &mut small.iter().copied(),
+        2,
+    );
+    let wide: std::vec::Vec<f64> = small
+        .iter()
+        .copied()
+        .chain((0..300_000).map(|_| r.uniform(-40.0, 40.0)))
+        .chain((0..200_000).map(|_| r.uniform(-745.0, 709.0)))
+        .chain((0..100_000).map(|_| -r.uniform(0.0, 1.0) * 1e300))
+        .collect();
+    check(
+        "exprel (std exp_m1)",
+        exprel,
+        exprel_std,
+        &mut wide.iter().copied(),
+        3,
+    );
+    // Special values.
+    assert!(exprel(f64::NAN).is_nan() && exprelf(f32::NAN).is_nan());
+    assert_eq!(exprel(f64::INFINITY), f64::INFINITY);
+    assert_eq!(exprel(f64::NEG_INFINITY).to_bits(), 0.0f64.to_bits());
+    assert_eq!(exprel(0.0), 1.0);
+    assert_eq!(exprel(-0.0), 1.0);
+    assert_eq!(exprel(5e-324), 1.0);
+    assert_eq!(exprel(-5e-324), 1.0);
+    assert_eq!(exprel(-1e300), 1e-300);
+    assert_eq!(exprelf(0.0), 1.0);
+    assert_eq!(exprelf(f32::INFINITY), f32::INFINITY);
+    // Both branches agree at the switch, on each side, to <= 2 ulp.
+    for (below, at) in [(next_down(half), half), (next_up(-half), -half)] {
+        let (b, a) = (exprel(below), exprel(at));
+        println!("exprel switch at {at}: {b:e} vs {a:e}, {} ulp", ulps(b, a));
+        assert!(ulps(b, a) <= 2, "{b} vs {a}");
+    }
+}

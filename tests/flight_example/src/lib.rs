@@ -37,3 +37,9 @@ pub mod markov {
 pub mod adaptive {
     include!(concat!(env!("OUT_DIR"), "/wang_adaptive.rs"));
 }
+
+/// The CSTR of `tests/specs/cstr_exprel.tsf`: a sector premise written with
+/// `exprel`, finite at the equilibrium (4 rules, n = 2, m = 1).
+pub mod cstr {
+    include!(concat!(env!("OUT_DIR"), "/cstr_exprel.rs"));
+}
