@@ -147,13 +147,13 @@ fn with_ranges(model: &TsModel, spans: &[Span], ranges: &[(f64, f64)]) -> TsMode
 mod tests {
     use super::*;
 
-    /// The sector model of x' = -x * x + u on |x| <= 2: narrowed to
+    /// The sector model of z' = -z * z + u on |z| <= 2: narrowed to
     /// [-0.5, 1], the vertices are A(1) = -1 and A(-0.5) = 0.5 exactly
-    /// (A(x) = -x is affine in the premise x).
+    /// (A = -z is affine in the premise z).
     #[test]
     fn narrowed_vertices_are_the_model_at_the_new_corners() {
-        let text = "tsf 1;\ncontroller c;\nstate x;\ninput u;\nA(x) = [-x];\nB = [1];\n\
-                    premise x range -2 .. 2;\nrules sector;\nobjective stability;\n";
+        let text = "tsf 1;\ncontroller c;\nstate z;\ninput u;\nA(x) = [-z];\nB = [1];\n\
+                    premise z range -2 .. 2;\nrules sector;\nobjective stability;\n";
         let spec = match tsf_lang::check_source(text) {
             (Some(spec), _) => spec,
             (None, diags) => panic!("{diags:#?}"), // ok: unit test
@@ -165,7 +165,7 @@ mod tests {
             (-2.0, 2.0, 0.0)
         );
         let m = with_ranges(&model, &spans, &[(-0.5, 1.0)]);
-        // Rule 0 is x_max (the high end), rule 1 x_min.
+        // Rule 0 is z_max (the high end), rule 1 z_min.
         assert!(
             (m.rules[0].a[(0, 0)] + 1.0).abs() < 1e-15,
             "{}",

@@ -88,13 +88,13 @@ impl PairAbscissa {
 mod tests {
     use super::*;
 
-    /// The sector model of x' = -x * x + u on |x| <= 1: rules x_max (A = -1)
-    /// and x_min (A = 1), b = 1; gains 0 and -2 give the pairs' closed
+    /// The sector model of z' = -z * z + u on |z| <= 1: rules z_max (A = -1)
+    /// and z_min (A = 1), b = 1; gains 0 and -2 give the pairs' closed
     /// loops -1, -3, 1, -1 (by hand).
     #[test]
     fn the_unstable_pair_is_found_with_its_eigenvalue() {
-        let text = "tsf 1;\ncontroller c;\nstate x;\ninput u;\nA(x) = [-x];\nB = [1];\n\
-                    premise x range -1 .. 1;\nrules sector;\nobjective stability;\n";
+        let text = "tsf 1;\ncontroller c;\nstate z;\ninput u;\nA(x) = [-z];\nB = [1];\n\
+                    premise z range -1 .. 1;\nrules sector;\nobjective stability;\n";
         let spec = match tsf_lang::check_source(text) {
             (Some(spec), _) => spec,
             (None, diags) => panic!("{diags:#?}"), // ok: unit test
@@ -113,7 +113,7 @@ mod tests {
         assert_eq!((w.plant, w.controller), (1, 0));
         let text = w.describe(&model);
         assert!(
-            text.contains("plant rule `x_min` under the gain of rule `x_max`")
+            text.contains("plant rule `z_min` under the gain of rule `z_max`")
                 && text.contains("+1.0000"),
             "{text}"
         );
