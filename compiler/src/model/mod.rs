@@ -133,3 +133,18 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
     }
     Some(model)
 }
+
+/// The scalar sector model z' = -z * z + u, premise z on [-lo, lo] (unit
+/// tests of later stages).
+#[cfg(test)]
+pub(crate) fn scalar_sector_model(lo: f64) -> TsModel {
+    let text = format!(
+        "tsf 1;\ncontroller c;\nstate z;\ninput u;\nA(x) = [-z];\nB = [1];\n\
+         premise z range -{lo} .. {lo};\nrules sector;\nobjective stability;\n"
+    );
+    let spec = match tsf_lang::check_source(&text) {
+        (Some(spec), _) => spec,
+        (None, diags) => panic!("{diags:#?}"), // ok: unit test
+    };
+    build(spec, &mut Vec::new()).expect("model") // ok: unit test
+}

@@ -152,13 +152,7 @@ mod tests {
     /// (A = -z is affine in the premise z).
     #[test]
     fn narrowed_vertices_are_the_model_at_the_new_corners() {
-        let text = "tsf 1;\ncontroller c;\nstate z;\ninput u;\nA(x) = [-z];\nB = [1];\n\
-                    premise z range -2 .. 2;\nrules sector;\nobjective stability;\n";
-        let spec = match tsf_lang::check_source(text) {
-            (Some(spec), _) => spec,
-            (None, diags) => panic!("{diags:#?}"), // ok: unit test
-        };
-        let model = crate::model::build(spec, &mut Vec::new()).expect("model"); // ok: unit test
+        let model = crate::model::scalar_sector_model(2.0);
         let spans = sector_spans(&model).expect("a sector model"); // ok: unit test
         assert_eq!(
             (spans[0].lo, spans[0].hi, spans[0].at_rest),

@@ -93,13 +93,7 @@ mod tests {
     /// loops -1, -3, 1, -1 (by hand).
     #[test]
     fn the_unstable_pair_is_found_with_its_eigenvalue() {
-        let text = "tsf 1;\ncontroller c;\nstate z;\ninput u;\nA(x) = [-z];\nB = [1];\n\
-                    premise z range -1 .. 1;\nrules sector;\nobjective stability;\n";
-        let spec = match tsf_lang::check_source(text) {
-            (Some(spec), _) => spec,
-            (None, diags) => panic!("{diags:#?}"), // ok: unit test
-        };
-        let model = crate::model::build(spec, &mut Vec::new()).expect("model"); // ok: unit test
+        let model = crate::model::scalar_sector_model(1.0);
         let gains = vec![DMatrix::zeros(1, 1), DMatrix::from_element(1, 1, -2.0)];
         let got: Vec<f64> = abscissae(&model, &gains)
             .iter()
