@@ -56,20 +56,8 @@ fn tables_of(file: &str) -> Result<Tables, String> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../specs")
         .join(file);
-    let src = tsfc::driver::frontend::read_source(&path).map_err(|e| format!("{e:?}"))?;
-    let sha = tsfc::report::sha256_hex(&src.bytes);
-    let checked = tsfc::driver::frontend::check(&src);
-    let model = checked.model.ok_or("the spec does not check")?;
     let spec_path = format!("specs/{file}");
-    let c = tsfc::driver::compile::compile(
-        &model,
-        tsfc::report::SpecInfo {
-            path: spec_path.clone(),
-            sha256: sha.clone(),
-        },
-        &tsfc::synth::Settings::default(),
-        Default::default(),
-    );
+    let (model, c, sha) = crate::common::compile_path(&path, &spec_path)?;
     let (design, cert) = c.outcome.map_err(|e| format!("{e:?}"))?;
     if !cert.ok {
         return Err("certificate refused".into());

@@ -10,8 +10,7 @@
 use crate::c_codegen::{build, c_compiler, run_driver, work_dir, write_files, write_runtime};
 use crate::common::errors_of;
 use std::path::Path;
-use tsfc::driver::compile::{compile, Status};
-use tsfc::driver::frontend;
+use tsfc::driver::compile::Status;
 
 fn read(rel: &str) -> (String, String) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
@@ -55,19 +54,8 @@ fn upper_memberships_at_e2_zero() -> (f64, f64) {
 #[test]
 fn exprel_model_certifies_and_its_c_gives_the_limit_at_e2_zero() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("specs/cstr_exprel.tsf");
-    let source = frontend::read_source(&path).expect("readable");
-    let model = frontend::check(&source).model.expect("checks clean");
-    let sha = tsfc::report::sha256_hex(&source.bytes);
     let shown = "tests/specs/cstr_exprel.tsf";
-    let c = compile(
-        &model,
-        tsfc::report::SpecInfo {
-            path: shown.into(),
-            sha256: sha.clone(),
-        },
-        &tsfc::synth::Settings::default(),
-        Default::default(),
-    );
+    let (model, c, sha) = crate::common::compile_path(&path, shown).expect("checks clean");
     assert_eq!(c.status, Status::Certified);
     // The limit: u = sum_j h_j F_j x with h the products of the sector
     // memberships at p = s = e (e2 = 0), from the report's gains.

@@ -54,19 +54,39 @@ pub fn shipped(name: &str) -> TsModel {
 
 /// A shipped spec's model and its compile with the default settings.
 pub fn compile_shipped(name: &str) -> (TsModel, tsfc::driver::compile::Compiled) {
-    compile_model(name, shipped(name))
+    compile_model(name, String::new(), shipped(name))
 }
 
 /// A source text's model and its compile with the default settings (the
 /// certificate's verdict handed to synthesis, as `tsfc compile` does).
 pub fn compile_text(name: &str, text: &str) -> (TsModel, tsfc::driver::compile::Compiled) {
-    compile_model(name, model_of(name, text))
+    compile_model(name, String::new(), model_of(name, text))
 }
 
-fn compile_model(name: &str, model: TsModel) -> (TsModel, tsfc::driver::compile::Compiled) {
+/// The spec file at `path` checked and compiled with the default settings,
+/// its report naming it `shown` with its sha256: the model, the compile and
+/// the sha256; Err when it cannot be read or does not check.
+pub fn compile_path(
+    path: &Path,
+    shown: &str,
+) -> Result<(TsModel, tsfc::driver::compile::Compiled, String), String> {
+    let source = frontend::read_source(path).map_err(|e| format!("{e:?}"))?;
+    let sha = tsfc::report::sha256_hex(&source.bytes);
+    let model = frontend::check(&source)
+        .model
+        .ok_or("the spec does not check")?;
+    let (model, c) = compile_model(shown, sha.clone(), model);
+    Ok((model, c, sha))
+}
+
+fn compile_model(
+    name: &str,
+    sha256: String,
+    model: TsModel,
+) -> (TsModel, tsfc::driver::compile::Compiled) {
     let info = tsfc::report::SpecInfo {
         path: name.into(),
-        sha256: String::new(),
+        sha256,
     };
     let c = tsfc::driver::compile::compile(
         &model,
