@@ -114,13 +114,92 @@ struct Row {
     runs: usize,
 }
 
+/// Where and on what a run was measured: printed above the tables and kept
+/// in the JSON, so a table in bench/RESULTS.md carries its commit and load.
+#[derive(Serialize, Debug)]
+struct Provenance {
+    /// `git rev-parse --short HEAD` of the working directory (`unknown`
+    /// outside a git checkout).
+    commit: String,
+    /// Whether tracked files differ from that commit.
+    dirty: bool,
+    /// The 1, 5 and 15 minute load averages at the start (`/proc/loadavg`;
+    /// empty where the system has none).
+    load_start: Vec<f64>,
+    /// The same at the end.
+    load_end: Vec<f64>,
+    /// Logical CPUs visible to the process.
+    cpus: usize,
+}
+
+impl Provenance {
+    /// The commit and load now; `load_end` is filled by [`Provenance::finish`].
+    fn now() -> Self {
+        let git = |args: &[&str]| {
+            std::process::Command::new("git")
+                .args(args)
+                .output()
+                .ok()
+                .filter(|o| o.status.success())
+                .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        };
+        Provenance {
+            commit: git(&["rev-parse", "--short", "HEAD"]).unwrap_or_else(|| "unknown".into()),
+            dirty: git(&["status", "--porcelain", "--untracked-files=no"])
+                .is_some_and(|s| !s.is_empty()),
+            load_start: load_average(),
+            load_end: Vec::new(),
+            cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        }
+    }
+
+    /// Records the load at the end of the run.
+    fn finish(&mut self) {
+        self.load_end = load_average();
+    }
+
+    /// One line for the top of the printed tables.
+    fn line(&self) -> String {
+        let load = |l: &[f64]| {
+            l.iter()
+                .map(|v| format!("{v:.2}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        format!(
+            "commit {}{}, {} CPUs, load average (1/5/15 min) {} at the start, {} at the end",
+            self.commit,
+            if self.dirty {
+                " (with uncommitted changes)"
+            } else {
+                ""
+            },
+            self.cpus,
+            load(&self.load_start),
+            load(&self.load_end),
+        )
+    }
+}
+
+/// The load averages of `/proc/loadavg` (empty where it cannot be read).
+fn load_average() -> Vec<f64> {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| {
+            s.split_whitespace()
+                .take(3)
+                .filter_map(|v| v.parse().ok())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// Everything the bench measured.
 #[derive(Serialize, Debug)]
 struct Results {
     /// Timed runs per spec.
     repeat: usize,
-    /// Logical CPUs visible to the process.
-    cpus: usize,
+    /// Commit, load and CPUs of the run.
+    measured: Provenance,
     /// Shipped specs.
     shipped: Vec<Row>,
     /// Generated scaling specs, by rule count.
@@ -153,6 +232,7 @@ fn run(cli: &Cli) -> Result<(), String> {
         return Ok(());
     }
     let repeat = cli.repeat.max(1);
+    let mut measured = Provenance::now();
     let mut settings = Settings::default();
     settings.solver.chordal_decomposition = !cli.no_chordal;
     if cli.qdldl {
@@ -187,10 +267,12 @@ fn run(cli: &Cli) -> Result<(), String> {
     if !scaling.is_empty() {
         print_table("scaling (Zhang-like, k x k rules)", &scaling);
     }
+    measured.finish();
+    println!("\nMeasured at {}.", measured.line());
     if let Some(path) = &cli.json {
         let results = Results {
             repeat,
-            cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            measured,
             shipped,
             scaling,
         };
