@@ -384,10 +384,13 @@ impl Cx {
                 ItemKind::Trigger(name, settings)
             }
             Rule::emit_decl => ItemKind::Emit(
-                next(&mut it, span)?
-                    .into_inner()
-                    .map(|p| self.ident(p))
-                    .collect(),
+                it.map(|target| {
+                    let mut parts = target.into_inner();
+                    let name = self.ident(next(&mut parts, span)?);
+                    let args = parts.map(|a| self.named_arg(a)).collect::<PResult<_>>()?;
+                    Ok(EmitTarget { name, args })
+                })
+                .collect::<PResult<_>>()?,
             ),
             Rule::precision_decl => ItemKind::Precision(self.ident(next(&mut it, span)?)),
             Rule::simulate_decl => {

@@ -40,10 +40,12 @@ mod sensor;
 mod signal_sensor;
 mod source;
 mod step;
+mod straight;
 
 pub use adaptive::emit_c_adaptive;
 pub use sensor::{c_sensor_file_names, emit_c_sensor};
 pub use signal_sensor::emit_c_signal_sensor;
+pub use straight::{is_straight, STRAIGHT_MAX_GAINS};
 
 /// The C99 backend: `<name>.h` and `<name>.c`, `<name>_sensor.h` and
 /// `<name>_sensor.c` for an aperiodic event trigger, and the runtime

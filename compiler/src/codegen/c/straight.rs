@@ -1,0 +1,462 @@
+//! The straight-line controller step (`emit c(style = straight)`, the
+//! default for controllers up to [`STRAIGHT_MAX_GAINS`] gain entries): the
+//! runtime's `tsf_step_with_premises` written out for this controller, with
+//! every dimension a compile-time constant. Memberships of the distinct
+//! premise terms carry their parameters as constants; rule weights,
+//! normalisation, the blend (one branch per rule, skipped when its strength
+//! is 0) and the saturation are unrolled; the gains and levels are read from
+//! the const tables at constant indices (the mode's block under modes).
+//!
+//! Every arithmetic operation is the runtime's, in the runtime's order, one
+//! product per statement (see the [`super`] module documentation), so the
+//! command, strengths and flags are the runtime's bit for bit. The rare
+//! nearest-rule fallback is a small loop over the rule centres, the
+//! runtime's `tsf_nearest_rule`; `exp` is the runtime's `tsf_exp`.
+
+use super::{lit, Gen};
+use crate::model::TermSpec;
+use crate::tables::{PremiseCode, Tables};
+use std::fmt::Write as _;
+use tsf_lang::spec::{CStyle, SetShape};
+
+/// Largest controller (rules x inputs x states, the gain entries the blend
+/// multiplies) whose step `style = auto` writes straight-line; larger ones
+/// get the table-driven step. At 256 the straight-line step of a
+/// single-precision Cortex-M4 build stays within the flight audit's text
+/// budget (docs/language.md, "Code targets").
+pub const STRAIGHT_MAX_GAINS: usize = 256;
+
+/// Whether the controller's step is generated straight-line: the spec's
+/// `style`, or for `auto` whether its gain tables (one mode's) have at most
+/// [`STRAIGHT_MAX_GAINS`] entries.
+pub fn is_straight(t: &Tables) -> bool {
+    match t.c_style {
+        CStyle::Straight => true,
+        CStyle::Table => false,
+        CStyle::Auto => t.r * t.m * t.n <= STRAIGHT_MAX_GAINS,
+    }
+}
+
+impl Gen<'_> {
+    /// `name_premises` of the straight-line style: `z = L x` written out
+    /// (the runtime's `tsf_dot`: from the first product, in index order),
+    /// or the premise expressions.
+    pub(super) fn straight_premises(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let t = self.t;
+        let real = format!("{u}REAL");
+        let PremiseCode::Linear(_) = &t.premise else {
+            return self.premises();
+        };
+        let mut body = String::new();
+        if t.p == 0 || t.n == 0 {
+            for k in 0..t.p {
+                let _ = writeln!(body, "    z[{k}] = {u}C(0);");
+            }
+            let _ = writeln!(body, "    (void){p}premise_map;\n    (void)x;\n    (void)z;");
+        } else {
+            for k in 0..t.p {
+                let row = k * t.n;
+                let _ = writeln!(body, "    {{\n        {real} acc = {p}premise_map[{row}] * x[0];");
+                for j in 1..t.n {
+                    let _ = writeln!(
+                        body,
+                        "        const {real} t{j} = {p}premise_map[{}] * x[{j}];\n        acc = acc + t{j};",
+                        row + j
+                    );
+                }
+                let _ = writeln!(body, "        z[{k}] = acc;\n    }}");
+            }
+        }
+        format!(
+            "/* Premise vector z of state x. */\nvoid {p}premises(const {real} x[{u}N], {real} z[]) {{\n{body}}}\n\n"
+        )
+    }
+
+    /// The helpers of the straight-line step (the runtime's `tsf_clamp01`,
+    /// `tsf_edge_ratio` and nearest-rule search, on this controller's
+    /// centres) and the step itself, then the accessors.
+    pub(super) fn straight_controller(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let t = self.t;
+        let real = format!("{u}REAL");
+        let pd = self.pd;
+        let mut s = String::new();
+        let uses_trap = t.factored.terms.iter().any(|term| {
+            matches!(
+                term,
+                TermSpec::Is {
+                    set: SetShape::Tri(..) | SetShape::Trap(..),
+                    ..
+                }
+            )
+        });
+        s.push_str("/* The runtime's operations on this controller, written out: tsf_clamp01,\n   tsf_edge_ratio and tsf_nearest_rule of tsf_runtime.c. */\n\n");
+        if !t.factored.terms.is_empty() {
+            let _ = write!(
+                s,
+                r#"/* Maps into [0, 1]; NaN -> 0. */
+static {real} {p}clamp01({real} v) {{
+    if (v >= {u}C(1)) {{
+        return {u}C(1);
+    }}
+    if (v > {u}C(0)) {{
+        return v;
+    }}
+    return {u}C(0);
+}}
+
+"#
+            );
+        }
+        if uses_trap {
+            let _ = write!(
+                s,
+                r#"/* (p - q)/(r - s); if r - s overflows, every operand is halved first. */
+static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
+    const {real} den = r - s;
+    if (isfinite(den) != 0) {{
+        return (p - q) / den;
+    }} else {{
+        const {real} ph = p * {u}C(0.5);
+        const {real} qh = q * {u}C(0.5);
+        const {real} rh = r * {u}C(0.5);
+        const {real} sh = s * {u}C(0.5);
+        return (ph - qh) / (rh - sh);
+    }}
+}}
+
+"#
+            );
+        }
+        let inner = if t.p == 0 {
+            "    (void)z;\n    (void)scale;\n".to_string()
+        } else {
+            format!(
+                r#"        for (k = 0; k < {u}P; k++) {{
+            const {real} a = z[k] * scale;
+            const {real} b = {p}centres[i * {pd} + k] * scale;
+            const {real} e = a - b;
+            const {real} e2 = e * e;
+            d = d + e2;
+        }}
+"#
+            )
+        };
+        let (decl_k, void_lead, inner_loop) = if t.p == 0 {
+            (String::new(), inner, String::new())
+        } else {
+            ("    int k;\n".to_string(), String::new(), inner)
+        };
+        let tiny_f64 = lit(f64::powi(2.0, -520));
+        let tiny_f32 = lit(f64::powi(2.0, -70));
+        let _ = write!(
+            s,
+            r#"/* Scale of the second search when a distance overflows (the runtime's
+   TSF_TINY_SCALE: 2^-520 in double, 2^-70 in float). */
+#define {u}TINY_double {tiny_f64}
+#define {u}TINY_float {tiny_f32}
+#define {u}TINY TSF_PASTE({u}TINY_, {u}REAL)
+
+/* Nearest rule centre with operands scaled by `scale`; *found is 0 if every
+   distance was NaN. Ties and NaN go to the lowest index. */
+static int {p}nearest_scaled(const {real} z[], {real} scale, {real} *best_d, int *found) {{
+    int best = 0;
+    int i;
+{decl_k}{void_lead}    *found = 0;
+    for (i = 0; i < {u}R; i++) {{
+        {real} d = {u}C(0);
+        int better;
+{inner_loop}        better = (*found != 0) ? (d < *best_d) : (isnan(d) == 0);
+        if (better != 0) {{
+            best = i;
+            *best_d = d;
+            *found = 1;
+        }}
+    }}
+    return best;
+}}
+
+/* Index of the nearest rule centre (the rare path of a step where no rule
+   fires); overflowing distances are recomputed with scaled operands. */
+static int {p}nearest_rule(const {real} z[]) {{
+    {real} d = {u}C(0);
+    int found;
+    int best = {p}nearest_scaled(z, {u}C(1), &d, &found);
+    if ((found != 0) && (isfinite(d) == 0)) {{
+        best = {p}nearest_scaled(z, {u}C({u}TINY), &d, &found);
+    }}
+    return best;
+}}
+
+"#
+        );
+        s.push_str(&self.straight_step());
+        s
+    }
+
+    /// `<name>_step_with_premises` written out, then `<name>_step`.
+    fn straight_step(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let t = self.t;
+        let real = format!("{u}REAL");
+        let (n, m, r) = (t.n, t.m, t.r);
+        let mut b = String::new();
+        let set_flag = |b: &mut String, ind: &str, flag: &str| {
+            let _ = writeln!(
+                b,
+                "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});"
+            );
+        };
+        let (mode_param, mode_arg) = match t.modes {
+            Some(_) => ("uint8_t mode, ", "mode, "),
+            None => ("", ""),
+        };
+        b.push_str("    uint8_t flags = 0u;\n");
+        match t.modes {
+            Some(_) => {
+                let _ = writeln!(
+                    b,
+                    "    /* The gains of the mode (mode 0 and a flag when it is out of range). */\n    const {real} *g = &{p}gains[tsf_select_mode(mode, {u}K, &flags) * ({u}R * {u}M * {u}N)];"
+                );
+            }
+            None => {
+                let _ = writeln!(b, "    const {real} *g = {p}gains;");
+            }
+        }
+        // Fault checks.
+        b.push_str("    /* A NaN or infinite state or premise: u = 0, h = 0. */\n");
+        for i in 0..n {
+            let _ = writeln!(b, "    if (isfinite(x[{i}]) == 0) {{");
+            set_flag(&mut b, "        ", "STATE_NONFINITE");
+            b.push_str("    }\n");
+        }
+        for i in 0..t.p {
+            let _ = writeln!(b, "    if (isfinite(z[{i}]) == 0) {{");
+            set_flag(&mut b, "        ", "PREMISE_NONFINITE");
+            b.push_str("    }\n");
+        }
+        if t.p == 0 {
+            b.push_str("    (void)z;\n");
+        }
+        let _ = writeln!(
+            b,
+            "    if ((flags & ({u}FLAG_STATE_NONFINITE | {u}FLAG_PREMISE_NONFINITE)) != 0u) {{"
+        );
+        for i in 0..r {
+            let _ = writeln!(b, "        s->h[{i}] = {u}C(0);");
+        }
+        for i in 0..m {
+            let _ = writeln!(b, "        u[{i}] = {u}C(0);");
+        }
+        b.push_str("        s->flags = flags;\n        return;\n    }\n");
+        b.push_str("    {\n");
+        // Degrees.
+        let d = t.factored.terms.len();
+        if d > 0 {
+            let names: Vec<String> = (0..d).map(|k| format!("d{k}")).collect();
+            let _ = writeln!(
+                b,
+                "        /* Degrees of the distinct premise terms. */\n        {real} {};",
+                names.join(", ")
+            );
+            for (k, term) in t.factored.terms.iter().enumerate() {
+                self.degree(&mut b, k, term);
+            }
+        }
+        // Weights.
+        if r > 0 {
+            let hs: Vec<String> = (0..r).map(|i| format!("h{i}")).collect();
+            let _ = writeln!(
+                b,
+                "        /* Rule weights (product t-norm, from 1 in the rule's term order), then\n           normalised: weights not > 0 count as 0. */\n        {real} {};\n        {real} sum = {u}C(0);",
+                hs.join(", ")
+            );
+            for (i, rule) in t.factored.rules.iter().enumerate() {
+                let mut e = format!("{u}C(1)");
+                for &f in rule {
+                    if f < d {
+                        let _ = write!(e, " * d{f}");
+                    } else {
+                        let _ = write!(e, " * {u}C(0)");
+                    }
+                }
+                let _ = writeln!(b, "        h{i} = {e};");
+            }
+            for i in 0..r {
+                let _ = writeln!(
+                    b,
+                    "        h{i} = h{i} > {u}C(0) ? h{i} : {u}C(0);\n        sum = sum + h{i};"
+                );
+            }
+            b.push_str("        if (!((sum > ");
+            let _ = writeln!(b, "{u}C(0)) && (isfinite(sum) != 0))) {{");
+            b.push_str("            /* No rule fired: the nearest rule centre's gain alone. */\n");
+            let _ = writeln!(b, "            const int best = {p}nearest_rule(z);");
+            for i in 0..r {
+                let _ = writeln!(
+                    b,
+                    "            h{i} = (best == {i}) ? {u}C(1) : {u}C(0);"
+                );
+            }
+            set_flag(&mut b, "            ", "NO_RULE_FIRED");
+            b.push_str("        } else {\n");
+            for i in 0..r {
+                let _ = writeln!(b, "            h{i} = h{i} / sum;");
+            }
+            b.push_str("        }\n");
+        } else {
+            let _ = writeln!(
+                b,
+                "        /* No rules: no rule fires. */\n        (void){p}nearest_rule(z);"
+            );
+            set_flag(&mut b, "        ", "NO_RULE_FIRED");
+        }
+        // Blend.
+        if m > 0 {
+            let us: Vec<String> = (0..m).map(|s| format!("u{s} = {u}C(0)")).collect();
+            let _ = writeln!(
+                b,
+                "        {{\n            /* u = sum_j h_j (F_j x), rules whose h_j is not > 0 skipped. */\n            {real} {};",
+                us.join(", ")
+            );
+            if n > 0 {
+                for j in 0..r {
+                    let _ = writeln!(b, "            if (h{j} > {u}C(0)) {{\n                {real} f, t;");
+                    for s in 0..m {
+                        let row = (j * m + s) * n;
+                        let _ = writeln!(b, "                f = g[{row}] * x[0];");
+                        for k in 1..n {
+                            let _ = writeln!(
+                                b,
+                                "                t = g[{}] * x[{k}];\n                f = f + t;",
+                                row + k
+                            );
+                        }
+                        let _ = writeln!(
+                            b,
+                            "                t = h{j} * f;\n                u{s} = u{s} + t;"
+                        );
+                    }
+                    b.push_str("            }\n");
+                }
+            } else {
+                b.push_str("            (void)g;\n            (void)x;\n");
+            }
+            b.push_str("            /* Saturation: |u_s| <= max(u_max_s, 0); NaN -> 0, +-inf -> +-level. */\n");
+            for s in 0..m {
+                let _ = writeln!(
+                    b,
+                    "            {{\n                const {real} b = {p}u_max[{s}] >= {u}C(0) ? {p}u_max[{s}] : {u}C(0);\n                {real} v = u{s};\n                if (isfinite(v) == 0) {{"
+                );
+                set_flag(&mut b, "                    ", "COMMAND_NONFINITE");
+                let _ = writeln!(
+                    b,
+                    "                    if ((isnan(v) != 0) || (isfinite(b) == 0)) {{\n                        v = {u}C(0);\n                    }}\n                }}\n                if (v > b) {{"
+                );
+                set_flag(&mut b, "                    ", "SATURATED");
+                let _ = writeln!(b, "                    u[{s}] = b;\n                }} else if (v < -b) {{");
+                set_flag(&mut b, "                    ", "SATURATED");
+                let _ = writeln!(
+                    b,
+                    "                    u[{s}] = -b;\n                }} else {{\n                    u[{s}] = v;\n                }}\n            }}"
+                );
+            }
+            b.push_str("        }\n");
+        } else {
+            b.push_str("        (void)g;\n        (void)x;\n        (void)u;\n");
+        }
+        for i in 0..r {
+            let _ = writeln!(b, "        s->h[{i}] = h{i};");
+        }
+        b.push_str("    }\n    s->flags = flags;\n");
+        let pd = self.pd;
+        format!(
+            r#"/* One control step at x with premises z: the runtime's tsf_step_with_premises,
+   operation by operation, written out for this controller. */
+void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
+{b}}}
+
+void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
+    {real} z[{pd}];
+    {p}premises(x, z);
+    {p}step_with_premises(s, {mode_arg}x, z, u);
+}}
+
+"#
+        )
+    }
+
+    /// The statements giving `d<k>`, the degree of distinct term `term`
+    /// (the runtime's `tsf_degree` with this term's parameters).
+    fn degree(&self, b: &mut String, k: usize, term: &TermSpec) {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        let c = |v: f64| format!("{u}C({})", lit(v));
+        let pn = self.t.p;
+        let (var, len) = match term {
+            TermSpec::Is { var, .. } => (*var, 1),
+            TermSpec::About { first, point, .. } => (*first, point.len()),
+        };
+        if var.checked_add(len).is_none_or(|end| end > pn) {
+            let _ = writeln!(b, "        d{k} = {u}C(0); /* premise component out of range */");
+            return;
+        }
+        match term {
+            TermSpec::Is { var, set } => {
+                let _ = writeln!(b, "        {{\n            const {real} zv = z[{var}];\n            {real} v;");
+                match *set {
+                    SetShape::Tri(..) | SetShape::Trap(..) => {
+                        let (ta, tb, tc, td) = match *set {
+                            SetShape::Tri(a, bb, cc) => (a, bb, bb, cc),
+                            SetShape::Trap(a, bb, cc, dd) => (a, bb, cc, dd),
+                            _ => unreachable!("trap shapes only"),
+                        };
+                        let (a, bb, cc, dd) = (c(ta), c(tb), c(tc), c(td));
+                        let _ = writeln!(
+                            b,
+                            "            if (!((zv >= {a}) && (zv <= {dd}))) {{\n                v = {u}C(0);\n            }} else if ((zv >= {bb}) && (zv <= {cc})) {{\n                v = {u}C(1);\n            }} else if (zv < {bb}) {{\n                v = {p}edge_ratio(zv, {a}, {bb}, {a});\n            }} else {{\n                v = {p}edge_ratio({dd}, zv, {dd}, {cc});\n            }}"
+                        );
+                    }
+                    SetShape::Gauss(ctr, sg) => {
+                        let _ = writeln!(
+                            b,
+                            "            const {real} w = (zv - {}) / {};\n            const {real} w2 = w * w;\n            const {real} e = {u}C(0.5) * w2;\n            v = {u}RT(tsf_exp)(-e);",
+                            c(ctr),
+                            c(sg)
+                        );
+                    }
+                    SetShape::Sigmoid(slope, ctr) => {
+                        let _ = writeln!(
+                            b,
+                            "            const {real} dz = zv - {};\n            const {real} kz = {} * dz;\n            const {real} e = {u}RT(tsf_exp)(-kz);\n            v = {u}C(1) / ({u}C(1) + e);",
+                            c(ctr),
+                            c(slope)
+                        );
+                    }
+                }
+                let _ = writeln!(b, "            d{k} = {p}clamp01(v);\n        }}");
+            }
+            TermSpec::About {
+                first,
+                point,
+                sigma,
+            } => {
+                let _ = writeln!(b, "        {{\n            {real} d2 = {u}C(0);\n            {real} v;");
+                for (j, pt) in point.iter().enumerate() {
+                    let _ = writeln!(
+                        b,
+                        "            {{\n                const {real} dz = z[{}] - {};\n                const {real} dd = dz * dz;\n                d2 = d2 + dd;\n            }}",
+                        first + j,
+                        c(*pt)
+                    );
+                }
+                let sg = c(*sigma);
+                let _ = writeln!(
+                    b,
+                    "            {{\n                const {real} s2 = {sg} * {sg};\n                const {real} e = {u}C(0.5) * (d2 / s2);\n                v = {u}RT(tsf_exp)(-e);\n            }}\n            d{k} = {p}clamp01(v);\n        }}"
+                );
+            }
+        }
+    }
+}
