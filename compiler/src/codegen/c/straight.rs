@@ -82,14 +82,16 @@ impl Gen<'_> {
         let real = format!("{u}REAL");
         let pd = self.pd;
         let mut s = String::new();
-        let uses_trap = t.factored.terms.iter().any(|term| {
-            matches!(
-                term,
-                TermSpec::Is {
-                    set: SetShape::Tri(..) | SetShape::Trap(..),
-                    ..
-                }
-            )
+        let uses_trap = t.factored.terms.iter().any(|term| match term {
+            TermSpec::Is {
+                set: SetShape::Tri(a, b, c),
+                ..
+            } => a != b || b != c,
+            TermSpec::Is {
+                set: SetShape::Trap(a, b, c, d),
+                ..
+            } => a != b || c != d,
+            _ => false,
         });
         s.push_str("/* The runtime's operations on this controller, written out: tsf_clamp01,\n   tsf_edge_ratio and tsf_nearest_rule of tsf_runtime.c. */\n\n");
         if !t.factored.terms.is_empty() {
@@ -224,16 +226,17 @@ static int {p}nearest_rule(const {real} z[]) {{
                 let _ = writeln!(b, "    const {real} *g = {p}gains;");
             }
         }
-        // Fault checks.
-        b.push_str("    /* A NaN or infinite state or premise: u = 0, h = 0. */\n");
-        for i in 0..n {
-            let _ = writeln!(b, "    if (isfinite(x[{i}]) == 0) {{");
-            set_flag(&mut b, "        ", "STATE_NONFINITE");
-            b.push_str("    }\n");
-        }
-        for i in 0..t.p {
-            let _ = writeln!(b, "    if (isfinite(z[{i}]) == 0) {{");
-            set_flag(&mut b, "        ", "PREMISE_NONFINITE");
+        // Fault checks: v - v is +0 for a finite v and NaN otherwise, so the
+        // sum of these differences is 0 exactly when every value is finite
+        // (the runtime's isfinite tests, fewer branches).
+        b.push_str("    /* A NaN or infinite state or premise (v - v is 0 only for a finite v): u = 0, h = 0. */\n");
+        for (vec, len, flag) in [("x", n, "STATE_NONFINITE"), ("z", t.p, "PREMISE_NONFINITE")] {
+            if len == 0 {
+                continue;
+            }
+            let terms: Vec<String> = (0..len).map(|i| format!("({vec}[{i}] - {vec}[{i}])")).collect();
+            let _ = writeln!(b, "    if ({} != {u}C(0)) {{", terms.join(" + "));
+            set_flag(&mut b, "        ", flag);
             b.push_str("    }\n");
         }
         if t.p == 0 {
@@ -269,7 +272,7 @@ static int {p}nearest_rule(const {real} z[]) {{
             let hs: Vec<String> = (0..r).map(|i| format!("h{i}")).collect();
             let _ = writeln!(
                 b,
-                "        /* Rule weights (product t-norm, from 1 in the rule's term order), then\n           normalised: weights not > 0 count as 0. */\n        {real} {};\n        {real} sum = {u}C(0);",
+                "        /* Rule weights (product t-norm, from 1 in the rule's term order), then\n           normalised. Degrees are +0 or in (0, 1], so weights are too: the runtime's\n           clamp of weights not > 0 and its finite test of the sum (<= {u}R) hold. */\n        {real} {};\n        {real} sum = {u}C(0);",
                 hs.join(", ")
             );
             for (i, rule) in t.factored.rules.iter().enumerate() {
@@ -283,14 +286,13 @@ static int {p}nearest_rule(const {real} z[]) {{
                 }
                 let _ = writeln!(b, "        h{i} = {e};");
             }
+            // The runtime's clamp (weights not > 0 count as 0) and its test
+            // that the sum is finite are identities here: every degree is
+            // +0 or in (0, 1], so every weight is too and the sum is at most R.
             for i in 0..r {
-                let _ = writeln!(
-                    b,
-                    "        h{i} = h{i} > {u}C(0) ? h{i} : {u}C(0);\n        sum = sum + h{i};"
-                );
+                let _ = writeln!(b, "        sum = sum + h{i};");
             }
-            b.push_str("        if (!((sum > ");
-            let _ = writeln!(b, "{u}C(0)) && (isfinite(sum) != 0))) {{");
+            let _ = writeln!(b, "        if (!(sum > {u}C(0))) {{");
             b.push_str("            /* No rule fired: the nearest rule centre's gain alone. */\n");
             let _ = writeln!(b, "            const int best = {p}nearest_rule(z);");
             for i in 0..r {
@@ -344,7 +346,18 @@ static int {p}nearest_rule(const {real} z[]) {{
                 b.push_str("            (void)g;\n            (void)x;\n");
             }
             b.push_str("            /* Saturation: |u_s| <= max(u_max_s, 0); NaN -> 0, +-inf -> +-level. */\n");
+            if t.u_max.iter().all(|v| *v == f64::INFINITY) {
+                let _ = writeln!(b, "            (void){p}u_max; /* every channel unlimited */");
+            }
             for s in 0..m {
+                if t.u_max.get(s).is_some_and(|v| *v == f64::INFINITY) {
+                    // An unlimited channel (level +inf in either real type):
+                    // the runtime's tests leave a finite v and zero the rest.
+                    let _ = writeln!(b, "            if (isfinite(u{s}) == 0) {{ /* unlimited channel */");
+                    set_flag(&mut b, "                ", "COMMAND_NONFINITE");
+                    let _ = writeln!(b, "                u[{s}] = {u}C(0);\n            }} else {{\n                u[{s}] = u{s};\n            }}");
+                    continue;
+                }
                 let _ = writeln!(
                     b,
                     "            {{\n                const {real} b = {p}u_max[{s}] >= {u}C(0) ? {p}u_max[{s}] : {u}C(0);\n                {real} v = u{s};\n                if (isfinite(v) == 0) {{"
@@ -415,8 +428,21 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                         let (a, bb, cc, dd) = (c(ta), c(tb), c(tc), c(td));
                         let _ = writeln!(
                             b,
-                            "            if (!((zv >= {a}) && (zv <= {dd}))) {{\n                v = {u}C(0);\n            }} else if ((zv >= {bb}) && (zv <= {cc})) {{\n                v = {u}C(1);\n            }} else if (zv < {bb}) {{\n                v = {p}edge_ratio(zv, {a}, {bb}, {a});\n            }} else {{\n                v = {p}edge_ratio({dd}, zv, {dd}, {cc});\n            }}"
+                            "            if (!((zv >= {a}) && (zv <= {dd}))) {{\n                v = {u}C(0);"
                         );
+                        // A shoulder (a = b or c = d, equal in either real
+                        // type) has no rising or falling edge: within [a, d]
+                        // the runtime's tests reduce to one comparison.
+                        let rising = format!("v = {p}edge_ratio(zv, {a}, {bb}, {a});");
+                        let falling = format!("v = {p}edge_ratio({dd}, zv, {dd}, {cc});");
+                        let one = format!("v = {u}C(1);");
+                        let tail = match (ta == tb, tc == td) {
+                            (true, true) => format!("}} else {{\n                {one}\n            }}"),
+                            (true, false) => format!("}} else if (zv <= {cc}) {{\n                {one}\n            }} else {{\n                {falling}\n            }}"),
+                            (false, true) => format!("}} else if (zv >= {bb}) {{\n                {one}\n            }} else {{\n                {rising}\n            }}"),
+                            (false, false) => format!("}} else if ((zv >= {bb}) && (zv <= {cc})) {{\n                {one}\n            }} else if (zv < {bb}) {{\n                {rising}\n            }} else {{\n                {falling}\n            }}"),
+                        };
+                        let _ = writeln!(b, "            {tail}");
                     }
                     SetShape::Gauss(ctr, sg) => {
                         let _ = writeln!(
