@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 use tsf_runtime::{Flags, ModalController, Term};
+use tsf_lang::spec::CStyle;
 use tsfc::codegen::c::{emit_c, runtime};
 use tsfc::codegen::rust::emit_rust;
 use tsfc::driver::compile::{compile, Status};
@@ -249,8 +250,20 @@ fn generated_modal_c_matches_the_runtime_bit_for_bit() {
             cases.push((mode, [0.3, e]));
         }
     }
-    let dir = work_dir();
+    // Both C styles: the straight-line step and the table-driven one.
+    for style in [CStyle::Straight, CStyle::Table] {
+    let t = &Tables {
+        c_style: style,
+        ..t.clone()
+    };
+    let dir = work_dir().join(format!("{style:?}"));
+    std::fs::create_dir_all(&dir).expect("style dir");
     let (h, c) = (emit_c(t).header, emit_c(t).source);
+    assert_eq!(
+        c.contains("tsf_step_with_premises)("),
+        style == CStyle::Table,
+        "{style:?} style expected"
+    );
     std::fs::write(dir.join("twomode.h"), h).expect("write");
     std::fs::write(dir.join("twomode.c"), c).expect("write");
     for f in runtime::files() {
@@ -320,9 +333,10 @@ fn generated_modal_c_matches_the_runtime_bit_for_bit() {
         }
     }
     println!(
-        "twomode C vs runtime: {} cases ({out_of_range} with an out-of-range mode), bit-identical",
+        "twomode C ({style:?} style) vs runtime: {} cases ({out_of_range} with an out-of-range mode), bit-identical",
         cases.len()
     );
+    }
 }
 
 /// The stationary distribution of the generator `pi`: p' Pi = 0, sum p = 1,

@@ -18,8 +18,11 @@ impl Checker<'_> {
                 "c" => draft.emit.push(Emit::C),
                 _ => {
                     self.err(
-                        Diagnostic::error(t.name.span, format!("unknown code target `{}`", t.name.node))
-                            .with_label("targets are `rust` and `c`"),
+                        Diagnostic::error(
+                            t.name.span,
+                            format!("unknown code target `{}`", t.name.node),
+                        )
+                        .with_label("targets are `rust` and `c`"),
                     );
                     continue;
                 }
@@ -28,15 +31,25 @@ impl Checker<'_> {
             for a in &t.args {
                 let option = (t.name.node == "c" && a.name.node == "style").then_some(());
                 if option.is_none() {
-                    let what = if t.name.node == "c" { "the option of `c` is `style`" } else { "`rust` takes no options" };
+                    let what = if t.name.node == "c" {
+                        "the option of `c` is `style`"
+                    } else {
+                        "`rust` takes no options"
+                    };
                     self.err(
-                        Diagnostic::error(a.name.span, format!("unknown option `{}` of `{}`", a.name.node, t.name.node))
-                            .with_label(what),
+                        Diagnostic::error(
+                            a.name.span,
+                            format!("unknown option `{}` of `{}`", a.name.node, t.name.node),
+                        )
+                        .with_label(what),
                     );
                     continue;
                 }
                 if seen {
-                    self.err(Diagnostic::error(a.name.span, "`style` is given twice".to_string()));
+                    self.err(Diagnostic::error(
+                        a.name.span,
+                        "`style` is given twice".to_string(),
+                    ));
                     continue;
                 }
                 seen = true;
@@ -92,8 +105,14 @@ mod tests {
         let spec = spec_with("emit rust, c(style = table);");
         assert_eq!(spec.emit, vec![Emit::Rust, Emit::C]);
         assert_eq!(spec.c_style, CStyle::Table);
-        assert_eq!(spec_with("emit c(style = straight);").c_style, CStyle::Straight);
-        assert_eq!(spec_with("emit c(style = auto), rust;").c_style, CStyle::Auto);
+        assert_eq!(
+            spec_with("emit c(style = straight);").c_style,
+            CStyle::Straight
+        );
+        assert_eq!(
+            spec_with("emit c(style = auto), rust;").c_style,
+            CStyle::Auto
+        );
     }
 
     #[test]

@@ -53,11 +53,17 @@ impl Gen<'_> {
             for k in 0..t.p {
                 let _ = writeln!(body, "    z[{k}] = {u}C(0);");
             }
-            let _ = writeln!(body, "    (void){p}premise_map;\n    (void)x;\n    (void)z;");
+            let _ = writeln!(
+                body,
+                "    (void){p}premise_map;\n    (void)x;\n    (void)z;"
+            );
         } else {
             for k in 0..t.p {
                 let row = k * t.n;
-                let _ = writeln!(body, "    {{\n        {real} acc = {p}premise_map[{row}] * x[0];");
+                let _ = writeln!(
+                    body,
+                    "    {{\n        {real} acc = {p}premise_map[{row}] * x[0];"
+                );
                 for j in 1..t.n {
                     let _ = writeln!(
                         body,
@@ -205,10 +211,7 @@ static int {p}nearest_rule(const {real} z[]) {{
         let (n, m, r) = (t.n, t.m, t.r);
         let mut b = String::new();
         let set_flag = |b: &mut String, ind: &str, flag: &str| {
-            let _ = writeln!(
-                b,
-                "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});"
-            );
+            let _ = writeln!(b, "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});");
         };
         let (mode_param, mode_arg) = match t.modes {
             Some(_) => ("uint8_t mode, ", "mode, "),
@@ -234,7 +237,9 @@ static int {p}nearest_rule(const {real} z[]) {{
             if len == 0 {
                 continue;
             }
-            let terms: Vec<String> = (0..len).map(|i| format!("({vec}[{i}] - {vec}[{i}])")).collect();
+            let terms: Vec<String> = (0..len)
+                .map(|i| format!("({vec}[{i}] - {vec}[{i}])"))
+                .collect();
             let _ = writeln!(b, "    if ({} != {u}C(0)) {{", terms.join(" + "));
             set_flag(&mut b, "        ", flag);
             b.push_str("    }\n");
@@ -296,10 +301,7 @@ static int {p}nearest_rule(const {real} z[]) {{
             b.push_str("            /* No rule fired: the nearest rule centre's gain alone. */\n");
             let _ = writeln!(b, "            const int best = {p}nearest_rule(z);");
             for i in 0..r {
-                let _ = writeln!(
-                    b,
-                    "            h{i} = (best == {i}) ? {u}C(1) : {u}C(0);"
-                );
+                let _ = writeln!(b, "            h{i} = (best == {i}) ? {u}C(1) : {u}C(0);");
             }
             set_flag(&mut b, "            ", "NO_RULE_FIRED");
             b.push_str("        } else {\n");
@@ -324,7 +326,10 @@ static int {p}nearest_rule(const {real} z[]) {{
             );
             if n > 0 {
                 for j in 0..r {
-                    let _ = writeln!(b, "            if (h{j} > {u}C(0)) {{\n                {real} f, t;");
+                    let _ = writeln!(
+                        b,
+                        "            if (h{j} > {u}C(0)) {{\n                {real} f, t;"
+                    );
                     for s in 0..m {
                         let row = (j * m + s) * n;
                         let _ = writeln!(b, "                f = g[{row}] * x[0];");
@@ -347,13 +352,19 @@ static int {p}nearest_rule(const {real} z[]) {{
             }
             b.push_str("            /* Saturation: |u_s| <= max(u_max_s, 0); NaN -> 0, +-inf -> +-level. */\n");
             if t.u_max.iter().all(|v| *v == f64::INFINITY) {
-                let _ = writeln!(b, "            (void){p}u_max; /* every channel unlimited */");
+                let _ = writeln!(
+                    b,
+                    "            (void){p}u_max; /* every channel unlimited */"
+                );
             }
             for s in 0..m {
                 if t.u_max.get(s).is_some_and(|v| *v == f64::INFINITY) {
                     // An unlimited channel (level +inf in either real type):
                     // the runtime's tests leave a finite v and zero the rest.
-                    let _ = writeln!(b, "            if (isfinite(u{s}) == 0) {{ /* unlimited channel */");
+                    let _ = writeln!(
+                        b,
+                        "            if (isfinite(u{s}) == 0) {{ /* unlimited channel */"
+                    );
                     set_flag(&mut b, "                ", "COMMAND_NONFINITE");
                     let _ = writeln!(b, "                u[{s}] = {u}C(0);\n            }} else {{\n                u[{s}] = u{s};\n            }}");
                     continue;
@@ -368,7 +379,10 @@ static int {p}nearest_rule(const {real} z[]) {{
                     "                    if ((isnan(v) != 0) || (isfinite(b) == 0)) {{\n                        v = {u}C(0);\n                    }}\n                }}\n                if (v > b) {{"
                 );
                 set_flag(&mut b, "                    ", "SATURATED");
-                let _ = writeln!(b, "                    u[{s}] = b;\n                }} else if (v < -b) {{");
+                let _ = writeln!(
+                    b,
+                    "                    u[{s}] = b;\n                }} else if (v < -b) {{"
+                );
                 set_flag(&mut b, "                    ", "SATURATED");
                 let _ = writeln!(
                     b,
@@ -412,12 +426,18 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
             TermSpec::About { first, point, .. } => (*first, point.len()),
         };
         if var.checked_add(len).is_none_or(|end| end > pn) {
-            let _ = writeln!(b, "        d{k} = {u}C(0); /* premise component out of range */");
+            let _ = writeln!(
+                b,
+                "        d{k} = {u}C(0); /* premise component out of range */"
+            );
             return;
         }
         match term {
             TermSpec::Is { var, set } => {
-                let _ = writeln!(b, "        {{\n            const {real} zv = z[{var}];\n            {real} v;");
+                let _ = writeln!(
+                    b,
+                    "        {{\n            const {real} zv = z[{var}];\n            {real} v;"
+                );
                 match *set {
                     SetShape::Tri(..) | SetShape::Trap(..) => {
                         let (ta, tb, tc, td) = match *set {
@@ -468,7 +488,10 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                 point,
                 sigma,
             } => {
-                let _ = writeln!(b, "        {{\n            {real} d2 = {u}C(0);\n            {real} v;");
+                let _ = writeln!(
+                    b,
+                    "        {{\n            {real} d2 = {u}C(0);\n            {real} v;"
+                );
                 for (j, pt) in point.iter().enumerate() {
                     let _ = writeln!(
                         b,
