@@ -89,7 +89,7 @@ impl Checker<'_> {
 #[cfg(test)]
 mod tests {
     use crate::check::testing::*;
-    use crate::spec::{Emit, Precision};
+    use crate::spec::{CStyle, Emit, Precision};
 
     #[test]
     fn targets_and_precision() {

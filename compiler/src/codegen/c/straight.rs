@@ -262,7 +262,7 @@ static int {p}nearest_rule(const {real} z[]) {{
         // Degrees.
         let d = t.factored.terms.len();
         if d > 0 {
-            let names: Vec<String> = (0..d).map(|k| format!("d{k}")).collect();
+            let names: Vec<String> = (0..d).map(|k| format!("deg{k}")).collect();
             let _ = writeln!(
                 b,
                 "        /* Degrees of the distinct premise terms. */\n        {real} {};",
@@ -284,7 +284,7 @@ static int {p}nearest_rule(const {real} z[]) {{
                 let mut e = format!("{u}C(1)");
                 for &f in rule {
                     if f < d {
-                        let _ = write!(e, " * d{f}");
+                        let _ = write!(e, " * deg{f}");
                     } else {
                         let _ = write!(e, " * {u}C(0)");
                     }
@@ -414,7 +414,7 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
         )
     }
 
-    /// The statements giving `d<k>`, the degree of distinct term `term`
+    /// The statements giving `deg<k>`, the degree of distinct term `term`
     /// (the runtime's `tsf_degree` with this term's parameters).
     fn degree(&self, b: &mut String, k: usize, term: &TermSpec) {
         let (p, u) = (&self.p, &self.u);
@@ -428,7 +428,7 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
         if var.checked_add(len).is_none_or(|end| end > pn) {
             let _ = writeln!(
                 b,
-                "        d{k} = {u}C(0); /* premise component out of range */"
+                "        deg{k} = {u}C(0); /* premise component out of range */"
             );
             return;
         }
@@ -481,7 +481,7 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                         );
                     }
                 }
-                let _ = writeln!(b, "            d{k} = {p}clamp01(v);\n        }}");
+                let _ = writeln!(b, "            deg{k} = {p}clamp01(v);\n        }}");
             }
             TermSpec::About {
                 first,
@@ -490,12 +490,12 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
             } => {
                 let _ = writeln!(
                     b,
-                    "        {{\n            {real} d2 = {u}C(0);\n            {real} v;"
+                    "        {{\n            {real} dsq = {u}C(0);\n            {real} v;"
                 );
                 for (j, pt) in point.iter().enumerate() {
                     let _ = writeln!(
                         b,
-                        "            {{\n                const {real} dz = z[{}] - {};\n                const {real} dd = dz * dz;\n                d2 = d2 + dd;\n            }}",
+                        "            {{\n                const {real} dz = z[{}] - {};\n                const {real} dd = dz * dz;\n                dsq = dsq + dd;\n            }}",
                         first + j,
                         c(*pt)
                     );
@@ -503,7 +503,7 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                 let sg = c(*sigma);
                 let _ = writeln!(
                     b,
-                    "            {{\n                const {real} s2 = {sg} * {sg};\n                const {real} e = {u}C(0.5) * (d2 / s2);\n                v = {u}RT(tsf_exp)(-e);\n            }}\n            d{k} = {p}clamp01(v);\n        }}"
+                    "            {{\n                const {real} s2 = {sg} * {sg};\n                const {real} e = {u}C(0.5) * (dsq / s2);\n                v = {u}RT(tsf_exp)(-e);\n            }}\n            deg{k} = {p}clamp01(v);\n        }}"
                 );
             }
         }
