@@ -108,7 +108,11 @@ fn generated_c_is_deterministic_and_snapshotted() {
         if t.name == "zhang_multiobjective" {
             // The table-driven style too (the default here is straight-line).
             let table = emit_c(&with_style(t, CStyle::Table));
-            assert_eq!(table, emit_c(&with_style(t, CStyle::Table)), "deterministic");
+            assert_eq!(
+                table,
+                emit_c(&with_style(t, CStyle::Table)),
+                "deterministic"
+            );
             assert_eq!(table.header, a.header, "the style changes the source only");
             insta::assert_snapshot!(format!("{}.table.c", t.name), table.source);
         }
@@ -177,16 +181,24 @@ fn assert_no_runtime_text(file: &str, text: &str) {
         "static int ",
         "static double ",
     ] {
-        let step_helper = matches!(needle, "edge_ratio" | "clamp01" | "nearest_scaled" | "static int ");
+        let step_helper = matches!(
+            needle,
+            "edge_ratio" | "clamp01" | "nearest_scaled" | "static int "
+        );
         if straight && step_helper {
             continue;
         }
         assert!(!text.contains(needle), "{file}: runtime text `{needle}`");
     }
     if straight {
-        let statics: Vec<&str> = text.lines().filter(|l| l.starts_with("static int ")).collect();
+        let statics: Vec<&str> = text
+            .lines()
+            .filter(|l| l.starts_with("static int "))
+            .collect();
         assert!(
-            statics.iter().all(|l| l.contains("_nearest_scaled(") || l.contains("_nearest_rule(")),
+            statics
+                .iter()
+                .all(|l| l.contains("_nearest_scaled(") || l.contains("_nearest_rule(")),
             "{file}: static functions beyond the step's helpers: {statics:?}"
         );
     }
