@@ -174,8 +174,16 @@ static int {p}nearest_scaled(const {real} z[], {real} scale, {real} *best_d, int
 {decl_k}{void_lead}    *found = 0;
     for (i = 0; i < {u}R; i++) {{
         {real} d = {u}C(0);
-        int better;
-{inner_loop}        better = (*found != 0) ? (d < *best_d) : (isnan(d) == 0);
+        int better = 0;
+{inner_loop}        if (*found != 0) {{
+            if (d < *best_d) {{
+                better = 1;
+            }}
+        }} else {{
+            if (isnan(d) == 0) {{
+                better = 1;
+            }}
+        }}
         if (better != 0) {{
             best = i;
             *best_d = d;
@@ -199,6 +207,22 @@ static int {p}nearest_rule(const {real} z[]) {{
 
 "#
         );
+        if t.n > 0 && t.m > 0 {
+            let mut body = format!("    {real} acc = row[0] * x[0];\n    {real} t;\n");
+            for k in 1..t.n {
+                let _ = writeln!(body, "    t = row[{k}] * x[{k}];\n    acc = acc + t;");
+            }
+            let _ = write!(
+                s,
+                r#"/* F_j row . x (tsf_row_dot): from the first product, in index order. Inline:
+   written out where it is used when optimising for speed, one copy when for size. */
+static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
+{body}    return acc;
+}}
+
+"#
+            );
+        }
         s.push_str(&self.straight_step());
         s
     }
@@ -332,14 +356,7 @@ static int {p}nearest_rule(const {real} z[]) {{
                     );
                     for s in 0..m {
                         let row = (j * m + s) * n;
-                        let _ = writeln!(b, "                f = g[{row}] * x[0];");
-                        for k in 1..n {
-                            let _ = writeln!(
-                                b,
-                                "                t = g[{}] * x[{k}];\n                f = f + t;",
-                                row + k
-                            );
-                        }
+                        let _ = writeln!(b, "                f = {p}row_dot(&g[{row}], x);");
                         let _ = writeln!(
                             b,
                             "                t = h{j} * f;\n                u{s} = u{s} + t;"
