@@ -189,6 +189,7 @@ fn rule_name(r: &Rule) -> Option<&'static str> {
         Rule::mc_how | Rule::kw_scale | Rule::kw_offset => "`scale`, `offset` or `in`",
         Rule::kw_by => "`by`",
         Rule::modifier => "a modifier",
+        Rule::emit_target => "a target `rust`, `c` or `c(style = ..)`",
         Rule::mode_def | Rule::kw_mode => "a mode `mode name { ... }`",
         Rule::EOI => "end of item",
         Rule::item => "an item (`const`, `state`, `rule`, ...)",

@@ -6,7 +6,12 @@
 //! [`runtime`]) does every computation of `tsf_runtime::FactoredController::step` and
 //! of the trigger state machines, operation by operation; generated files
 //! hold only what depends on the spec: dimensions, const tables, the premise
-//! function and thin wrappers passing the tables to the runtime.
+//! function and the step. The step has two styles (`emit c(style = ..)`,
+//! [`is_straight`]): `table`, a thin wrapper passing the tables to the
+//! runtime's step, and `straight` (the default up to
+//! [`STRAIGHT_MAX_GAINS`] gain entries), the runtime's step written out for
+//! the controller with every dimension a constant (`straight.rs`), bit for
+//! bit the same results.
 //!
 //! Conventions (runtime/README.md): no `malloc`, no recursion, no global
 //! mutable state (the caller owns `<name>_t`), only standard headers

@@ -21,9 +21,10 @@ use tsf_lang::spec::{CStyle, SetShape};
 
 /// Largest controller (rules x inputs x states, the gain entries the blend
 /// multiplies) whose step `style = auto` writes straight-line; larger ones
-/// get the table-driven step. At 256 the straight-line step of a
-/// single-precision Cortex-M4 build stays within the flight audit's text
-/// budget (docs/language.md, "Code targets").
+/// get the table-driven step. Zhang & Zeng (162 entries) is measured within
+/// the flight audit's Cortex-M4 text budgets (bench/RESULTS.md, issue 37);
+/// 256 allows a little more, the code growing with rules x inputs (one row
+/// call each at `-Os`).
 pub const STRAIGHT_MAX_GAINS: usize = 256;
 
 /// Whether the controller's step is generated straight-line: the spec's
