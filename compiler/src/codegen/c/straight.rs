@@ -341,6 +341,38 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
             );
             set_flag(&mut b, "        ", "NO_RULE_FIRED");
         }
+        self.straight_blend(&mut b);
+        for i in 0..r {
+            let _ = writeln!(b, "        s->h[{i}] = h{i};");
+        }
+        b.push_str("    }\n    s->flags = flags;\n");
+        let pd = self.pd;
+        format!(
+            r#"/* One control step at x with premises z: the runtime's tsf_step_with_premises,
+   operation by operation, written out for this controller. */
+void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
+{b}}}
+
+void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
+    {real} z[{pd}];
+    {p}premises(x, z);
+    {p}step_with_premises(s, {mode_arg}x, z, u);
+}}
+
+"#
+        )
+    }
+
+    /// The blend (one branch per rule, skipped when its strength is not
+    /// > 0) and the saturation of every channel, into `b`.
+    fn straight_blend(&self, b: &mut String) {
+        let (p, u) = (&self.p, &self.u);
+        let t = self.t;
+        let real = format!("{u}REAL");
+        let (n, m, r) = (t.n, t.m, t.r);
+        let set_flag = |b: &mut String, ind: &str, flag: &str| {
+            let _ = writeln!(b, "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});");
+        };
         // Blend.
         if m > 0 {
             let us: Vec<String> = (0..m).map(|s| format!("u{s} = {u}C(0)")).collect();
@@ -383,7 +415,7 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
                         b,
                         "            if (isfinite(u{s}) == 0) {{ /* unlimited channel */"
                     );
-                    set_flag(&mut b, "                ", "COMMAND_NONFINITE");
+                    set_flag(b, "                ", "COMMAND_NONFINITE");
                     let _ = writeln!(b, "                u[{s}] = {u}C(0);\n            }} else {{\n                u[{s}] = u{s};\n            }}");
                     continue;
                 }
@@ -391,17 +423,17 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
                     b,
                     "            {{\n                const {real} b = {p}u_max[{s}] >= {u}C(0) ? {p}u_max[{s}] : {u}C(0);\n                {real} v = u{s};\n                if (isfinite(v) == 0) {{"
                 );
-                set_flag(&mut b, "                    ", "COMMAND_NONFINITE");
+                set_flag(b, "                    ", "COMMAND_NONFINITE");
                 let _ = writeln!(
                     b,
                     "                    if ((isnan(v) != 0) || (isfinite(b) == 0)) {{\n                        v = {u}C(0);\n                    }}\n                }}\n                if (v > b) {{"
                 );
-                set_flag(&mut b, "                    ", "SATURATED");
+                set_flag(b, "                    ", "SATURATED");
                 let _ = writeln!(
                     b,
                     "                    u[{s}] = b;\n                }} else if (v < -b) {{"
                 );
-                set_flag(&mut b, "                    ", "SATURATED");
+                set_flag(b, "                    ", "SATURATED");
                 let _ = writeln!(
                     b,
                     "                    u[{s}] = -b;\n                }} else {{\n                    u[{s}] = v;\n                }}\n            }}"
@@ -411,25 +443,6 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
         } else {
             b.push_str("        (void)g;\n        (void)x;\n        (void)u;\n");
         }
-        for i in 0..r {
-            let _ = writeln!(b, "        s->h[{i}] = h{i};");
-        }
-        b.push_str("    }\n    s->flags = flags;\n");
-        let pd = self.pd;
-        format!(
-            r#"/* One control step at x with premises z: the runtime's tsf_step_with_premises,
-   operation by operation, written out for this controller. */
-void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
-{b}}}
-
-void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
-    {real} z[{pd}];
-    {p}premises(x, z);
-    {p}step_with_premises(s, {mode_arg}x, z, u);
-}}
-
-"#
-        )
     }
 
     /// The statements giving `deg<k>`, the degree of distinct term `term`
