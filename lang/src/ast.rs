@@ -90,6 +90,15 @@ pub struct NamedArg {
     pub value: Expr,
 }
 
+/// One target of `emit`: `c` or `c(style = table)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EmitTarget {
+    /// The target's name.
+    pub name: Ident,
+    /// Its options (`style = ..` for `c`).
+    pub args: Vec<NamedArg>,
+}
+
 /// A fuzzy-set definition inside a premise block: `neg = tri(-1, -1, 0);`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SetDef {
@@ -345,7 +354,7 @@ pub enum ItemKind {
     /// `trigger kind { settings }`
     Trigger(Ident, Vec<Setting>),
     /// `emit targets;`
-    Emit(Vec<Ident>),
+    Emit(Vec<EmitTarget>),
     /// `precision f64;`
     Precision(Ident),
     /// `simulate { ... }`

@@ -540,6 +540,19 @@ pub enum Emit {
     C,
 }
 
+/// How generated C writes a controller's step (`emit c(style = ..)`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CStyle {
+    /// Straight-line up to a size, table-driven beyond it (the default).
+    #[default]
+    Auto,
+    /// Straight-line: memberships, rules, blend and saturation written out
+    /// with the tables' numbers at compile-time indices.
+    Straight,
+    /// Table-driven: dimensions and tables handed to the runtime's step.
+    Table,
+}
+
 /// Floating-point precision of generated code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Precision {
@@ -757,6 +770,8 @@ pub struct Spec {
     pub linf_paper: Option<f64>,
     /// Code targets.
     pub emit: Vec<Emit>,
+    /// Style of the generated C step (`emit c(style = ..)`).
+    pub c_style: CStyle,
     /// Precision.
     pub precision: Precision,
     /// Scenario.

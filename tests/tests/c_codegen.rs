@@ -19,6 +19,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
+use tsf_lang::spec::CStyle;
 use tsf_runtime::{
     math, AdaptiveTrigger, Controller, MixedTrigger, PeriodicTrigger, RelativeTrigger, Rule,
 };
@@ -104,6 +105,17 @@ fn generated_c_is_deterministic_and_snapshotted() {
         }
         insta::assert_snapshot!(format!("{}.h", t.name), a.header);
         insta::assert_snapshot!(format!("{}.c", t.name), a.source);
+        if t.name == "zhang_multiobjective" {
+            // The table-driven style too (the default here is straight-line).
+            let table = emit_c(&with_style(t, CStyle::Table));
+            assert_eq!(
+                table,
+                emit_c(&with_style(t, CStyle::Table)),
+                "deterministic"
+            );
+            assert_eq!(table.header, a.header, "the style changes the source only");
+            insta::assert_snapshot!(format!("{}.table.c", t.name), table.source);
+        }
         assert_eq!(
             a.source
                 .contains("Controller-side role of the event-triggered loop"),
@@ -154,8 +166,12 @@ fn generated_c_is_deterministic_and_snapshotted() {
 }
 
 /// Generated files hold no runtime code: the runtime's functions are
-/// defined once, in tsf_runtime.c.
+/// defined once, in tsf_runtime.c. The straight-line step (`style =
+/// straight`) is the exception it is meant to be: it writes the step's own
+/// helpers (`clamp01`, `edge_ratio`, the nearest-rule search) out for its
+/// controller, as static functions of the real type, and nothing else.
 fn assert_no_runtime_text(file: &str, text: &str) {
+    let straight = text.contains("_nearest_rule(");
     for needle in [
         "atan_j16",
         "quad_form",
@@ -165,7 +181,26 @@ fn assert_no_runtime_text(file: &str, text: &str) {
         "static int ",
         "static double ",
     ] {
+        let step_helper = matches!(
+            needle,
+            "edge_ratio" | "clamp01" | "nearest_scaled" | "static int "
+        );
+        if straight && step_helper {
+            continue;
+        }
         assert!(!text.contains(needle), "{file}: runtime text `{needle}`");
+    }
+    if straight {
+        let statics: Vec<&str> = text
+            .lines()
+            .filter(|l| l.starts_with("static int "))
+            .collect();
+        assert!(
+            statics
+                .iter()
+                .all(|l| l.contains("_nearest_scaled(") || l.contains("_nearest_rule(")),
+            "{file}: static functions beyond the step's helpers: {statics:?}"
+        );
     }
 }
 
@@ -694,49 +729,245 @@ fn generated_c_matches_the_runtime() {
         );
     }
     let mut summary = String::new();
-    for (k, t) in shipped_tables().iter().enumerate() {
-        let dir = work_dir(&t.name);
-        let src = write_files(&dir, t, &emit_c(t));
-        let rt = write_runtime(&dir);
-        let drv = dir.join("driver.c");
-        std::fs::write(&drv, driver(t)).expect("write driver");
-        let xs = states(t, 0x5eed + k as u64);
-        assert!(xs.len() >= 2000, "{} states", xs.len());
-        let mut input = String::new();
-        for x in &xs {
-            let words: Vec<String> = x.iter().map(|v| format!("{:x}", v.to_bits())).collect();
-            let _ = writeln!(input, "{}", words.join(" "));
-        }
-        let input_path = dir.join("states.txt");
-        std::fs::write(&input_path, &input).expect("write states");
-        let rust = reference_rows(t, &xs);
-        let mut builds: Vec<(&str, Vec<&str>)> = vec![("O2", vec!["-O2"])];
-        if sanitize {
-            let mut flags = vec!["-O1", "-g"];
-            flags.extend(SANITIZE);
-            builds.push(("ubsan+asan", flags));
-        }
-        for (tag, flags) in builds {
-            let exe = dir.join(format!("driver_{}", tag.replace('+', "_")));
-            build(&cc, &[src.clone(), rt.clone(), drv.clone()], &exe, &flags);
-            let out = run_driver(&exe, &input_path);
-            let c: Vec<Row> = out.lines().map(|l| parse_row(l, t)).collect();
-            let (worst, at) = compare(t, tag, &xs, &c, &rust);
-            let mut hist = std::collections::BTreeMap::new();
-            for r in &rust {
-                *hist.entry(r.flags).or_insert(0usize) += 1;
+    for (k, shipped) in shipped_tables().iter().enumerate() {
+        // Both C styles, each against the Rust runtime; the two styles'
+        // rows must be the same bits (the straight-line step is the C
+        // runtime's step written out).
+        let mut by_style: Vec<Vec<Row>> = Vec::new();
+        for style in [CStyle::Straight, CStyle::Table] {
+            let t = &with_style(shipped, style);
+            let dir = work_dir(&format!("{}_{style:?}", t.name));
+            let src = write_files(&dir, t, &emit_c(t));
+            assert_eq!(
+                src_is_straight(&dir, t),
+                style == CStyle::Straight,
+                "{}: {style:?} style expected",
+                t.name
+            );
+            let rt = write_runtime(&dir);
+            let drv = dir.join("driver.c");
+            std::fs::write(&drv, driver(t)).expect("write driver");
+            let xs = states(t, 0x5eed + k as u64);
+            assert!(xs.len() >= 2000, "{} states", xs.len());
+            let mut input = String::new();
+            for x in &xs {
+                let words: Vec<String> = x.iter().map(|v| format!("{:x}", v.to_bits())).collect();
+                let _ = writeln!(input, "{}", words.join(" "));
             }
-            let sent = rust.iter().filter(|r| r.decisions[1]).count();
-            let _ = writeln!(
+            let input_path = dir.join("states.txt");
+            std::fs::write(&input_path, &input).expect("write states");
+            let rust = reference_rows(t, &xs);
+            let mut builds: Vec<(&str, Vec<&str>)> = vec![("O2", vec!["-O2"])];
+            if sanitize {
+                let mut flags = vec!["-O1", "-g"];
+                flags.extend(SANITIZE);
+                builds.push(("ubsan+asan", flags));
+            }
+            for (tag, flags) in builds {
+                let exe = dir.join(format!("driver_{}", tag.replace('+', "_")));
+                build(&cc, &[src.clone(), rt.clone(), drv.clone()], &exe, &flags);
+                let out = run_driver(&exe, &input_path);
+                let c: Vec<Row> = out.lines().map(|l| parse_row(l, t)).collect();
+                let (worst, at) = compare(t, tag, &xs, &c, &rust);
+                if let Some(first) = by_style.first() {
+                    assert_same_bits(t, &format!("{style:?} {tag}"), &xs, &c, first);
+                }
+                let mut hist = std::collections::BTreeMap::new();
+                for r in &rust {
+                    *hist.entry(r.flags).or_insert(0usize) += 1;
+                }
+                let sent = rust.iter().filter(|r| r.decisions[1]).count();
+                let _ = writeln!(
                 summary,
-                "{} [{tag}]: {} states, flags histogram {hist:?}, adaptive trigger sent {sent}; \
+                "{} [{style:?} {tag}]: {} states, flags histogram {hist:?}, adaptive trigger sent {sent}; \
                  max relative difference {worst:e} at {at}",
                 t.name,
                 xs.len()
             );
+                by_style.push(c);
+            }
         }
     }
     println!("{summary}");
+}
+
+/// The tables with the C step style `style`.
+fn with_style(t: &Tables, style: CStyle) -> Tables {
+    Tables {
+        c_style: style,
+        ..t.clone()
+    }
+}
+
+/// Whether the written source of `t` in `dir` has the straight-line step
+/// (it hands no descriptor to the runtime's step).
+fn src_is_straight(dir: &Path, t: &Tables) -> bool {
+    let text = std::fs::read_to_string(dir.join(c_file_names(t).1)).expect("read source");
+    assert_eq!(
+        text.contains("tsf_step_with_premises)("),
+        !text.contains("_nearest_rule("),
+        "{}: exactly one step style",
+        t.name
+    );
+    !text.contains("tsf_step_with_premises)(")
+}
+
+/// Equal bits, NaN equal to NaN (the driver prints NaN without payload).
+fn same_bits(a: f64, b: f64) -> bool {
+    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+}
+
+/// Every row of `a` is `b`'s bit for bit: flags, accessors, u, h and z.
+fn assert_same_bits(t: &Tables, tag: &str, states: &[Vec<f64>], a: &[Row], b: &[Row]) {
+    assert_eq!(a.len(), b.len(), "{tag}: row count");
+    for (i, (ra, rb)) in a.iter().zip(b).enumerate() {
+        let same = ra.flags == rb.flags
+            && ra.accessors == rb.accessors
+            && [(&ra.u, &rb.u), (&ra.h, &rb.h), (&ra.z, &rb.z)]
+                .iter()
+                .all(|(x, y)| {
+                    x.len() == y.len() && x.iter().zip(y.iter()).all(|(p, q)| same_bits(*p, *q))
+                });
+        assert!(
+            same,
+            "{} [{tag}] state {i} {:?}: not bit-identical:\n {ra:?}\n {rb:?}",
+            t.name, states[i]
+        );
+    }
+}
+
+/// 20,000 seeded states: a random walk, uniform states from inside the
+/// operating region to far outside it (no rule fires), huge magnitudes
+/// (commands overflow, premises overflow from finite states) and every edge
+/// value in every component.
+fn many_states(n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut rng = Rng::new(seed);
+    let mut out = Vec::new();
+    let mut x: Vec<f64> = (0..n).map(|_| rng.uniform(-0.1, 0.1)).collect();
+    for _ in 0..4000 {
+        for v in x.iter_mut() {
+            *v += rng.uniform(-0.01, 0.01);
+        }
+        out.push(x.clone());
+    }
+    for scale in [0.003, 0.03, 0.1, 0.2, 0.5, 1.5, 10.0, 40.0] {
+        for _ in 0..1700 {
+            out.push((0..n).map(|_| rng.uniform(-scale, scale)).collect());
+        }
+    }
+    while out.len() < 20_000 - EDGES.len() * (n + 1) - 2 {
+        out.push(
+            (0..n)
+                .map(|_| {
+                    let s = if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
+                    s * 10f64.powf(rng.uniform(-320.0, 308.0))
+                })
+                .collect(),
+        );
+    }
+    for &e in &EDGES {
+        out.push(vec![e; n]);
+        for k in 0..n {
+            let mut v: Vec<f64> = (0..n).map(|_| rng.uniform(-0.2, 0.2)).collect();
+            v[k] = e;
+            out.push(v);
+        }
+    }
+    out.push(
+        (0..n)
+            .map(|k| if k % 2 == 0 { 1e308 } else { -1e308 })
+            .collect(),
+    );
+    out.push(vec![f64::MAX; n]);
+    out
+}
+
+/// Both C styles of the Zhang & Zeng controller on 20,000 seeded states,
+/// in double (also with saturation levels, so that channels clip) and in
+/// float: commands, strengths, premises and flags are the runtime's bit for
+/// bit. Double: against the Rust runtime (trapezoid terms only, no libm
+/// call, so exact) and the table-driven C step (the C runtime); float:
+/// straight-line against the C runtime's float step.
+#[test]
+fn both_c_styles_are_the_runtimes_bit_for_bit_on_20000_zhang_states() {
+    let cc = c_compiler();
+    let zhang = shipped_tables()
+        .iter()
+        .find(|t| t.name == "zhang_multiobjective")
+        .expect("zhang");
+    let xs = many_states(zhang.n, 0x37);
+    assert_eq!(xs.len(), 20_000);
+    let saturated = Tables {
+        u_max: vec![0.02, 0.5, f64::INFINITY],
+        ..zhang.clone()
+    };
+    let mut report = String::new();
+    let real = format!("-D{}_REAL=float", zhang.name.to_ascii_uppercase());
+    for (variant, base) in [("unlimited", zhang), ("saturated", &saturated)] {
+        let rust = reference_rows(base, &xs);
+        for (prec, extra) in [("f64", vec!["-O2"]), ("f32", vec!["-O2", real.as_str()])] {
+            let mut rows: Vec<Vec<Row>> = Vec::new();
+            for style in [CStyle::Straight, CStyle::Table] {
+                let t = &with_style(base, style);
+                let dir = work_dir(&format!("many_{variant}_{prec}_{style:?}"));
+                let src = write_files(&dir, t, &emit_c(t));
+                assert_eq!(src_is_straight(&dir, t), style == CStyle::Straight);
+                let rt = write_runtime(&dir);
+                let drv = dir.join("driver.c");
+                std::fs::write(&drv, driver(t)).expect("write driver");
+                let mut input = String::new();
+                for x in &xs {
+                    let words: Vec<String> =
+                        x.iter().map(|v| format!("{:x}", v.to_bits())).collect();
+                    let _ = writeln!(input, "{}", words.join(" "));
+                }
+                let input_path = dir.join("states.txt");
+                std::fs::write(&input_path, &input).expect("write states");
+                let exe = dir.join("driver");
+                let mut flags = extra.clone();
+                flags.push("-ffp-contract=off");
+                build(&cc, &[src, rt, drv], &exe, &flags);
+                let out = run_driver(&exe, &input_path);
+                let c: Vec<Row> = out.lines().map(|l| parse_row(l, t)).collect();
+                if prec == "f64" {
+                    assert_same_bits(
+                        t,
+                        &format!("{variant} {prec} {style:?} vs Rust"),
+                        &xs,
+                        &c,
+                        &rust,
+                    );
+                }
+                rows.push(c);
+            }
+            assert_same_bits(
+                base,
+                &format!("{variant} {prec} straight vs table"),
+                &xs,
+                &rows[0],
+                &rows[1],
+            );
+            let mut hist = std::collections::BTreeMap::new();
+            for r in &rows[0] {
+                *hist.entry(r.flags).or_insert(0usize) += 1;
+            }
+            let _ = writeln!(report, "{variant} {prec}: flags histogram {hist:?}");
+            // No rule fired, non-finite state, non-finite command and (with
+            // levels) saturation all occur, so every path was compared.
+            let seen = rows[0].iter().fold(0u8, |a, r| a | r.flags);
+            let want = if variant == "saturated" {
+                1 | 2 | 8 | 16
+            } else {
+                1 | 2 | 8
+            };
+            assert_eq!(
+                seen & want,
+                want,
+                "{variant} {prec}: flags seen {seen:#b}\n{report}"
+            );
+        }
+    }
+    println!("{report}");
 }
 
 /// All controllers in one image (prefixes), the float build, and the header

@@ -14,6 +14,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
+use tsf_lang::spec::CStyle;
 use tsf_runtime::{Flags, ModalController, Term};
 use tsfc::codegen::c::{emit_c, runtime};
 use tsfc::codegen::rust::emit_rust;
@@ -249,80 +250,93 @@ fn generated_modal_c_matches_the_runtime_bit_for_bit() {
             cases.push((mode, [0.3, e]));
         }
     }
-    let dir = work_dir();
-    let (h, c) = (emit_c(t).header, emit_c(t).source);
-    std::fs::write(dir.join("twomode.h"), h).expect("write");
-    std::fs::write(dir.join("twomode.c"), c).expect("write");
-    for f in runtime::files() {
-        std::fs::write(dir.join(&f.name), &f.text).expect("write runtime");
-    }
-    std::fs::write(dir.join("driver.c"), driver()).expect("write driver");
-    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
-    let exe = dir.join("driver");
-    let built = Command::new(&cc)
-        .args([
-            "-std=c99",
-            "-Wall",
-            "-Wextra",
-            "-Werror",
-            "-pedantic",
-            "-O2",
-            "-ffp-contract=off",
-        ])
-        .arg(dir.join("twomode.c"))
-        .arg(dir.join(runtime::SOURCE_NAME))
-        .arg(dir.join("driver.c"))
-        .arg("-o")
-        .arg(&exe)
-        .arg("-lm")
-        .output()
-        .expect("run the C compiler");
-    assert!(
-        built.status.success(),
-        "{}",
-        String::from_utf8_lossy(&built.stderr)
-    );
-    let mut input = String::new();
-    for (mode, x) in &cases {
-        let _ = writeln!(input, "{mode} {:x} {:x}", x[0].to_bits(), x[1].to_bits());
-    }
-    let input_path = dir.join("cases.txt");
-    std::fs::write(&input_path, input).expect("write cases");
-    let out = Command::new(&exe)
-        .stdin(std::fs::File::open(&input_path).expect("cases"))
-        .stdout(Stdio::piped())
-        .output()
-        .expect("run the driver");
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).expect("utf-8");
-    let lines: Vec<&str> = text.lines().collect();
-    assert_eq!(lines.len(), cases.len());
-    let mut out_of_range = 0;
-    for ((mode, x), line) in cases.iter().zip(&lines) {
-        let z = [exprs[0].eval(x)];
-        let s = ctl.step_with_premises(*mode, x, &z);
-        let want = format!(
-            "{:x} {:x} {:x} {}",
-            s.u[0].to_bits(),
-            s.h[0].to_bits(),
-            s.h[1].to_bits(),
-            s.flags.0
+    // Both C styles: the straight-line step and the table-driven one.
+    for style in [CStyle::Straight, CStyle::Table] {
+        let t = &Tables {
+            c_style: style,
+            ..t.clone()
+        };
+        let dir = work_dir().join(format!("{style:?}"));
+        std::fs::create_dir_all(&dir).expect("style dir");
+        let (h, c) = (emit_c(t).header, emit_c(t).source);
+        assert_eq!(
+            c.contains("tsf_step_with_premises)("),
+            style == CStyle::Table,
+            "{style:?} style expected"
         );
-        assert_eq!(*line, want, "mode {mode}, x = {x:?}");
-        if *mode >= 2 {
-            out_of_range += 1;
-            assert!(s.flags.contains(Flags::MODE_OUT_OF_RANGE));
-            // Mode 0's gains.
-            assert_eq!(
-                s.u[0].to_bits(),
-                ctl.step_with_premises(0, x, &z).u[0].to_bits()
-            );
+        std::fs::write(dir.join("twomode.h"), h).expect("write");
+        std::fs::write(dir.join("twomode.c"), c).expect("write");
+        for f in runtime::files() {
+            std::fs::write(dir.join(&f.name), &f.text).expect("write runtime");
         }
-    }
-    println!(
-        "twomode C vs runtime: {} cases ({out_of_range} with an out-of-range mode), bit-identical",
+        std::fs::write(dir.join("driver.c"), driver()).expect("write driver");
+        let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+        let exe = dir.join("driver");
+        let built = Command::new(&cc)
+            .args([
+                "-std=c99",
+                "-Wall",
+                "-Wextra",
+                "-Werror",
+                "-pedantic",
+                "-O2",
+                "-ffp-contract=off",
+            ])
+            .arg(dir.join("twomode.c"))
+            .arg(dir.join(runtime::SOURCE_NAME))
+            .arg(dir.join("driver.c"))
+            .arg("-o")
+            .arg(&exe)
+            .arg("-lm")
+            .output()
+            .expect("run the C compiler");
+        assert!(
+            built.status.success(),
+            "{}",
+            String::from_utf8_lossy(&built.stderr)
+        );
+        let mut input = String::new();
+        for (mode, x) in &cases {
+            let _ = writeln!(input, "{mode} {:x} {:x}", x[0].to_bits(), x[1].to_bits());
+        }
+        let input_path = dir.join("cases.txt");
+        std::fs::write(&input_path, input).expect("write cases");
+        let out = Command::new(&exe)
+            .stdin(std::fs::File::open(&input_path).expect("cases"))
+            .stdout(Stdio::piped())
+            .output()
+            .expect("run the driver");
+        assert!(out.status.success());
+        let text = String::from_utf8(out.stdout).expect("utf-8");
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), cases.len());
+        let mut out_of_range = 0;
+        for ((mode, x), line) in cases.iter().zip(&lines) {
+            let z = [exprs[0].eval(x)];
+            let s = ctl.step_with_premises(*mode, x, &z);
+            let want = format!(
+                "{:x} {:x} {:x} {}",
+                s.u[0].to_bits(),
+                s.h[0].to_bits(),
+                s.h[1].to_bits(),
+                s.flags.0
+            );
+            assert_eq!(*line, want, "mode {mode}, x = {x:?}");
+            if *mode >= 2 {
+                out_of_range += 1;
+                assert!(s.flags.contains(Flags::MODE_OUT_OF_RANGE));
+                // Mode 0's gains.
+                assert_eq!(
+                    s.u[0].to_bits(),
+                    ctl.step_with_premises(0, x, &z).u[0].to_bits()
+                );
+            }
+        }
+        println!(
+        "twomode C ({style:?} style) vs runtime: {} cases ({out_of_range} with an out-of-range mode), bit-identical",
         cases.len()
     );
+    }
 }
 
 /// The stationary distribution of the generator `pi`: p' Pi = 0, sum p = 1,

@@ -209,6 +209,7 @@ fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, S
             .clone()
             .unwrap_or_else(|| vec![f64::INFINITY; m]),
         precision: spec.precision,
+        c_style: spec.c_style,
         sensor: crate::tables::Sensor::None,
         modes,
     };

@@ -63,6 +63,7 @@ pub fn adaptive_tables(
         gains: Vec::new(),
         u_max: vec![f64::INFINITY; model.m],
         precision: spec.precision,
+        c_style: spec.c_style,
         sensor: crate::tables::Sensor::None,
         modes: None,
     };

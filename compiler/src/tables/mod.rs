@@ -22,7 +22,7 @@ use crate::certify::Certificate;
 use crate::model::{TermSpec, TsModel};
 use crate::synth::{Achieved, Design};
 use sym::{premise_entries, Func, Sym};
-use tsf_lang::spec::Precision;
+use tsf_lang::spec::{CStyle, Precision};
 
 /// How generated code computes the premise vector z from x.
 #[derive(Debug, Clone, PartialEq)]
@@ -96,6 +96,8 @@ pub struct Tables {
     pub u_max: Vec<f64>,
     /// Floating-point type of generated code.
     pub precision: Precision,
+    /// Style of the generated C step (`emit c(style = ..)`).
+    pub c_style: CStyle,
     /// The sensor-side module of the loop's law, if it has one.
     pub sensor: Sensor,
     /// Per-mode gains of a mode-dependent design (`modes { design =
@@ -291,6 +293,7 @@ pub fn tables(
             .clone()
             .unwrap_or_else(|| vec![f64::INFINITY; model.m]),
         precision: spec.precision,
+        c_style: spec.c_style,
         sensor: match (
             sensor::sensor_tables(model, design)?,
             signal::signal_sensor_tables(model, design)?,

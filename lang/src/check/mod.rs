@@ -168,6 +168,7 @@ struct Draft<'a> {
     /// Where a synthesized trigger weight is asked for (when its design method checked).
     weight_span: Option<Span>,
     emit: Vec<Emit>,
+    c_style: CStyle,
     emit_seen: Option<Span>,
     precision: Option<Precision>,
     precision_seen: Option<Span>,
@@ -341,6 +342,7 @@ impl<'a> Checker<'a> {
             trigger_region,
             linf_paper: self.linf_paper,
             emit: draft.emit,
+            c_style: draft.c_style,
             precision: draft.precision.unwrap_or(Precision::F64),
             simulate: draft.simulate,
             modes,

@@ -189,6 +189,7 @@ fn rule_name(r: &Rule) -> Option<&'static str> {
         Rule::mc_how | Rule::kw_scale | Rule::kw_offset => "`scale`, `offset` or `in`",
         Rule::kw_by => "`by`",
         Rule::modifier => "a modifier",
+        Rule::emit_target => "a target `rust`, `c` or `c(style = ..)`",
         Rule::mode_def | Rule::kw_mode => "a mode `mode name { ... }`",
         Rule::EOI => "end of item",
         Rule::item => "an item (`const`, `state`, `rule`, ...)",
@@ -384,10 +385,13 @@ impl Cx {
                 ItemKind::Trigger(name, settings)
             }
             Rule::emit_decl => ItemKind::Emit(
-                next(&mut it, span)?
-                    .into_inner()
-                    .map(|p| self.ident(p))
-                    .collect(),
+                it.map(|target| {
+                    let mut parts = target.into_inner();
+                    let name = self.ident(next(&mut parts, span)?);
+                    let args = parts.map(|a| self.named_arg(a)).collect::<PResult<_>>()?;
+                    Ok(EmitTarget { name, args })
+                })
+                .collect::<PResult<_>>()?,
             ),
             Rule::precision_decl => ItemKind::Precision(self.ident(next(&mut it, span)?)),
             Rule::simulate_decl => {

@@ -6,7 +6,12 @@
 //! [`runtime`]) does every computation of `tsf_runtime::FactoredController::step` and
 //! of the trigger state machines, operation by operation; generated files
 //! hold only what depends on the spec: dimensions, const tables, the premise
-//! function and thin wrappers passing the tables to the runtime.
+//! function and the step. The step has two styles (`emit c(style = ..)`,
+//! [`is_straight`]): `table`, a thin wrapper passing the tables to the
+//! runtime's step, and `straight` (the default up to
+//! [`STRAIGHT_MAX_GAINS`] gain entries), the runtime's step written out for
+//! the controller with every dimension a constant (`straight.rs`), bit for
+//! bit the same results.
 //!
 //! Conventions (runtime/README.md): no `malloc`, no recursion, no global
 //! mutable state (the caller owns `<name>_t`), only standard headers
@@ -40,10 +45,12 @@ mod sensor;
 mod signal_sensor;
 mod source;
 mod step;
+mod straight;
 
 pub use adaptive::emit_c_adaptive;
 pub use sensor::{c_sensor_file_names, emit_c_sensor};
 pub use signal_sensor::emit_c_signal_sensor;
+pub use straight::{is_straight, STRAIGHT_MAX_GAINS};
 
 /// The C99 backend: `<name>.h` and `<name>.c`, `<name>_sensor.h` and
 /// `<name>_sensor.c` for an aperiodic event trigger, and the runtime

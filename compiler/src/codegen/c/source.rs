@@ -15,9 +15,18 @@ impl Gen<'_> {
     pub(super) fn source(&self) -> String {
         let mut s = self.banner("C99 implementation");
         s.push_str(&self.prelude(&self.t.name));
-        s.push_str(&self.tables());
-        s.push_str(&self.premises());
-        s.push_str(&self.controller());
+        if super::straight::is_straight(self.t) {
+            s.push_str(&self.straight_tables());
+            s.push_str(&self.straight_premises());
+            s.push_str(&self.init());
+            s.push_str(&self.straight_controller());
+        } else {
+            s.push_str(&self.tables());
+            s.push_str(&self.premises());
+            s.push_str(&self.init());
+            s.push_str(&self.step());
+        }
+        s.push_str(&self.accessors());
         s.push_str(&self.triggers());
         s
     }
@@ -46,6 +55,21 @@ impl Gen<'_> {
     /// The const tables: premise map, centres, gains, levels, terms, and the
     /// descriptor `<name>_tables` pointing at them.
     fn tables(&self) -> String {
+        let mut s = self.gain_tables();
+        s.push_str(&self.term_tables());
+        let _ = writeln!(s, "{}", self.descriptor(self.t.factored.terms.len()));
+        s
+    }
+
+    /// The const tables the straight-line step reads at constant indices:
+    /// premise map, centres, gains and levels (the terms' parameters are
+    /// constants in its code).
+    fn straight_tables(&self) -> String {
+        self.gain_tables()
+    }
+
+    /// Premise map, centres, gains and saturation levels.
+    fn gain_tables(&self) -> String {
         let t = self.t;
         let (p, u) = (&self.p, &self.u);
         let real = format!("{u}REAL");
@@ -80,8 +104,6 @@ impl Gen<'_> {
             "/* Saturation levels (INFINITY = unlimited). */\nstatic const {real} {p}u_max[{u}M] = {};\n",
             list(&t.u_max)
         );
-        s.push_str(&self.term_tables());
-        let _ = writeln!(s, "{}", self.descriptor(t.factored.terms.len()));
         s
     }
 

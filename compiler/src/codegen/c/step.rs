@@ -1,12 +1,15 @@
-//! The controller's step, accessors and trigger state machines in
-//! `<name>.c`: thin wrappers that hand this controller's tables and
-//! dimensions to the runtime (`tsf_runtime.c`), which does the arithmetic.
+//! The controller's table-driven step (`emit c(style = table)`),
+//! accessors and trigger state machines in `<name>.c`: thin wrappers that
+//! hand this controller's tables and dimensions to the runtime
+//! (`tsf_runtime.c`), which does the arithmetic. The straight-line step is
+//! [`super::straight`].
 
 use super::Gen;
 
 impl Gen<'_> {
-    /// Init, step, accessors.
-    pub(super) fn controller(&self) -> String {
+    /// The table-driven step: `<name>_step_with_premises` hands the
+    /// descriptor to the runtime's `tsf_step_with_premises`.
+    pub(super) fn step(&self) -> String {
         let (p, u) = (&self.p, &self.u);
         let real = format!("{u}REAL");
         let pd = self.pd;
@@ -24,15 +27,7 @@ impl Gen<'_> {
             ),
         };
         format!(
-            r#"void {p}init({p}t *s) {{
-    int i;
-    for (i = 0; i < {u}R; i++) {{
-        s->h[i] = {u}C(0);
-    }}
-    s->flags = 0;
-}}
-
-void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
+            r#"void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
     {real} deg[{dd}]; /* degrees of the distinct premise terms */
     {call}
 }}
@@ -43,7 +38,32 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
     {p}step_with_premises(s, {mode_arg}x, z, u);
 }}
 
-uint8_t {p}flags(const {p}t *s) {{
+"#
+        )
+    }
+
+    /// `<name>_init`: h = 0, no flags.
+    pub(super) fn init(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        format!(
+            r#"void {p}init({p}t *s) {{
+    int i;
+    for (i = 0; i < {u}R; i++) {{
+        s->h[i] = {u}C(0);
+    }}
+    s->flags = 0;
+}}
+
+"#
+        )
+    }
+
+    /// The accessors of the controller state.
+    pub(super) fn accessors(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        format!(
+            r#"uint8_t {p}flags(const {p}t *s) {{
     return s->flags;
 }}
 
