@@ -60,8 +60,11 @@ impl Gen<'_> {
             s,
             r#"//
 // Semantics are those of tsf-runtime's `FactoredController::step` (runtime/README.md),
-// computed by tsf_runtime.c (written next to this file: compile and link it
-// once per image): non-finite state or premise -> u = 0, h = 0 and a fault
+// computed with tsf_runtime.c's operations in its order: the step in this
+// controller's .c either writes them out (`emit c(style = straight)`, bit for
+// bit) or calls the runtime (`style = table`). Link tsf_runtime.c (written next
+// to this file) once per image either way.
+// Non-finite state or premise -> u = 0, h = 0 and a fault
 // flag; no rule fired -> the nearest rule centre's gain alone and a flag;
 // |u_s| <= u_max_s always; rules with h_j == 0 are skipped in the blend;
 // each distinct premise term is evaluated once per step.
