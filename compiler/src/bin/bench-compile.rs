@@ -14,7 +14,9 @@ use clap::Parser;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
 use tsf_lang::spec::{InitialSet, Objective, Relaxation, Target};
+use tsfc::driver::adaptive;
 use tsfc::driver::compile::Status;
 use tsfc::model::TsModel;
 use tsfc::pipeline::read;
@@ -338,29 +340,102 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// Runs the pipeline `repeat` times (after one warm-up) and takes medians.
-fn bench_spec(path: &Path, repeat: usize, settings: &Settings) -> Result<Row, String> {
-    let label = path.file_name().map_or_else(
-        || path.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
+/// One run of an adaptive spec's own route (read, check, the adaptive
+/// design, as `tsfc compile` does): its stage times (parse, model; the rest
+/// of the run counted as `build`, no SDP) and whether the design is well
+/// posed; `None` when the spec is not adaptive.
+fn adaptive_run(path: &Path) -> Result<Option<(Stages, bool, usize)>, String> {
+    let t0 = Instant::now();
+    let front = read(path).map_err(|e| e.message)?;
+    let (parse, model) = (
+        front.checked.parse_time.as_secs_f64(),
+        front.checked.model_time.as_secs_f64(),
     );
-    eprintln!("bench: {label} ({repeat} runs)");
-    let mut runs = Vec::with_capacity(repeat);
-    let (mut last, mut status) = pipeline(path, settings)?;
-    for _ in 0..repeat {
-        (last, status) = pipeline(path, settings)?;
-        runs.push(Stages::from(&last.timings_s));
+    let rules = front.checked.model.as_ref().map_or(0, |m| m.rules.len());
+    let Some(outcome) = adaptive::outcome(&front) else {
+        return Ok(None);
+    };
+    let total = t0.elapsed().as_secs_f64();
+    let stages = Stages {
+        parse,
+        model,
+        build: (total - parse - model).max(0.0),
+        total,
+        ..Stages::default()
+    };
+    Ok(Some((stages, outcome.design.is_some(), rules)))
+}
+
+/// The row of an adaptive spec (`None` when the spec is not adaptive).
+fn adaptive_row(path: &Path, label: &str, repeat: usize) -> Result<Option<Row>, String> {
+    if adaptive_run(path)?.is_none() {
+        return Ok(None);
     }
+    let mut runs = Vec::with_capacity(repeat);
+    let mut last = (false, 0);
+    for _ in 0..repeat {
+        if let Some((t, posed, rules)) = adaptive_run(path)? {
+            runs.push(t);
+            last = (posed, rules);
+        }
+    }
+    let median_s = medians(&runs);
+    Ok(Some(Row {
+        spec: label.to_string(),
+        rules: last.1,
+        status: if last.0 {
+            "AdaptiveWellPosed"
+        } else {
+            "AdaptiveRefused"
+        }
+        .into(),
+        hinf_gamma: None,
+        objectives: serde_json::Value::Null,
+        sdps: 0,
+        iterations: 0,
+        problem: serde_json::Value::Null,
+        median_s,
+        overhead_pct: 100.0,
+        runs: repeat,
+    }))
+}
+
+/// The median of each stage over `runs`.
+fn medians(runs: &[Stages]) -> Stages {
     let stage = |f: fn(&Stages) -> f64| median(runs.iter().map(f).collect());
-    let median_s = Stages {
+    Stages {
         parse: stage(|t| t.parse),
         model: stage(|t| t.model),
         build: stage(|t| t.build),
         solve: stage(|t| t.solve),
         certify: stage(|t| t.certify),
         total: stage(|t| t.total),
-    };
-    let overhead_pct = stage(|t| 100.0 * (t.total - t.solve) / t.total);
+    }
+}
+
+/// Runs the pipeline `repeat` times (after one warm-up) and takes medians;
+/// an adaptive spec runs its own design route (no LMIs).
+fn bench_spec(path: &Path, repeat: usize, settings: &Settings) -> Result<Row, String> {
+    let label = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    eprintln!("bench: {label} ({repeat} runs)");
+    if let Some(row) = adaptive_row(path, &label, repeat)? {
+        return Ok(row);
+    }
+    let mut runs = Vec::with_capacity(repeat);
+    let (mut last, mut status) = pipeline(path, settings)?;
+    for _ in 0..repeat {
+        (last, status) = pipeline(path, settings)?;
+        runs.push(Stages::from(&last.timings_s));
+    }
+    let median_s = medians(&runs);
+    let overhead_pct = median(
+        runs.iter()
+            .map(|t| 100.0 * (t.total - t.solve) / t.total)
+            .collect(),
+    );
     let objectives = serde_json::to_value(&last.objectives).unwrap_or_default();
     Ok(Row {
         spec: label,
