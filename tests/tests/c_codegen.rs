@@ -569,22 +569,47 @@ const EDGES: [f64; 14] = [
 /// states at six scales (inside and outside the operating region), huge
 /// magnitudes, and every edge value in every component.
 fn states(t: &Tables, seed: u64) -> Vec<Vec<f64>> {
-    let n = t.n;
+    let scales = [0.003, 0.03, 0.1, 0.5, 1.5, 10.0];
+    seeded_states(t.n, seed, (500, &scales, 300), Huge::Count(200))
+}
+
+/// How many huge-magnitude states [`seeded_states`] draws.
+enum Huge {
+    /// This many.
+    Count(usize),
+    /// As many as make this many states in all.
+    FillTo(usize),
+}
+
+/// Seeded states of dimension `n`: a random walk of `walk` steps,
+/// `per_scale` uniform states at each of `scales`, huge magnitudes of either
+/// sign (`huge`), every edge value in every component, alternating +-1e308
+/// (L x overflows or cancels) and all `f64::MAX`.
+fn seeded_states(
+    n: usize,
+    seed: u64,
+    (walk, scales, per_scale): (usize, &[f64], usize),
+    huge: Huge,
+) -> Vec<Vec<f64>> {
     let mut rng = Rng::new(seed);
     let mut out = Vec::new();
     let mut x: Vec<f64> = (0..n).map(|_| rng.uniform(-0.1, 0.1)).collect();
-    for _ in 0..500 {
+    for _ in 0..walk {
         for v in x.iter_mut() {
             *v += rng.uniform(-0.01, 0.01);
         }
         out.push(x.clone());
     }
-    for scale in [0.003, 0.03, 0.1, 0.5, 1.5, 10.0] {
-        for _ in 0..300 {
+    for &scale in scales {
+        for _ in 0..per_scale {
             out.push((0..n).map(|_| rng.uniform(-scale, scale)).collect());
         }
     }
-    for _ in 0..200 {
+    let huge_end = match huge {
+        Huge::Count(c) => out.len() + c,
+        Huge::FillTo(total) => total - EDGES.len() * (n + 1) - 2,
+    };
+    while out.len() < huge_end {
         out.push(
             (0..n)
                 .map(|_| {
@@ -602,7 +627,6 @@ fn states(t: &Tables, seed: u64) -> Vec<Vec<f64>> {
             out.push(v);
         }
     }
-    // Alternating huge values: L x overflows or cancels.
     out.push(
         (0..n)
             .map(|k| if k % 2 == 0 { 1e308 } else { -1e308 })
@@ -841,45 +865,8 @@ fn assert_same_bits(t: &Tables, tag: &str, states: &[Vec<f64>], a: &[Row], b: &[
 /// (commands overflow, premises overflow from finite states) and every edge
 /// value in every component.
 fn many_states(n: usize, seed: u64) -> Vec<Vec<f64>> {
-    let mut rng = Rng::new(seed);
-    let mut out = Vec::new();
-    let mut x: Vec<f64> = (0..n).map(|_| rng.uniform(-0.1, 0.1)).collect();
-    for _ in 0..4000 {
-        for v in x.iter_mut() {
-            *v += rng.uniform(-0.01, 0.01);
-        }
-        out.push(x.clone());
-    }
-    for scale in [0.003, 0.03, 0.1, 0.2, 0.5, 1.5, 10.0, 40.0] {
-        for _ in 0..1700 {
-            out.push((0..n).map(|_| rng.uniform(-scale, scale)).collect());
-        }
-    }
-    while out.len() < 20_000 - EDGES.len() * (n + 1) - 2 {
-        out.push(
-            (0..n)
-                .map(|_| {
-                    let s = if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
-                    s * 10f64.powf(rng.uniform(-320.0, 308.0))
-                })
-                .collect(),
-        );
-    }
-    for &e in &EDGES {
-        out.push(vec![e; n]);
-        for k in 0..n {
-            let mut v: Vec<f64> = (0..n).map(|_| rng.uniform(-0.2, 0.2)).collect();
-            v[k] = e;
-            out.push(v);
-        }
-    }
-    out.push(
-        (0..n)
-            .map(|k| if k % 2 == 0 { 1e308 } else { -1e308 })
-            .collect(),
-    );
-    out.push(vec![f64::MAX; n]);
-    out
+    let scales = [0.003, 0.03, 0.1, 0.2, 0.5, 1.5, 10.0, 40.0];
+    seeded_states(n, seed, (4000, &scales, 1700), Huge::FillTo(20_000))
 }
 
 /// Both C styles of the Zhang & Zeng controller on 20,000 seeded states,
