@@ -8,6 +8,7 @@ mod c_codegen;
 mod common;
 mod compat;
 mod diagnostics;
+mod editors;
 mod event_trigger;
 mod exprel;
 mod fuzz;
