@@ -246,6 +246,7 @@ fn compile(
     // A compile that is not certified leaves the outputs of an earlier design
     // untouched: its report goes beside them under another name.
     let certified = run.certified().is_ok();
+    let default_report = report_path.is_none();
     let report_path = report_path.unwrap_or_else(|| {
         let name = &run.model.spec.controller.node;
         out.join(if certified {
@@ -288,7 +289,23 @@ fn compile(
     for (path, _) in files.iter().skip(1) {
         eprintln!("  wrote                {}", path.display());
     }
+    if certified && default_report {
+        remove_stale_failed_report(out, &run.model.spec.controller.node);
+    }
     ExitCode::from(run.exit_code())
+}
+
+/// After a certified compile, the failed report of an earlier refused
+/// attempt in the same folder describes a design that no longer ships: it is
+/// removed (and said), so the folder never holds a report that contradicts it.
+fn remove_stale_failed_report(out: &std::path::Path, controller: &str) {
+    let stale = out.join(format!("{controller}.failed.report.json"));
+    if stale.is_file() {
+        match std::fs::remove_file(&stale) {
+            Ok(()) => eprintln!("  removed              {} (stale)", stale.display()),
+            Err(e) => eprintln!("warning: cannot remove the stale {}: {e}", stale.display()),
+        }
+    }
 }
 
 /// The `--emit` targets, else the spec's `emit`.

@@ -262,7 +262,17 @@ fn a_failed_compile_leaves_earlier_outputs_untouched() {
         report_before,
         "the earlier report changed"
     );
-    assert!(dir.join("inverted_pendulum.failed.report.json").exists());
+    let failed = dir.join("inverted_pendulum.failed.report.json");
+    assert!(failed.exists());
+    // A later certified compile removes the refused attempt's report, and says so.
+    let third = run(&good);
+    assert_eq!(third.status.code(), Some(0));
+    assert!(
+        !failed.exists(),
+        "a stale failed report stayed beside the certified one"
+    );
+    let stderr = String::from_utf8_lossy(&third.stderr);
+    assert!(stderr.contains("failed.report.json (stale)"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

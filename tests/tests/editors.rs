@@ -36,7 +36,9 @@ fn grammar_keywords() -> BTreeSet<String> {
 /// The names of the built-in functions, read from their table in the evaluator.
 fn builtins() -> BTreeSet<String> {
     let src = read("lang/src/eval/builtins.rs");
-    let start = src.find("BUILTINS: &[&str] = &[").expect("the BUILTINS table");
+    let start = src
+        .find("BUILTINS: &[&str] = &[")
+        .expect("the BUILTINS table");
     let end = start + src[start..].find("];").expect("the end of BUILTINS");
     src[start..end]
         .split('"')
@@ -51,7 +53,12 @@ fn shapes() -> BTreeSet<String> {
     let src = read("lang/src/check/premises.rs");
     ["tri", "trap", "gauss", "sigmoid"]
         .into_iter()
-        .inspect(|s| assert!(src.contains(&format!("\"{s}\"")), "shape {s} left the checker"))
+        .inspect(|s| {
+            assert!(
+                src.contains(&format!("\"{s}\"")),
+                "shape {s} left the checker"
+            )
+        })
         .map(String::from)
         .collect()
 }
@@ -92,7 +99,10 @@ fn editor_grammars_know_every_keyword() {
     want.extend(builtins());
     want.extend(shapes());
     let mut textmate = BTreeSet::new();
-    textmate_words(&json("editors/vscode/syntaxes/tsf.tmLanguage.json"), &mut textmate);
+    textmate_words(
+        &json("editors/vscode/syntaxes/tsf.tmLanguage.json"),
+        &mut textmate,
+    );
     let vim = vim_words();
     let missing_tm: Vec<_> = want.difference(&textmate).collect();
     let missing_vim: Vec<_> = want.difference(&vim).collect();
@@ -116,10 +126,18 @@ fn vscode_extension_manifest_is_consistent() {
     let grammar = &contributes["grammars"][0];
     assert_eq!(grammar["language"], "tsf");
     let grammar_path = grammar["path"].as_str().expect("grammar path");
-    let tm = json(&format!("editors/vscode/{}", grammar_path.trim_start_matches("./")));
+    let tm = json(&format!(
+        "editors/vscode/{}",
+        grammar_path.trim_start_matches("./")
+    ));
     assert_eq!(tm["scopeName"], grammar["scopeName"]);
-    let config = lang["configuration"].as_str().expect("language configuration");
-    json(&format!("editors/vscode/{}", config.trim_start_matches("./")));
+    let config = lang["configuration"]
+        .as_str()
+        .expect("language configuration");
+    json(&format!(
+        "editors/vscode/{}",
+        config.trim_start_matches("./")
+    ));
     let main = pkg["main"].as_str().expect("main");
     let client = read(&format!("editors/vscode/{}", main.trim_start_matches("./")));
     assert!(
