@@ -105,12 +105,7 @@ impl Emitter<'_> {
     /// Ends the current line; the next one starts at `indent`, after a blank
     /// line when the source had one and one is allowed here.
     fn newline(&mut self, indent: usize, blank: bool) {
-        if let Some(top) = self.stack.last_mut() {
-            if self.prev.is_some_and(|p| p.text_is_open) && top.ch != b'{' {
-                top.block = true;
-            }
-        }
-        if !self.cur.code.is_empty() || self.cur.comment.is_some() {
+        if !self.cur.code.trim().is_empty() || self.cur.comment.is_some() {
             self.lines.push(std::mem::take(&mut self.cur));
             if blank && !self.after_open {
                 self.lines.push(Line::default());
@@ -122,6 +117,23 @@ impl Emitter<'_> {
         self.indent = indent;
         self.prev = None;
         self.need_break = false;
+    }
+
+    /// Ends the current line before a piece: at the block's indentation when
+    /// a statement starts (or a block closes), else as a continuation.
+    fn break_line(&mut self, statement: bool, closer: bool, blank: bool) {
+        // A bracket that ends its line indents its contents one level.
+        if let Some(top) = self.stack.last_mut() {
+            if self.prev.is_some_and(|p| p.text_is_open) && top.ch != b'{' {
+                top.block = true;
+            }
+        }
+        let indent = if statement {
+            self.depth * INDENT
+        } else {
+            self.continuation(closer)
+        };
+        self.newline(indent, blank);
     }
 
     /// The indentation of a line that continues a statement.
@@ -147,12 +159,7 @@ impl Emitter<'_> {
         if on_code_line {
             self.push_text(" ");
         } else if self.prev.is_some() || self.need_break || p.newlines > 0 {
-            let indent = if self.stmt_start {
-                self.depth * INDENT
-            } else {
-                self.continuation(false)
-            };
-            self.newline(indent, p.newlines >= 2);
+            self.break_line(self.stmt_start, false, p.newlines >= 2);
         }
         self.push_text(p.text);
         self.prev = Some(Prev {
@@ -172,12 +179,9 @@ impl Emitter<'_> {
         }
         let starts_line = self.cur.code.trim().is_empty() && self.cur.comment.is_none();
         if self.need_break || closes_block || (p.newlines > 0 && !starts_line) {
-            let indent = if self.stmt_start || closes_block {
-                self.depth * INDENT
-            } else {
-                self.continuation(matches!(t, ")" | "]"))
-            };
-            self.newline(indent, p.newlines >= 2 && !closes_block);
+            let closer = matches!(t, ")" | "]");
+            let blank = p.newlines >= 2 && !closes_block;
+            self.break_line(self.stmt_start || closes_block, closer, blank);
         } else if self.space_before(p) {
             self.push_text(" ");
         }
