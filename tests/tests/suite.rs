@@ -11,6 +11,7 @@ mod diagnostics;
 mod editors;
 mod event_trigger;
 mod exprel;
+mod fmt;
 mod fuzz;
 mod fuzz_features;
 mod fuzz_pipeline;
