@@ -205,7 +205,7 @@ fn page_is_self_contained_captioned_and_balanced() {
             p.name
         )));
         for set in ["neg", "zero", "pos"] {
-            assert!(f.contains(&format!(">{set}</text>")), "legend entry {set}");
+            assert!(f.contains(&format!(">\n{set}\n</text>")), "legend entry {set}");
         }
     }
     assert!(html.contains("<figure id=\"consistency\">"));
@@ -335,4 +335,88 @@ fn missing_spec_is_a_usage_error() {
     let e = tsfc::review::review(&out.join("nope.tsf"), None, &out).expect_err("no spec");
     assert_eq!(e.exit_code(), 2);
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The Chromium binary on PATH (`chromium`, the Debian package), if any.
+fn chromium() -> Option<PathBuf> {
+    std::env::var_os("PATH")?
+        .to_str()?
+        .split(':')
+        .map(|d| Path::new(d).join("chromium"))
+        .find(|p| p.is_file())
+}
+
+/// Renders the file `page` in headless Chromium (fresh profile, no network
+/// services), with `extra` arguments; returns the console messages it logged
+/// (`--enable-logging=stderr` prints each as a `:CONSOLE` line).
+fn render(chromium: &Path, page: &Path, profile: &Path, extra: &[&str]) -> Vec<String> {
+    let out = Command::new(chromium)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--hide-scrollbars",
+            "--enable-logging=stderr",
+            "--v=0",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("chromium runs");
+    assert!(out.status.success(), "chromium failed: {out:?}");
+    String::from_utf8_lossy(&out.stderr)
+        .lines()
+        .filter(|l| l.contains(":CONSOLE"))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Headless Chromium renders the review page with no console message (the
+/// route is proved on a page that logs a `console.error`) and takes a
+/// non-empty PNG screenshot. Skipped, with a message, without `chromium`.
+#[test]
+fn chromium_renders_the_page_without_console_errors() {
+    let Some(chromium) = chromium() else {
+        eprintln!("SKIPPED chromium_renders_the_page_without_console_errors: `chromium` is not installed (apt-get install chromium)");
+        return;
+    };
+    let dir = scratch("chromium");
+    let probe = dir.join("probe.html");
+    std::fs::write(
+        &probe,
+        "<!DOCTYPE html><html><body><p>probe</p><script>console.error(\"tsfc-probe-error\")</script></body></html>\n",
+    )
+    .expect("probe page");
+    let caught = render(
+        &chromium,
+        &probe,
+        &dir.join("profile-probe"),
+        &["--dump-dom"],
+    );
+    assert!(
+        caught.iter().any(|l| l.contains("tsfc-probe-error")),
+        "the console route does not see a console.error: {caught:?}"
+    );
+    let w = tsfc::review::review(&spec(ZHANG), None, &dir).unwrap_or_else(|e| panic!("{e}"));
+    let shot = dir.join("review.png");
+    let console = render(
+        &chromium,
+        &w.path,
+        &dir.join("profile-page"),
+        &[
+            &format!("--screenshot={}", shot.display()),
+            "--window-size=1280,4000",
+        ],
+    );
+    assert!(console.is_empty(), "console messages: {console:?}");
+    let png = std::fs::read(&shot).expect("a screenshot");
+    assert!(png.len() > 10_000, "screenshot of {} bytes", png.len());
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "a PNG");
+    let _ = std::fs::remove_dir_all(&dir);
 }
