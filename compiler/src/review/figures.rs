@@ -238,7 +238,7 @@ fn thin<T: Clone>(v: &[T], max: usize) -> Vec<T> {
     }
     let stride = v.len().div_ceil(max - 1);
     let mut kept: Vec<T> = v.iter().step_by(stride).cloned().collect();
-    if (v.len() - 1) % stride != 0 {
+    if !(v.len() - 1).is_multiple_of(stride) {
         kept.extend(v.last().cloned());
     }
     kept
@@ -272,4 +272,22 @@ pub fn run_figures_svg(o: &Outcome) -> Result<Vec<Svg>, SimError> {
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::thin;
+
+    /// Thinning keeps the first and the last element, at most `max` in all,
+    /// and leaves a short series alone.
+    #[test]
+    fn thin_keeps_the_ends_and_bounds_the_count() {
+        let v: Vec<usize> = (0..10_001).collect();
+        for max in [2, 3, 1000, 9_999] {
+            let t = thin(&v, max);
+            assert!(t.len() <= max, "{} > {max}", t.len());
+            assert_eq!((t[0], t[t.len() - 1]), (0, 10_000));
+        }
+        assert_eq!(thin(&v[..5], 1000), v[..5].to_vec());
+    }
 }
