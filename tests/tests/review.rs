@@ -205,7 +205,10 @@ fn page_is_self_contained_captioned_and_balanced() {
             p.name
         )));
         for set in ["neg", "zero", "pos"] {
-            assert!(f.contains(&format!(">\n{set}\n</text>")), "legend entry {set}");
+            assert!(
+                f.contains(&format!(">\n{set}\n</text>")),
+                "legend entry {set}"
+            );
         }
     }
     assert!(html.contains("<figure id=\"consistency\">"));
