@@ -9,7 +9,7 @@ use crate::sim::Prepared;
 use crate::util::error::Error;
 use crate::util::hash::sha256_hex;
 use std::path::{Path, PathBuf};
-use tsf_lang::spec::Emit;
+use tsf_lang::spec::{Emit, Trigger};
 
 /// Where the design came from.
 #[derive(Debug, Clone, PartialEq)]
@@ -136,6 +136,15 @@ fn reused(
         return Err("the spec has errors".into());
     };
     let prepared = reuse::from_report(front, model, json)?;
+    // A trigger with a sensor-side module: the report does not hold its
+    // tables, so the list of generated files cannot be made from it.
+    let sensor = matches!(
+        model.spec.trigger.as_ref().map(|t| &t.node),
+        Some(Trigger::Aperiodic { .. } | Trigger::Mixed { .. })
+    );
+    if sensor && model.spec.modes.is_none() {
+        return Err("the sensor module of its trigger is not described by the report".into());
+    }
     let value: serde_json::Value =
         serde_json::from_str(json).map_err(|e| format!("it is not JSON ({e})"))?;
     let generated = codegen::generate(&prepared.tables, targets).map_err(|e| e.to_string())?;
