@@ -423,3 +423,55 @@ fn chromium_renders_the_page_without_console_errors() {
     assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "a PNG");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `about` sets (Xu & Huang's vector premises): one panel per component of
+/// the premise, one curve per distinct point, the width in the caption.
+#[test]
+fn about_sets_are_plotted_per_component() {
+    let model = crate::common::shipped("xu2020_regional.tsf");
+    let f = tsfc::review::figures::membership_figure(&model, 0).unwrap_or_else(|e| panic!("{e}"));
+    for c in 0..3 {
+        assert!(
+            f.svg.contains(&format!("degree along w[{c}]")),
+            "panel w[{c}]"
+        );
+    }
+    for p in [
+        "0, 0, 0",
+        "0.5, 0.5, 0.5",
+        "-0.5, -0.5, -0.5",
+        "1, 1, 1",
+        "-1, -1, -1",
+    ] {
+        assert!(f.svg.contains(&format!("about [{p}]")), "curve about [{p}]");
+    }
+    let sigma = model.premises.slots[0].sigma;
+    assert!(
+        f.caption.contains(&format!("sigma = {sigma}")),
+        "{}",
+        f.caption
+    );
+}
+
+/// The consistency map is the model stage's grid: its largest value along
+/// every varying state component is the report's worst mismatch.
+#[test]
+fn consistency_map_peaks_at_the_worst_mismatch() {
+    let model = crate::common::shipped(ZHANG);
+    let c = model.consistency.as_ref().expect("a consistency check");
+    let mut varying = 0;
+    for (axis, profile) in c.axes.iter().zip(&c.profile) {
+        assert_eq!(axis.len(), profile.len());
+        if axis.len() > 1 {
+            varying += 1;
+            let peak = profile.iter().copied().fold(0.0, f64::max);
+            assert_eq!(peak, c.worst, "the profile's peak is the worst mismatch");
+        }
+    }
+    assert_eq!(varying, 6);
+    let f = tsfc::review::figures::consistency_figure(&model, c)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .expect("a map");
+    assert!(f.svg.contains("mismatch along w") && f.svg.contains("mismatch along rho"));
+    assert!(f.caption.contains(&format!("{:.1}%", 100.0 * c.worst)));
+}
