@@ -22,6 +22,7 @@
 pub mod codegen;
 pub mod driver;
 pub mod report;
+pub mod review;
 pub mod sim;
 pub mod util;
 

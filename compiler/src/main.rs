@@ -147,6 +147,23 @@ enum Command {
         #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["monte_carlo", "x0", "report"])]
         merge: Option<Vec<PathBuf>>,
     },
+    /// Write a self-contained HTML design review page, OUT/<controller>.review.html: the claim,
+    /// the certificate table, the gains and P, membership functions, the model-consistency map,
+    /// the scenario's closed-loop plots and metrics, the generated files' hashes (docs/review.md).
+    ///
+    /// The design comes from the certified report of `tsfc compile` when it matches the spec (as
+    /// for `tsfc simulate`), else the spec is compiled. Exit codes: 0 written; 1 spec error;
+    /// 2 usage or I/O error; 3 design not certified.
+    Review {
+        /// Spec file.
+        spec: PathBuf,
+        /// Output folder.
+        #[arg(long, default_value = "tsfc-out")]
+        out: PathBuf,
+        /// Certified report of the design (default: OUT/<controller>.report.json, if present).
+        #[arg(long)]
+        report: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -228,6 +245,15 @@ fn main() -> ExitCode {
             // ok: clap requires the spec unless --merge is given.
             (None, None) => ExitCode::from(2),
         },
+        Command::Review { spec, out, report } => {
+            match tsfc::review::review(&spec, report.as_deref(), &out) {
+                Ok(w) => {
+                    eprint!("{}", w.summary());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => report_error(&e),
+            }
+        }
     }
 }
 

@@ -32,6 +32,7 @@ mod objectives;
 mod plots;
 mod region;
 mod relaxation_map;
+mod review;
 mod rust_codegen;
 mod sampled_loop;
 mod sector;

@@ -40,6 +40,13 @@ pub struct Consistency {
     pub at: Vec<f64>,
     /// Rules firing there, with their normalized weights h_i > 1 %.
     pub firing: Vec<(String, f64)>,
+    /// The grid: the values of each state component (one value for a
+    /// component that does not vary).
+    pub axes: Vec<Vec<f64>>,
+    /// Per state component k and grid value `axes[k][i]`: the worst relative
+    /// mismatch over the compared states with x_k at that value (the maximum
+    /// over the other components; 0 where no state was compared).
+    pub profile: Vec<Vec<f64>>,
 }
 
 /// Grid bounds: from the smallest to the largest operating-point coordinate,
@@ -123,6 +130,8 @@ pub(super) fn check(
         matrix: "A",
         at: Vec::new(),
         firing: Vec::new(),
+        profile: grid.iter().map(|a| vec![0.0; a.len()]).collect(),
+        axes: grid.clone(),
     };
     let mut worst_h = Vec::new();
     let exprs: Vec<&ModelMatrix> = targets.iter().map(|(_, m, _)| m).collect();
@@ -182,6 +191,9 @@ pub(super) fn check(
                 };
                 suspicious |= exact.iter().any(|v| !v.is_finite());
                 let rel = blend_distance(&h, locals, exact, shape, &mut blend) / scales[k];
+                for (row, &i) in worst.profile.iter_mut().zip(&idx) {
+                    row[i] = row[i].max(rel);
+                }
                 if rel > worst.worst {
                     worst.worst = rel;
                     worst.matrix = name;

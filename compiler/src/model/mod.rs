@@ -13,7 +13,7 @@ pub mod region;
 
 pub use consistency::{Consistency, MISMATCH_TOLERANCE};
 pub use coverage::{check_coverage, Coverage};
-pub use premise::{premise_values, rule_weight, PremiseLayout, PremiseSlot, TermSpec};
+pub use premise::{membership, premise_values, rule_weight, PremiseLayout, PremiseSlot, TermSpec};
 
 use nalgebra::DMatrix;
 use tsf_lang::spec::{Output, Spec};

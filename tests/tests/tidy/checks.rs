@@ -73,7 +73,7 @@ fn tidy_stage_checker_follows_re_exports_of_the_crate_root() {
     );
     let v = stage_violations(&krate(&[("model/a.rs", "use crate::helper;\n")]));
     assert!(
-        v[0].contains("model (rank 1) uses (crate root) (rank 7"),
+        v[0].contains("model (rank 1) uses (crate root) (rank 8"),
         "{v:?}"
     );
 }

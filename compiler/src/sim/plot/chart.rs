@@ -375,13 +375,8 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure) -> Resu
 
 /// The figure as `(SVG bytes, PNG bytes)`; the same figure gives the same bytes.
 pub(crate) fn render(fig: &Figure) -> Result<(Vec<u8>, Vec<u8>), SimError> {
-    font::ensure()?;
+    let s = render_svg(fig)?;
     let size = size(fig);
-    let mut s = String::new();
-    {
-        let root = SVGBackend::with_string(&mut s, size).into_drawing_area();
-        draw(&root, fig)?;
-    }
     let (w, h) = size;
     let mut rgb = vec![0u8; (w * h * 3) as usize];
     {
@@ -390,6 +385,17 @@ pub(crate) fn render(fig: &Figure) -> Result<(Vec<u8>, Vec<u8>), SimError> {
         draw(&root, fig)?;
     }
     Ok((s.into_bytes(), encode_png(&rgb, size)?))
+}
+
+/// The figure as SVG text; the same figure gives the same text.
+pub(crate) fn render_svg(fig: &Figure) -> Result<String, SimError> {
+    font::ensure()?;
+    let mut s = String::new();
+    {
+        let root = SVGBackend::with_string(&mut s, size(fig)).into_drawing_area();
+        draw(&root, fig)?;
+    }
+    Ok(s)
 }
 
 /// An RGB buffer of `size` as PNG bytes.

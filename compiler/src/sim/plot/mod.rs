@@ -283,9 +283,8 @@ fn modes(o: &Outcome) -> Option<Figure> {
     })
 }
 
-/// The plot files of a run: `(file name, bytes)`.
-pub fn plots(o: &Outcome) -> Result<Vec<(String, Vec<u8>)>, SimError> {
-    let mut files = Vec::new();
+/// The figures of a run and their tags (`states`, `inputs`, `events`, `modes`).
+pub(crate) fn figures(o: &Outcome) -> Vec<(Figure, &'static str)> {
     let mut figures = vec![
         (states(o), "states"),
         (inputs(o), "inputs"),
@@ -294,7 +293,13 @@ pub fn plots(o: &Outcome) -> Result<Vec<(String, Vec<u8>)>, SimError> {
     if let Some(f) = modes(o) {
         figures.push((f, "modes"));
     }
-    for (fig, tag) in figures {
+    figures
+}
+
+/// The plot files of a run: `(file name, bytes)`.
+pub fn plots(o: &Outcome) -> Result<Vec<(String, Vec<u8>)>, SimError> {
+    let mut files = Vec::new();
+    for (fig, tag) in figures(o) {
         let (svg, png) = chart::render(&fig)?;
         files.push((format!("{}.{tag}.svg", o.name), svg));
         files.push((format!("{}.{tag}.png", o.name), png));
