@@ -135,6 +135,8 @@ enum Command {
         #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["monte_carlo", "x0", "report"])]
         merge: Option<Vec<PathBuf>>,
     },
+    /// Run the language server on stdin/stdout (for editors; docs/editor.md).
+    Lsp,
 }
 
 fn main() -> ExitCode {
@@ -151,6 +153,7 @@ fn main() -> ExitCode {
             report,
             emit,
         } => compile(&spec, &out, report, emit),
+        Command::Lsp => ExitCode::from(tsfc::lsp::run_stdio()),
         Command::Simulate {
             spec,
             out,

@@ -28,6 +28,13 @@ pub use diag::{Diagnostic, Severity};
 pub use span::Span;
 pub use spec::Spec;
 
+/// Parses a source text without checking it: the items that parsed, and what
+/// the broken ones seem to declare (for editors: outline, names, positions).
+/// Never panics; bounded like [`check_source`].
+pub fn parse_source(source: &str) -> ast::File {
+    parser::parse_file(source).0
+}
+
 /// Parses and checks a source text: the spec (if valid) and the diagnostics,
 /// sorted by position: at most [`limits::MAX_DIAGNOSTICS`], then one line
 /// counting the others.
