@@ -6,6 +6,7 @@
 
 use crossbeam_channel::{bounded, Receiver, Sender};
 use lsp_server::{ErrorCode, Message};
+use serde_json::Value;
 use std::io::{self, BufRead, Read, Write};
 
 /// Largest frame read (bytes): a document of the spec size limit, escaped as
@@ -148,8 +149,18 @@ pub fn parse(body: &[u8]) -> Frame {
         }
     };
     let id = value.get("id").cloned().unwrap_or_default();
+    // A response carries `result` or `error`; without them and without a
+    // `method`, serde would read any object with an id as an empty response.
+    let shaped = value.get("method").is_some_and(Value::is_string)
+        || value.get("result").is_some()
+        || value.get("error").is_some();
     match serde_json::from_value::<Message>(value) {
-        Ok(m) => Frame::Message(m),
+        Ok(m) if shaped => Frame::Message(m),
+        Ok(_) => Frame::Error(
+            id,
+            ErrorCode::InvalidRequest,
+            "not a JSON-RPC request, response or notification: no method, result or error".into(),
+        ),
         Err(e) => Frame::Error(
             id,
             ErrorCode::InvalidRequest,
