@@ -56,6 +56,18 @@ enum Command {
         #[arg(long)]
         explain: bool,
     },
+    /// Rewrite specs in the canonical layout (docs/language.md, "Formatting").
+    ///
+    /// Exit codes: 0 formatted (or, with --check, already formatted); 1 a spec would
+    /// change (--check) or does not parse (it is left untouched); 2 I/O error.
+    Fmt {
+        /// Spec files.
+        #[arg(required = true)]
+        specs: Vec<PathBuf>,
+        /// Write nothing: print the files that would change and their first change.
+        #[arg(long)]
+        check: bool,
+    },
     /// Synthesize certified PDC gains and write the report (exit 3 when infeasible or refused).
     Compile {
         /// Spec file.
@@ -147,6 +159,17 @@ fn main() -> ExitCode {
             format,
             explain,
         } => check(&specs, format, explain),
+        Command::Fmt { specs, check } => {
+            let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
+            let req = tsfc::driver::format::Request {
+                specs,
+                check,
+                color,
+            };
+            let code =
+                tsfc::driver::format::run(&req, &mut std::io::stdout(), &mut std::io::stderr());
+            ExitCode::from(code)
+        }
         Command::Compile {
             spec,
             out,

@@ -13,6 +13,7 @@ mod check;
 pub mod diag;
 mod display;
 pub mod eval;
+pub mod format;
 pub mod limits;
 pub mod modes;
 pub mod num;

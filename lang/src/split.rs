@@ -102,7 +102,7 @@ impl Nesting {
 }
 
 /// The end of the identifier or number starting at `i`, if one starts there.
-fn word_end(bytes: &[u8], i: usize) -> Option<usize> {
+pub(crate) fn word_end(bytes: &[u8], i: usize) -> Option<usize> {
     let is_digit = |j: usize| bytes.get(j).is_some_and(u8::is_ascii_digit);
     let digits = |mut j: usize| {
         while is_digit(j) {

@@ -7,11 +7,13 @@
 //! synthesis and the certificate ([`compile`]) to tables and generated files;
 //! [`prepare`] hands the simulator a certified design ([`reuse`]: from a
 //! certified report, without solving again); [`adaptive`] runs an adaptive
-//! spec's design, code and simulation; [`summary`] is the terminal summary.
+//! spec's design, code and simulation; [`summary`] is the terminal summary;
+//! [`format`] is `tsfc fmt`.
 
 pub mod adaptive;
 pub mod builder;
 pub mod compile;
+pub mod format;
 pub mod frontend;
 pub mod pipeline;
 pub mod prepare;
