@@ -238,11 +238,7 @@ fn diagnostics_are_tsfc_checks() {
         "the duplicate constant's first declaration is related information: {got:#?}"
     );
     // The fix, as a full-text change, clears them.
-    s.notify(
-        "textDocument/didChange",
-        json!({ "textDocument": { "uri": URI, "version": 2 }, "contentChanges": [{ "text": pendulum() }] }),
-    );
-    assert_eq!(s.diagnostics(), Vec::<Value>::new());
+    assert_eq!(change(&mut s, &pendulum(), 2), Vec::<Value>::new());
     assert_eq!(s.stop(), Some(0));
 }
 
@@ -373,7 +369,43 @@ fn hover_definition_references_completion_outline() {
         .filter_map(|x| x["name"].as_str())
         .collect();
     assert_eq!(sets, ["near", "far"]);
+
+    // Formatting: nothing to do on the shipped (formatted) spec; one edit of
+    // the whole document with `tsfc fmt`'s layout on a messy one; no edit when
+    // the document does not parse.
+    let format = |s: &mut Server| {
+        s.request("textDocument/formatting", json!({ "textDocument": { "uri": URI }, "options": { "tabSize": 4, "insertSpaces": true } }))
+    };
+    let clean = format(&mut s);
+    let want = tsf_lang::format::format_source(&text).expect("formats");
+    if want == text {
+        assert_eq!(clean["result"], json!([]), "{clean}");
+    }
+    let messy = text.replacen("const a    = 1 / (m + Mc);", "const a =1/( m+Mc ) ;", 1);
+    change(&mut s, &messy, 2);
+    let edits = format(&mut s)["result"].as_array().cloned().expect("edits");
+    assert_eq!(edits.len(), 1, "{edits:?}");
+    assert_eq!(
+        edits[0]["range"]["start"],
+        json!({ "line": 0, "character": 0 })
+    );
+    assert_eq!(edits[0]["range"]["end"], position(&messy, messy.len()));
+    assert_eq!(
+        edits[0]["newText"].as_str(),
+        tsf_lang::format::format_source(&messy).ok().as_deref()
+    );
+    change(&mut s, &messy.replacen("rule R1:", "rule R1", 1), 3);
+    assert_eq!(format(&mut s)["result"], Value::Null);
     assert_eq!(s.stop(), Some(0));
+}
+
+/// Sends the whole new text and waits for its diagnostics.
+fn change(s: &mut Server, text: &str, version: i32) -> Vec<Value> {
+    s.notify(
+        "textDocument/didChange",
+        json!({ "textDocument": { "uri": URI, "version": version }, "contentChanges": [{ "text": text }] }),
+    );
+    s.diagnostics()
 }
 
 #[test]
@@ -393,6 +425,7 @@ fn hostile_documents_are_answered_within_bounds() {
             "10 MB of garbage (over the size limit)",
             "x = ((]; ".repeat(1_200_000),
         ),
+        ("1.3 million broken items", "1;\n".repeat(1_300_000)),
         (
             "an unterminated block comment",
             format!("tsf 1; /* {}", "a".repeat(1_000_000)),

@@ -50,7 +50,12 @@ fn neovim_session() {
     let line_good = "        g * sinc(theta) / den(theta),";
     assert!(good.contains(line_good), "the pendulum spec changed");
     let fixed_line = "        /* θ */ g * sinc(theta) / den(theta),";
-    let fixed = good.replacen(line_good, fixed_line, 1);
+    // And a line out of the canonical layout, for formatting to fix.
+    let fixed = good.replacen(line_good, fixed_line, 1).replacen(
+        "const a    = 1 / (m + Mc);",
+        "const a =1/( m+Mc ) ;",
+        1,
+    );
     let broken = fixed.replacen("/* θ */ g *", "/* θ */ gg *", 1);
 
     let dir = std::env::temp_dir().join(format!("tsfc-lsp-nvim-{}", std::process::id()));
@@ -171,8 +176,15 @@ fn neovim_session() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Formatting is not wired yet: the request fails and the buffer is unchanged.
+/// Formatting replaced the buffer with `tsfc fmt`'s layout of the fixed spec.
 fn check_formatting(found: &Value, fixed: &str) {
-    assert_eq!(found["format_changed"], false, "{found:#}");
-    assert_eq!(found["formatted"].as_str(), Some(fixed));
+    let want = tsf_lang::format::format_source(fixed).expect("the fixed spec formats");
+    assert_ne!(want, fixed, "the test spec should need formatting");
+    assert_eq!(found["format_error"], Value::Null, "{found:#}");
+    assert_eq!(found["format_changed"], true, "formatting changed nothing");
+    assert_eq!(
+        found["formatted"].as_str(),
+        Some(want.as_str()),
+        "the buffer after formatting is not `tsfc fmt`'s layout"
+    );
 }

@@ -18,6 +18,7 @@ pub mod position;
 pub mod symbols;
 pub mod transport;
 
+use crate::util::output::MAX_SPEC_BYTES;
 use document::Document;
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{
@@ -32,11 +33,12 @@ use lsp_types::{
     CompletionOptions, CompletionResponse, DocumentSymbolResponse, GotoDefinitionResponse, Hover,
     HoverContents, HoverProviderCapability, InitializeResult, Location, MarkupContent, MarkupKind,
     OneOf, PublishDiagnosticsParams, ServerCapabilities, ServerInfo, TextDocumentSyncCapability,
-    TextDocumentSyncKind, Uri,
+    TextDocumentSyncKind, TextEdit, Uri,
 };
 use serde_json::Value;
 use std::collections::HashMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use tsf_lang::Span;
 
 /// Runs the server on stdin/stdout until `exit`; the process's exit code (0
 /// after `shutdown`, 1 otherwise, as LSP asks).
@@ -290,14 +292,22 @@ fn capabilities() -> InitializeResult {
     }
 }
 
-/// `textDocument/formatting`: one edit replacing the whole document, none
-/// when the document does not parse or is already formatted.
+/// `textDocument/formatting`: one edit replacing the whole document with
+/// `tsfc fmt`'s layout; no edit when the document does not parse (or is past
+/// the size limit), an empty list when it is already formatted.
 fn formatting(doc: &Document) -> Answer {
-    let _ = doc;
-    Err((
-        ErrorCode::RequestFailed,
-        "formatting is not available yet".into(),
-    ))
+    if doc.text.len() as u64 > MAX_SPEC_BYTES {
+        return Ok(Value::Null);
+    }
+    let edits = match tsf_lang::format::format_source(&doc.text) {
+        Err(_) => return Ok(Value::Null),
+        Ok(formatted) if formatted == doc.text => Vec::new(),
+        Ok(formatted) => vec![TextEdit {
+            range: doc.lines.range(&doc.text, Span::new(0, doc.text.len())),
+            new_text: formatted,
+        }],
+    };
+    serde_json::to_value(edits).map_err(internal)
 }
 
 fn publish(uri: Uri, diagnostics: Vec<lsp_types::Diagnostic>) -> Notification {

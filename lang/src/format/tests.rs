@@ -2,7 +2,11 @@ use super::*;
 
 fn fmt(s: &str) -> String {
     let once = format_source(s).expect("formats");
-    assert_eq!(format_source(&once).as_deref(), Ok(once.as_str()), "idempotent");
+    assert_eq!(
+        format_source(&once).as_deref(),
+        Ok(once.as_str()),
+        "idempotent"
+    );
     assert_eq!(lex::token_texts(s), lex::token_texts(&once), "same tokens");
     once
 }
@@ -88,7 +92,10 @@ fn too_deep_nesting_is_an_error_not_a_crash() {
 
 #[test]
 fn crlf_and_bom_sources() {
-    assert_eq!(fmt("tsf 1;\r\n\r\n\r\ncontroller c;\r\n"), "tsf 1;\n\ncontroller c;\n");
+    assert_eq!(
+        fmt("tsf 1;\r\n\r\n\r\ncontroller c;\r\n"),
+        "tsf 1;\n\ncontroller c;\n"
+    );
     assert_eq!(fmt("\u{feff}tsf  1;"), "\u{feff}tsf 1;\n");
     assert_eq!(fmt(""), "");
     assert_eq!(fmt("\n\n// only\n\n"), "// only\n");
