@@ -427,6 +427,10 @@ fn hostile_documents_are_answered_within_bounds() {
         ),
         ("1.3 million broken items", "1;\n".repeat(1_300_000)),
         (
+            "100,000 functions with the same parameter names",
+            "fn f(a, b) = a + b;\n".repeat(100_000),
+        ),
+        (
             "an unterminated block comment",
             format!("tsf 1; /* {}", "a".repeat(1_000_000)),
         ),

@@ -56,9 +56,8 @@ impl Document {
             bytes: text.as_bytes().to_vec(),
             text,
         };
-        let checked = frontend::check(&source);
+        let (checked, file) = frontend::check_parsed(&source);
         let text = source.text;
-        let file = tsf_lang::parse_source(&text);
         let index = Index::build(&text, &file);
         let model = checked.model.map(Arc::new);
         Document {

@@ -4,11 +4,14 @@
 use super::document::Document;
 use super::symbols::Kind;
 use lsp_types::{DocumentSymbol, SymbolKind};
+use std::collections::HashMap;
 
 /// The outline of `doc`.
 #[allow(deprecated)] // `DocumentSymbol::deprecated` must be set to build the struct
 pub fn outline(doc: &Document) -> Vec<DocumentSymbol> {
     let mut out: Vec<DocumentSymbol> = Vec::new();
+    // Where each premise is in `out` (the last of that name).
+    let mut premises: HashMap<&str, usize> = HashMap::new();
     for d in &doc.index.decls {
         let symbol = DocumentSymbol {
             name: d.name.clone(),
@@ -23,14 +26,15 @@ pub fn outline(doc: &Document) -> Vec<DocumentSymbol> {
         match d.kind {
             Kind::Param => {}
             Kind::Set => {
-                let parent = out
-                    .iter_mut()
-                    .rev()
-                    .find(|p| p.kind == SymbolKind::NAMESPACE && d.premise.contains(&p.name));
+                let parent = d.premise.iter().find_map(|p| premises.get(p.as_str()));
                 match parent {
-                    Some(p) => p.children.get_or_insert_with(Vec::new).push(symbol),
+                    Some(&k) => out[k].children.get_or_insert_with(Vec::new).push(symbol),
                     None => out.push(symbol),
                 }
+            }
+            Kind::Premise => {
+                premises.insert(&d.name, out.len());
+                out.push(symbol);
             }
             _ => out.push(symbol),
         }

@@ -119,6 +119,12 @@ impl Index {
             at.insert(d.span.start, k);
         }
         let clause_sets = clause_sets(file, &decls);
+        let mut params: HashMap<&str, Vec<usize>> = HashMap::new();
+        for (k, d) in decls.iter().enumerate() {
+            if d.kind == Kind::Param {
+                params.entry(d.name.as_str()).or_default().push(k);
+            }
+        }
         let tokens = identifiers(text)
             .into_iter()
             .map(|span| {
@@ -127,14 +133,7 @@ impl Index {
                     .get(&span.start)
                     .or_else(|| clause_sets.get(&span.start))
                     .copied()
-                    .or_else(|| {
-                        decls.iter().position(|d| {
-                            d.kind == Kind::Param
-                                && d.name == name
-                                && d.scope
-                                    .is_some_and(|s| s.start <= span.start && span.end <= s.end)
-                        })
-                    })
+                    .or_else(|| param(&decls, params.get(name)?, span))
                     .or_else(|| global.get(name).copied());
                 Token { span, decl }
             })
@@ -267,21 +266,40 @@ impl Decls {
     }
 }
 
+/// The parameter among `candidates` (in source order; their items do not
+/// overlap) whose item contains `span`: the first of the last item starting
+/// before it, found by bisection.
+fn param(decls: &[Decl], candidates: &[usize], span: Span) -> Option<usize> {
+    let scope = |k: usize| decls[k].scope.unwrap_or_default();
+    let n = candidates.partition_point(|&k| scope(k).start <= span.start);
+    let last = scope(*candidates.get(n.checked_sub(1)?)?);
+    if span.end > last.end {
+        return None;
+    }
+    let first = candidates[..n].partition_point(|&k| scope(k).start < last.start);
+    Some(candidates[first])
+}
+
 /// The set named by each rule clause `z is set`, by the start of the set's name.
 fn clause_sets(file: &File, decls: &[Decl]) -> HashMap<usize, usize> {
+    let mut sets: HashMap<(&str, &str), usize> = HashMap::new();
+    for (k, d) in decls.iter().enumerate() {
+        if d.kind == Kind::Set {
+            for p in &d.premise {
+                sets.entry((p.as_str(), d.name.as_str())).or_insert(k);
+            }
+        }
+    }
     let mut out = HashMap::new();
     for it in &file.items {
         let ItemKind::Rule { clauses, .. } = &it.kind else {
             continue;
         };
         for c in clauses {
-            let SetRef::Named(set) = &c.set else {
-                continue;
-            };
-            if let Some(k) = decls.iter().position(|d| {
-                d.kind == Kind::Set && d.name == set.node && d.premise.contains(&c.premise.node)
-            }) {
-                out.insert(set.span.start, k);
+            if let SetRef::Named(set) = &c.set {
+                if let Some(&k) = sets.get(&(c.premise.node.as_str(), set.node.as_str())) {
+                    out.insert(set.span.start, k);
+                }
             }
         }
     }
@@ -339,6 +357,34 @@ pub fn identifiers(text: &str) -> Vec<Span> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn resolves_parameters_and_sets_in_their_scope() {
+        let text = "const a = 1;\nfn f(a, b) = a + b;\nfn g(a) = a * 2;\nconst c = a;\n\
+                    premise p = x[0] { lo = tri(0, 0, 1); }\npremise q = x[1] { lo = tri(0, 0, 1); }\n\
+                    rule R: q is lo and p is lo => at(x = [0, 0]);\n";
+        let (file, _, _) = tsf_lang::check_source_parsed(text);
+        let idx = Index::build(text, &file);
+        let decl_of = |needle: &str, k: usize| {
+            let at = text.match_indices(needle).nth(k).expect(needle).0;
+            let d = &idx.decls[idx.token_at(at).and_then(|t| t.decl).expect("resolved")];
+            (d.kind, d.span.start)
+        };
+        let pos = |needle: &str| text.find(needle).unwrap();
+        // `a` in f's body is f's parameter, in g's body g's, in `const c` the constant.
+        assert_eq!(decl_of("a + b", 0), (Kind::Param, pos("a, b")));
+        assert_eq!(decl_of("a * 2", 0), (Kind::Param, pos("a) = a *")));
+        assert_eq!(decl_of("a;", 0), (Kind::Const, pos("a = 1")));
+        // `q is lo` is q's set, `p is lo` p's.
+        let q_lo = text.match_indices("lo = tri").nth(1).unwrap().0;
+        assert_eq!(decl_of("lo and", 0), (Kind::Set, q_lo));
+        assert_eq!(decl_of("lo =>", 0), (Kind::Set, pos("lo = tri")));
+        assert_eq!(
+            idx.references(idx.decls.iter().position(|d| d.span.start == q_lo).unwrap())
+                .count(),
+            2
+        );
+    }
 
     #[test]
     fn lexes_identifiers_not_comments_or_numbers() {
