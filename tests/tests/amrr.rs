@@ -325,8 +325,12 @@ fn the_t2_steady_state_is_small() {
 }
 
 /// The spec's own law, the paper's mixed trigger on sigma.
-const SPEC_TRIGGER: &str =
-    "trigger mixed { on = sigma; beta = 0.461; rho = 1e-6; monitor = continuous; }";
+const SPEC_TRIGGER: &str = "trigger mixed {
+    on = sigma;
+    beta = 0.461;  // paper: beta = 0.5
+    rho = 1e-6;
+    monitor = continuous;
+}";
 
 /// The spec with its trigger item replaced by `law`, compiled.
 fn analyze_with(law: &str) -> tsfc::driver::compile::Compiled {

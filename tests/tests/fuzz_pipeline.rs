@@ -15,7 +15,7 @@ use tsfc::synth::Settings;
 
 /// A spec in the shape of the mass-spring-damper, from generated parts.
 #[derive(Debug, Clone)]
-struct Case {
+pub(crate) struct Case {
     stiffness: f64,
     level: f64,
     damping_expr: String,
@@ -26,7 +26,7 @@ struct Case {
 }
 
 impl Case {
-    fn text(&self) -> String {
+    pub(crate) fn text(&self) -> String {
         format!(
             "tsf 1;\ncontroller fz;\nstate x1, x2;\ninput u saturate {level:e};\ndisturbance w bound 0.01;\n\
              output z = [x1];\nconst c = {damping};\n\
@@ -102,7 +102,7 @@ fn trigger() -> impl Strategy<Value = String> {
     ]
 }
 
-fn case() -> impl Strategy<Value = Case> {
+pub(crate) fn case() -> impl Strategy<Value = Case> {
     (
         number(),
         number(),

@@ -10,6 +10,7 @@ mod compat;
 mod diagnostics;
 mod event_trigger;
 mod exprel;
+mod fmt;
 mod fuzz;
 mod fuzz_features;
 mod fuzz_pipeline;

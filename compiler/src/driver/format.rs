@@ -88,7 +88,7 @@ fn one(
         write!(out, "{}", hunk(&source.text, &formatted))?;
         return Ok(CHANGED_OR_SPEC);
     }
-    crate::util::output::write_atomic(path, formatted.as_bytes()).map_err(|e| {
+    crate::util::output::replace_file(path, formatted.as_bytes()).map_err(|e| {
         std::io::Error::new(e.kind(), format!("cannot write `{}`: {e}", source.name))
     })?;
     writeln!(out, "formatted {}", source.name)?;

@@ -184,6 +184,27 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     write_set(&[(path.to_path_buf(), bytes.to_vec())])
 }
 
+/// Rewrites the user's own file at `path` (a spec `tsfc fmt` formats): the
+/// new content goes to a temporary file beside it, which takes the file's
+/// permissions and is renamed over it. No lock file is left in the user's
+/// folder (one file, not a set); an unchanged content is not rewritten.
+pub fn replace_file(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    check_target(path)?;
+    if unchanged(path, bytes) {
+        return Ok(());
+    }
+    let permissions = fs::metadata(path).ok().map(|m| m.permissions());
+    let tmp = write_temp(path, bytes)?;
+    let renamed = permissions
+        .map_or(Ok(()), |p| fs::set_permissions(&tmp, p))
+        .and_then(|()| fs::rename(&tmp, path));
+    if renamed.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    remove_stale_temps(folder_of(path), &file_name(path));
+    renamed
+}
+
 /// The largest spec file read, in bytes.
 pub const MAX_SPEC_BYTES: u64 = 4 << 20;
 
