@@ -176,7 +176,7 @@ fn diagnostics_are_tsfc_checks() {
             "gg * sinc(theta) / den(theta)",
             1,
         )
-        .replacen("const l    = 0.5;", "const l    = 0.5;\nconst m = 3;", 1);
+        .replacen("const l = 0.5;", "const l = 0.5;\nconst m = 3;", 1);
     let mut s = Server::start();
     let init = s.initialize();
     let caps = &init["result"]["capabilities"];
@@ -259,7 +259,7 @@ fn hover_definition_references_completion_outline() {
         g.contains("**constant** `g`") && g.contains("= 9.8 (scalar)"),
         "{g}"
     );
-    let set = hover_text(&s.at("textDocument/hover", &text, "far  = trap", 0));
+    let set = hover_text(&s.at("textDocument/hover", &text, "far = trap", 0));
     assert!(
         set.contains("far = trap(-0.25, -0.25, 0.6366197723675814, 1)"),
         "{set}"
@@ -381,7 +381,7 @@ fn hover_definition_references_completion_outline() {
     if want == text {
         assert_eq!(clean["result"], json!([]), "{clean}");
     }
-    let messy = text.replacen("const a    = 1 / (m + Mc);", "const a =1/( m+Mc ) ;", 1);
+    let messy = text.replacen("const a = 1 / (m + Mc);", "const a =1/( m+Mc ) ;", 1);
     change(&mut s, &messy, 2);
     let edits = format(&mut s)["result"].as_array().cloned().expect("edits");
     assert_eq!(edits.len(), 1, "{edits:?}");

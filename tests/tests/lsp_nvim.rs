@@ -52,7 +52,7 @@ fn neovim_session() {
     let fixed_line = "        /* θ */ g * sinc(theta) / den(theta),";
     // And a line out of the canonical layout, for formatting to fix.
     let fixed = good.replacen(line_good, fixed_line, 1).replacen(
-        "const a    = 1 / (m + Mc);",
+        "const a = 1 / (m + Mc);",
         "const a =1/( m+Mc ) ;",
         1,
     );
@@ -146,7 +146,7 @@ fn neovim_session() {
     // While the spec is broken (and never checked clean), the hover shows the
     // constant's definition.
     let broken_hover = found["hover_const_broken"].as_str().unwrap_or_default();
-    assert!(broken_hover.contains("const g    = 9.8;"), "{broken_hover}");
+    assert!(broken_hover.contains("const g = 9.8;"), "{broken_hover}");
 
     // The fix (a buffer edit, sent as didChange) clears the diagnostics.
     assert_eq!(
