@@ -21,6 +21,7 @@
 
 pub mod codegen;
 pub mod driver;
+pub mod lsp;
 pub mod report;
 pub mod review;
 pub mod sim;

@@ -164,6 +164,8 @@ enum Command {
         #[arg(long)]
         report: Option<PathBuf>,
     },
+    /// Run the language server on stdin/stdout (for editors; docs/editor.md).
+    Lsp,
 }
 
 fn main() -> ExitCode {
@@ -191,6 +193,7 @@ fn main() -> ExitCode {
             report,
             emit,
         } => compile(&spec, &out, report, emit),
+        Command::Lsp => ExitCode::from(tsfc::lsp::run_stdio()),
         Command::Simulate {
             spec,
             out,

@@ -33,6 +33,14 @@ pub use spec::Spec;
 /// sorted by position: at most [`limits::MAX_DIAGNOSTICS`], then one line
 /// counting the others.
 pub fn check_source(source: &str) -> (Option<Spec>, Vec<Diagnostic>) {
+    let (_, spec, diags) = check_source_parsed(source);
+    (spec, diags)
+}
+
+/// [`check_source`], also returning the syntax tree: the items that parsed,
+/// and what the broken ones seem to declare (for editors: the outline, the
+/// names and their positions).
+pub fn check_source_parsed(source: &str) -> (ast::File, Option<Spec>, Vec<Diagnostic>) {
     let (file, mut diags, omitted) = parser::parse_file(source);
     let (spec, more) = check::check(&file);
     diags.extend(more);
@@ -41,5 +49,5 @@ pub fn check_source(source: &str) -> (Option<Spec>, Vec<Diagnostic>) {
     diags.dedup_by(|a, b| a.span == b.span && a.message == b.message);
     let has_error = omitted > 0 || diags.iter().any(Diagnostic::is_error);
     diag::cap(&mut diags, omitted);
-    (if has_error { None } else { spec }, diags)
+    (file, if has_error { None } else { spec }, diags)
 }

@@ -19,6 +19,8 @@ mod fuzzy_lyapunov;
 mod given_gains;
 mod hardening;
 mod jittered;
+mod lsp;
+mod lsp_nvim;
 mod markov;
 mod markov_performance;
 mod markov_runtime;

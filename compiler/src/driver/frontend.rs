@@ -3,6 +3,7 @@
 use crate::model::{self, TsModel};
 use std::path::Path;
 use std::time::{Duration, Instant};
+use tsf_lang::ast::File;
 use tsf_lang::{Diagnostic, Span};
 
 /// A source file as read from disk.
@@ -58,6 +59,12 @@ impl Checked {
 
 /// Parses, checks and builds the model of a source text. Never panics.
 pub fn check(source: &Source) -> Checked {
+    check_parsed(source).0
+}
+
+/// [`check`], also returning the syntax tree the language stage parsed (for
+/// the language server's names and outline).
+pub fn check_parsed(source: &Source) -> (Checked, File) {
     let t0 = Instant::now();
     let mut diagnostics = Vec::new();
     if let Err(e) = std::str::from_utf8(&source.bytes) {
@@ -68,7 +75,7 @@ pub fn check(source: &Source) -> Checked {
                 .with_help("save the spec as UTF-8 text"),
         );
     }
-    let (spec, diags) = tsf_lang::check_source(&source.text);
+    let (file, spec, diags) = tsf_lang::check_source_parsed(&source.text);
     diagnostics.extend(diags);
     let parse_time = t0.elapsed();
     let t1 = Instant::now();
@@ -83,10 +90,11 @@ pub fn check(source: &Source) -> Checked {
         .into_iter()
         .map(|d| d.clamped(&source.text))
         .collect();
-    Checked {
+    let checked = Checked {
         model,
         diagnostics,
         parse_time,
         model_time,
-    }
+    };
+    (checked, file)
 }

@@ -10,7 +10,7 @@ use std::fmt::Write;
 use tsf_lang::spec::ClauseSet;
 
 /// A matrix on one line per row, `[a, b; c, d]` style, indented.
-fn matrix(name: &str, m: &DMatrix<f64>) -> String {
+pub fn matrix(name: &str, m: &DMatrix<f64>) -> String {
     let rows: Vec<String> = m
         .row_iter()
         .map(|r| r.iter().map(|v| fmt_num(*v)).collect::<Vec<_>>().join(", "))
@@ -63,32 +63,8 @@ pub fn explain(model: &TsModel) -> String {
         );
     }
     let _ = writeln!(out, "rules:");
-    for (rule, local) in spec.rules.iter().zip(&model.rules) {
-        let clauses: Vec<String> = rule
-            .clauses
-            .iter()
-            .map(|c| {
-                let p = &spec.premises[c.premise];
-                match &c.set {
-                    ClauseSet::Named(k) => format!(
-                        "{} is {}",
-                        p.name,
-                        p.sets.get(*k).map_or("?", |s| s.name.as_str())
-                    ),
-                    ClauseSet::About(v) => format!(
-                        "{} is about [{}]",
-                        p.name,
-                        v.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", ")
-                    ),
-                }
-            })
-            .collect();
-        let _ = writeln!(out, "  {}: {}", rule.name, clauses.join(" and "));
-        out.push_str(&matrix("A", &local.a));
-        out.push_str(&matrix("B", &local.b));
-        if model.q > 0 {
-            out.push_str(&matrix("D", &local.d));
-        }
+    for k in 0..model.rules.len() {
+        out.push_str(&rule(model, k));
     }
     if let Some(c) = &model.consistency {
         let _ =
@@ -97,6 +73,41 @@ pub fn explain(model: &TsModel) -> String {
             "model consistency: worst relative mismatch {:.2e} in {} over {} states (tolerance {})",
             c.worst, c.matrix, c.points, super::MISMATCH_TOLERANCE
         );
+    }
+    out
+}
+
+/// Rule `k` of `model` as `--explain` prints it: its premise, then its local
+/// model (A_i, B_i and, with disturbances, D_i) as the checker built it.
+pub fn rule(model: &TsModel, k: usize) -> String {
+    let spec = &model.spec;
+    let (Some(rule), Some(local)) = (spec.rules.get(k), model.rules.get(k)) else {
+        return String::new();
+    };
+    let clauses: Vec<String> = rule
+        .clauses
+        .iter()
+        .map(|c| {
+            let p = &spec.premises[c.premise];
+            match &c.set {
+                ClauseSet::Named(k) => format!(
+                    "{} is {}",
+                    p.name,
+                    p.sets.get(*k).map_or("?", |s| s.name.as_str())
+                ),
+                ClauseSet::About(v) => format!(
+                    "{} is about [{}]",
+                    p.name,
+                    v.iter().map(|x| fmt_num(*x)).collect::<Vec<_>>().join(", ")
+                ),
+            }
+        })
+        .collect();
+    let mut out = format!("  {}: {}\n", rule.name, clauses.join(" and "));
+    out.push_str(&matrix("A", &local.a));
+    out.push_str(&matrix("B", &local.b));
+    if model.q > 0 {
+        out.push_str(&matrix("D", &local.d));
     }
     out
 }

@@ -177,7 +177,8 @@ impl Emitter<'_> {
         if closes_block {
             self.depth -= 1;
         }
-        let starts_line = self.cur.code.trim().is_empty() && self.cur.comment.is_none();
+        // Nothing emitted on this line yet (`prev` is reset by every line end).
+        let starts_line = self.prev.is_none() && self.cur.comment.is_none();
         if self.need_break || closes_block || (p.newlines > 0 && !starts_line) {
             let closer = matches!(t, ")" | "]");
             let blank = p.newlines >= 2 && !closes_block;

@@ -2,9 +2,9 @@
 //!
 //! A token-level formatter: the source is lexed into tokens and comments
 //! ([`lex`]), the parser tells which signs are unary and which brackets open
-//! an operand ([`roles`]), and the pieces are re-emitted with whitespace
-//! decided by their kinds and the open brackets ([`layout`]); trailing
-//! comments of neighbouring lines are aligned ([`render`]). Only whitespace
+//! an operand (`roles`), and the pieces are re-emitted with whitespace
+//! decided by their kinds and the open brackets (`layout`); trailing
+//! comments of neighbouring lines are aligned (`render`). Only whitespace
 //! changes, so the tokens (and the checked spec) are the same; the author's
 //! line breaks inside a statement are kept, so formatting is idempotent.
 //! A source with a syntax error is refused, never rewritten.

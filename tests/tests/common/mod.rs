@@ -142,3 +142,42 @@ pub fn abscissa(m: &nalgebra::DMatrix<f64>) -> f64 {
         .and_then(|re| re.last().copied())
         .expect("the Schur form converges")
 }
+
+/// The `tsfc` binary of this build profile, built first by cargo (once per
+/// test run; a no-op when it is fresh): the test binary is in
+/// `<target>/<profile>/deps/`, the `tsfc` binary in `<target>/<profile>/`.
+pub fn tsfc_binary() -> PathBuf {
+    static BIN: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    BIN.get_or_init(|| {
+        let exe = std::env::current_exe().expect("the test binary's path");
+        let dir = exe
+            .parent()
+            .and_then(Path::parent)
+            .expect("the test binary is in <target>/<profile>/deps");
+        let profile = dir
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("release");
+        let profile = if profile == "debug" { "dev" } else { profile };
+        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+        let status = std::process::Command::new(cargo)
+            .args([
+                "build",
+                "--quiet",
+                "-p",
+                "tsfc",
+                "--bin",
+                "tsfc",
+                "--profile",
+                profile,
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .status()
+            .expect("run cargo build for the tsfc binary");
+        assert!(status.success(), "cargo build -p tsfc --bin tsfc failed");
+        let bin = dir.join(format!("tsfc{}", std::env::consts::EXE_SUFFIX));
+        assert!(bin.is_file(), "no tsfc binary at {}", bin.display());
+        bin
+    })
+    .clone()
+}
