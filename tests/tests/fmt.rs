@@ -32,26 +32,9 @@ fn read(p: &Path) -> String {
     std::fs::read_to_string(p).expect("read")
 }
 
-/// The `tsfc` binary beside this test binary (built when missing).
+/// The `tsfc` binary of this build (built fresh by the shared helper).
 fn tsfc() -> Command {
-    let exe = std::env::current_exe().expect("test binary");
-    let dir = exe.parent().and_then(Path::parent).expect("target folder");
-    let bin = dir.join(format!("tsfc{}", std::env::consts::EXE_SUFFIX));
-    if !bin.exists() {
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let profile = if dir.ends_with("release") {
-            "--release"
-        } else {
-            "--quiet"
-        };
-        let built = Command::new(cargo)
-            .args(["build", "--quiet", profile, "-p", "tsfc", "--bin", "tsfc"])
-            .current_dir(root())
-            .status()
-            .expect("cargo build");
-        assert!(built.success(), "cannot build the tsfc binary");
-    }
-    Command::new(bin)
+    Command::new(crate::common::tsfc_binary())
 }
 
 fn run(args: &[&str], files: &[&Path]) -> Output {
