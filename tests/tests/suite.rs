@@ -32,6 +32,7 @@ mod region;
 mod relaxation_map;
 mod rust_codegen;
 mod sampled_loop;
+mod schema;
 mod sector;
 mod shipped_specs;
 mod sim_evaluators;
