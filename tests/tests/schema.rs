@@ -53,7 +53,12 @@ fn the_published_schemas_are_what_the_types_generate() {
             k.file_name(),
             k.name
         );
-        assert!(k.id().ends_with(&format!("/schema/v{}/{}.json", schema::VERSION, k.name)));
+        let id = k.id();
+        assert!(
+            id.starts_with("https://")
+                && id.ends_with(&format!("/schema/v{}/{}.json", schema::VERSION, k.name)),
+            "{id}"
+        );
     }
     // No stale schema of a kind that is gone.
     let listed: BTreeSet<String> = std::fs::read_dir(&dir)
@@ -193,7 +198,9 @@ fn every_kind_tsfc_writes_validates() {
     }
     let doc = tsfc::driver::check_json::CheckReport::of(&checked);
     let json: Value = serde_json::from_str(&doc.to_json().expect("json")).expect("parses");
-    assert!(json["files"][2]["diagnostics"].as_array().is_some_and(|d| d.len() >= 2));
+    assert!(json["files"][2]["diagnostics"]
+        .as_array()
+        .is_some_and(|d| d.len() >= 2));
     assert_valid("check", &json, "check --format json");
     seen.insert("check");
     // adaptive-report and adaptive-metrics.

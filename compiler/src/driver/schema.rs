@@ -15,14 +15,11 @@ use schemars::JsonSchema;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
-/// Version of the schemas: the `vN` of their `$id`. It changes when a
-/// document changes incompatibly (a field removed, renamed or retyped).
-pub const VERSION: u32 = 1;
+pub use crate::report::{schema_id, SCHEMA_VERSION as VERSION};
 
 /// Where the schemas are published: the repository URL, `/schema/vN/`.
 pub fn base_url() -> String {
-    let repo = env!("CARGO_PKG_REPOSITORY").trim_end_matches('/');
-    format!("{repo}/schema/v{VERSION}/")
+    schema_id("").trim_end_matches(".json").to_string()
 }
 
 /// One kind of JSON document tsfc writes.
@@ -142,7 +139,7 @@ pub fn kind_of_file(file_name: &str) -> Option<&'static Kind> {
 impl Kind {
     /// The schema's `$id`.
     pub fn id(&self) -> String {
-        format!("{}{}.json", base_url(), self.name)
+        schema_id(self.name)
     }
 
     /// The schema file's name.
@@ -192,6 +189,9 @@ fn failed_report() -> Value {
             "type": "string",
             "enum": ["infeasible", "refused"]
         });
+    }
+    if let Some(named) = s.pointer_mut("/properties/$schema") {
+        named["const"] = json!(schema_id("failed-report"));
     }
     s
 }
@@ -246,7 +246,10 @@ pub fn names() -> String {
 pub fn run(kind_name: Option<&str>, out: Option<&Path>) -> Result<String, Error> {
     let chosen = match kind_name {
         Some(n) => Some(kind(n).ok_or_else(|| {
-            Error::usage(format!("unknown schema kind `{n}`; the kinds are: {}", names()))
+            Error::usage(format!(
+                "unknown schema kind `{n}`; the kinds are: {}",
+                names()
+            ))
         })?),
         None => None,
     };

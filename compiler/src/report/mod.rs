@@ -6,8 +6,8 @@ pub mod objectives;
 use crate::certify::Certificate;
 use crate::model::TsModel;
 use crate::synth::{Design, SolverLog, SynthError};
-use serde::Serialize;
 pub use objectives::{Objectives, Problem, ProblemSize};
+use serde::Serialize;
 
 pub use crate::util::matrix::rows;
 
@@ -244,9 +244,26 @@ pub struct Diagnosis {
     pub achievable: Vec<String>,
 }
 
-/// The whole report.
+/// Version of the JSON Schemas of tsfc's documents (the `vN` of their
+/// `$id`, `tsfc schema`): it changes when a document changes incompatibly
+/// (a field removed, renamed or retyped).
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The `$id` of the schema of documents of kind `kind` (`report`, ...): the
+/// repository URL, `/schema/vN/<kind>.json`.
+pub fn schema_id(kind: &str) -> String {
+    // The workspace's `repository`.
+    let repo = env!("CARGO_PKG_REPOSITORY").trim_end_matches('/');
+    format!("{repo}/schema/v{SCHEMA_VERSION}/{kind}.json")
+}
+
+/// The JSON report of `tsfc compile`: the design, its certificate and how it was found.
 #[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct Report {
+    /// The report's JSON Schema (`report`, or `failed-report` when not
+    /// certified; docs/schema/).
+    #[serde(rename = "$schema")]
+    pub schema: String,
     /// tsfc version.
     pub tsfc_version: &'static str,
     /// The spec.
@@ -388,6 +405,7 @@ pub fn report(
     let problem = Problem::of(log);
     let (modes, transition_rates) = markov::sections(model, design, cert.as_ref(), certified);
     Report {
+        schema: schema_id(if certified { "report" } else { "failed-report" }),
         modes,
         transition_rates,
         tsfc_version: env!("CARGO_PKG_VERSION"),
@@ -410,9 +428,7 @@ pub fn report(
             .and_then(|d| d.fuzzy.as_ref())
             .map(FuzzyLyapunovReport::of),
         lmi_margin_eps: design.map(|d| d.eps),
-        objectives: design
-            .map(|d| Objectives::of(model, d))
-            .unwrap_or_default(),
+        objectives: design.map(|d| Objectives::of(model, d)).unwrap_or_default(),
         gains: if certified {
             design
                 .map(|d| Gain::of_rules(model, &d.gains))

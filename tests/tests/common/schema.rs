@@ -33,8 +33,8 @@ fn validator() -> &'static Validator {
                     path.display()
                 )
             });
-            let doc: Value = serde_json::from_str(&text)
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let doc: Value =
+                serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             let id = k.id();
             compiler
                 .add_resource(&id, doc)
@@ -75,7 +75,16 @@ pub fn report_json(report: &tsfc::report::Report) -> Value {
     } else {
         "failed-report"
     };
-    assert_valid(kind, &json, &format!("the report of `{}`", report.controller));
+    assert_valid(
+        kind,
+        &json,
+        &format!("the report of `{}`", report.controller),
+    );
+    assert_eq!(
+        json["$schema"].as_str(),
+        Some(tsfc::driver::schema::schema_id(kind).as_str()),
+        "the report names its schema"
+    );
     json
 }
 
@@ -90,7 +99,9 @@ pub fn validate_dir(dir: &Path) -> usize {
             continue;
         }
         let kind = kind_of_file(&name).unwrap_or_else(|| {
-            panic!("{name}: no schema names this file (add a kind to compiler/src/driver/schema.rs)")
+            panic!(
+                "{name}: no schema names this file (add a kind to compiler/src/driver/schema.rs)"
+            )
         });
         let text = std::fs::read_to_string(e.path()).expect("read the JSON");
         let doc: Value =

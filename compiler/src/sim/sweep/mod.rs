@@ -284,7 +284,10 @@ pub fn write_sweep(
         (format!("{name}.sweep.md"), table.markdown().into_bytes()),
         (format!("{name}.sweep.csv"), table.csv().into_bytes()),
         (format!("{name}.sweep.json"), json(table)?),
-        (format!("{name}.sweep.metrics.json"), json(&sorted(metrics)?)?),
+        (
+            format!("{name}.sweep.metrics.json"),
+            json(&sorted(metrics)?)?,
+        ),
     ];
     files.into_iter().map(|(f, b)| write(dir, f, &b)).collect()
 }
