@@ -48,7 +48,7 @@ fn the_published_schemas_are_what_the_types_generate() {
             published == k.text(),
             "docs/schema/{} differs from what `tsfc schema {}` generates: a field was added to, \
              removed from or changed in a type tsfc serializes. Regenerate with `{REGENERATE}`, \
-             review the diff, and raise schema::VERSION (compiler/src/driver/schema.rs) when a \
+             review the diff, and raise SCHEMA_VERSION (compiler/src/report/mod.rs) when a \
              field was removed, renamed or retyped.",
             k.file_name(),
             k.name
