@@ -166,6 +166,17 @@ enum Command {
     },
     /// Run the language server on stdin/stdout (for editors; docs/editor.md).
     Lsp,
+    /// Print the JSON Schema of one kind of JSON tsfc writes, or write them all to --out.
+    ///
+    /// Kinds: report, failed-report, metrics, sweep, sweep-metrics, mc-summary, mc-runs,
+    /// mc-shard, check, adaptive-report, adaptive-metrics (docs/schema/README.md).
+    Schema {
+        /// The kind (all kinds with --out).
+        kind: Option<String>,
+        /// Write every schema (or KIND's) into this folder as KIND.json, atomically.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -255,6 +266,18 @@ fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e) => report_error(&e),
+            }
+        }
+        Command::Schema { kind, out } => {
+            match tsfc::driver::schema::run(kind.as_deref(), out.as_deref()) {
+                Ok(text) if std::io::stdout().lock().write_all(text.as_bytes()).is_ok() => {
+                    ExitCode::SUCCESS
+                }
+                Ok(_) => ExitCode::from(exit::IO),
+                Err(e) => {
+                    eprintln!("error: {}", e.message);
+                    ExitCode::from(e.exit_code())
+                }
             }
         }
     }
@@ -666,30 +689,13 @@ fn check(specs: &[PathBuf], format: Format, explain: bool) -> ExitCode {
                     }
                 }
             }
-            Format::Json => {
-                let diags: Vec<_> = checked
-                    .diagnostics
-                    .iter()
-                    .map(|d| diag::to_json(&source.name, &source.text, d))
-                    .collect();
-                json_files.push(serde_json::json!({
-                    "file": source.name,
-                    "ok": !checked.has_errors(),
-                    "diagnostics": diags,
-                }));
-            }
+            Format::Json => json_files.push((source, checked)),
         }
     }
     if matches!(format, Format::Json) {
-        let doc = serde_json::json!({ "files": json_files });
+        let doc = tsfc::driver::check_json::CheckReport::of(&json_files);
         let mut out = std::io::stdout().lock();
-        if writeln!(
-            out,
-            "{}",
-            serde_json::to_string_pretty(&doc).unwrap_or_default()
-        )
-        .is_err()
-        {
+        if writeln!(out, "{}", doc.to_json().unwrap_or_default()).is_err() {
             return ExitCode::from(exit::IO);
         }
     }

@@ -3,7 +3,7 @@
 use serde::Serialize;
 
 /// A half-open byte range `start..end` into a source file.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, schemars::JsonSchema)]
 pub struct Span {
     /// First byte.
     pub start: usize,

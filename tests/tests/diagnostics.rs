@@ -14,10 +14,13 @@ fn render(path: &Path) -> (String, usize) {
         .unwrap_or_default();
     let checked = frontend::check(&source);
     let errors = checked.diagnostics.iter().filter(|d| d.is_error()).count();
-    (
-        diag::render(&source.name, &source.text, &checked.diagnostics, false),
-        errors,
-    )
+    let text = diag::render(&source.name, &source.text, &checked.diagnostics, false);
+    // `tsfc check --format json` of the spec validates against its schema.
+    let files = [(source, checked)];
+    let doc = tsfc::driver::check_json::CheckReport::of(&files);
+    let json = serde_json::to_value(&doc).expect("serializes");
+    crate::common::schema::assert_valid("check", &json, &files[0].0.name);
+    (text, errors)
 }
 
 #[test]

@@ -224,7 +224,7 @@ fn certificate_and_report_cover_the_trigger() {
         assert_eq!(found.len(), r * r, "{prefix}");
         assert!(found.iter().all(|l| l.ok && l.margin > 0.0), "{prefix}");
     }
-    let json = serde_json::to_value(&c.report).expect("report serializes");
+    let json = crate::common::schema::report_json(&c.report);
     let trig = &json["trigger"];
     let weight = trig["weight"].as_array().expect("weight rows");
     assert_eq!(weight.len(), model.n);

@@ -154,6 +154,7 @@ fn answer(text: &str, dir: &Path) -> Result<(u8, &'static str), TestCaseError> {
                 .map_err(|e| TestCaseError::fail(format!("shard {k} after the whole: {e}")))?;
             write_shard(&part, &shards).map_err(|e| TestCaseError::fail(e.to_string()))?;
         }
+        crate::common::schema::validate_dir(&shards);
         let merged = merge_dirs(std::slice::from_ref(&shards))
             .map_err(|e| TestCaseError::fail(format!("own shards refused: {e}")))?;
         prop_assert_eq!(&merged.runs, &whole.runs);
@@ -401,6 +402,7 @@ fn mutated_shard_files_never_panic_the_merge_nor_leave_out() {
             Ok(p) => match write_campaign(&p, &out) {
                 Ok((s, files)) => {
                     prop_assert!(files.iter().all(|f| f.starts_with(&out)));
+                    crate::common::schema::validate_dir(&out);
                     (if s.failed > 0 { 4 } else { 0 }, "merged")
                 }
                 Err(e) => (code(&e)?, "not written"),

@@ -85,7 +85,7 @@ struct Certified {
 fn certified() -> Certified {
     let c = compiled();
     assert_eq!(c.status, Status::Certified, "{:?}", c.report.notes);
-    let json = serde_json::to_value(&c.report).expect("report JSON");
+    let json = crate::common::schema::report_json(&c.report);
     let f = &json["fuzzy_lyapunov"];
     assert_eq!(
         serde_json::from_value::<Vec<f64>>(f["phi"].clone()).expect("phi"),
@@ -268,7 +268,7 @@ fn the_fuzzy_decay_rate_is_at_least_the_quadratic_one() {
     let rate = |extra: &str| {
         let c = compiled_src(&spec_of("decay_rate maximize", extra));
         assert_eq!(c.status, Status::Certified, "{extra}: {:?}", c.report.notes);
-        let json = serde_json::to_value(&c.report).expect("report JSON");
+        let json = crate::common::schema::report_json(&c.report);
         json["objectives"]["decay_rate"]
             .as_f64()
             .expect("decay rate")
@@ -295,6 +295,6 @@ fn a_bound_no_level_set_keeps_is_refused() {
         .as_ref()
         .expect("a design whose certificate fails");
     assert_eq!(cert.worst, tsfc::certify::FUZZY_REGION);
-    let json = serde_json::to_value(&c.report).expect("report JSON");
+    let json = crate::common::schema::report_json(&c.report);
     assert!(json["fuzzy_lyapunov"]["region"].is_null());
 }

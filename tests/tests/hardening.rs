@@ -712,7 +712,7 @@ fn no_trigger_law_is_certified_with_an_infinite_or_outside_bound() {
             continue;
         }
         certified += 1;
-        let report = serde_json::to_value(&run.compiled.report).expect("report");
+        let report = crate::common::schema::report_json(&run.compiled.report);
         let mut bad = Vec::new();
         for section in ["trigger", "sampled_loop", "signal_trigger", "objectives"] {
             bounds_finite(&report[section], section, &mut bad);
@@ -764,7 +764,7 @@ fn linf_spec(with: &str) -> String {
 }
 
 fn linf_gamma(run: &tsfc::pipeline::Run) -> f64 {
-    let report = serde_json::to_value(&run.compiled.report).expect("report");
+    let report = crate::common::schema::report_json(&run.compiled.report);
     report["objectives"]["linf_gamma"]
         .as_f64()
         .unwrap_or_else(|| panic!("{:#}", report["objectives"]))

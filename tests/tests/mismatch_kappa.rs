@@ -172,7 +172,7 @@ fn the_report_certificate_holds_at_random_memberships_within_kappa() {
     );
     assert_eq!(c.status, Status::Certified);
     // Everything from the report's JSON: P and the gains.
-    let json = serde_json::to_value(&c.report).expect("report JSON");
+    let json = crate::common::schema::report_json(&c.report);
     let p = matrix(&json["P"]);
     let gains: Vec<DMatrix<f64>> = json["gains"]
         .as_array()

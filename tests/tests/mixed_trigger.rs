@@ -128,7 +128,7 @@ fn two_rule_signal_is_the_image_of_the_pdc_command() {
     assert!(cert.image_residual <= 1e-9);
     assert!(cert.lambda > 0.0 && cert.x_bound > 0.0);
     assert!(cert.claim.contains("continuous monitoring"));
-    let report = serde_json::to_value(&c.report).expect("json");
+    let report = crate::common::schema::report_json(&c.report);
     assert_eq!(report["signal_trigger"]["monitor"], "step");
 }
 

@@ -85,6 +85,11 @@ fn shards_merge_into_the_whole_campaign() {
         assert!(part.runs.iter().all(|r| r.index % 3 == k - 1));
         write_shard(&part, &dir).expect("shard file");
     }
+    assert_eq!(
+        crate::common::schema::validate_dir(&dir),
+        3,
+        "the shard files"
+    );
     let merged = merge_dirs(std::slice::from_ref(&dir)).expect("merge");
     assert_eq!(merged.runs, whole.runs);
     assert_eq!(merged.envelope, whole.envelope);
@@ -94,6 +99,11 @@ fn shards_merge_into_the_whole_campaign() {
     let (s, files) = write_campaign(&merged, &out).expect("outputs");
     assert_eq!(s, summarize(&whole));
     assert_eq!(files.len(), 11);
+    assert_eq!(
+        crate::common::schema::validate_dir(&out),
+        2,
+        "runs and summary"
+    );
     for f in &files {
         assert!(
             std::fs::metadata(f).expect("written").len() > 0,

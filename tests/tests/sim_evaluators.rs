@@ -25,6 +25,7 @@ fn compile(path: &Path) -> Compiled {
         .and_then(|f| f.compile(&tsfc::synth::Settings::default()))
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let prepared = prepare_run(&run).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    crate::common::schema::report_json(&run.compiled.report);
     let report = serde_json::to_string_pretty(&run.compiled.report).expect("report JSON");
     Compiled {
         path: path.to_path_buf(),

@@ -205,6 +205,11 @@ fn outputs_are_written() {
     let (o, files) =
         simulate_to(prepared("inverted_pendulum.tsf"), &horizon(1.0), &dir).expect("outputs");
     assert!(!o.metrics.failed);
+    assert_eq!(
+        crate::common::schema::validate_dir(&dir),
+        1,
+        "the metrics JSON"
+    );
     for ext in [
         ".csv",
         ".metrics.json",

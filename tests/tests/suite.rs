@@ -37,6 +37,7 @@ mod relaxation_map;
 mod review;
 mod rust_codegen;
 mod sampled_loop;
+mod schema;
 mod sector;
 mod shipped_specs;
 mod sim_evaluators;

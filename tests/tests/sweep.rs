@@ -167,6 +167,11 @@ fn the_table_does_not_depend_on_the_thread_count() {
         )
         .unwrap_or_else(|e| panic!("{e}"));
         let files = write_sweep(&t, &m, &d).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            crate::common::schema::validate_dir(&d),
+            2,
+            "table and metrics"
+        );
         files
             .iter()
             .map(|f| std::fs::read(f).expect("read"))

@@ -725,7 +725,7 @@ fn papers_gains_fail_tsfc_trigger_certificate_even_at_nu_zero() {
         .and_then(|front| front.compile(&tsfc::synth::Settings::default()))
         .unwrap_or_else(|e| panic!("{e}"));
     let _ = std::fs::remove_file(&path);
-    let json = serde_json::to_value(&run.compiled.report).expect("report");
+    let json = crate::common::schema::report_json(&run.compiled.report);
     eprintln!(
         "paper's gains, nu = 0.2: status {:?}; diagnosis {}",
         run.compiled.status, json["diagnosis"]

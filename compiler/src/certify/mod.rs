@@ -18,7 +18,7 @@ pub use stored::{MembershipBound, StoredPrecision};
 type Values = Vec<(String, nalgebra::DMatrix<f64>)>;
 
 /// The margin of one constraint.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct LmiMargin {
     /// Constraint name (e.g. `hinf Q[2,5]`).
     pub name: String,
@@ -39,7 +39,7 @@ pub struct LmiMargin {
 pub const RULE: &str = "a strict LMI holds when its margin exceeds its rounding-error bound (margin > error_bound > 0); a non-strict one when its margin is at least -error_bound; the solver's margin lmi_margin_eps is what the SDP asked for, not what the certificate requires";
 
 /// The certificate of a design.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct Certificate {
     /// What passing means ([`RULE`]).
     pub rule: &'static str,

@@ -23,7 +23,7 @@ use tsf_lang::spec::Precision;
 
 /// The bound on membership normalization and blending in the stored
 /// precision, and the margin it asks of the continuous loop's LMIs.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct MembershipBound {
     /// Unit roundoff u of the precision (2^-24 or 2^-53).
     pub unit_roundoff: f64,
@@ -44,7 +44,7 @@ pub struct MembershipBound {
 }
 
 /// The stored-precision certificate.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct StoredPrecision {
     /// `f32` or `f64`.
     pub precision: &'static str,

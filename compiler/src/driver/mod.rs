@@ -8,16 +8,19 @@
 //! [`prepare`] hands the simulator a certified design ([`reuse`]: from a
 //! certified report, without solving again); [`adaptive`] runs an adaptive
 //! spec's design, code and simulation; [`summary`] is the terminal summary;
-//! [`format`] is `tsfc fmt`.
+//! [`format`] is `tsfc fmt`; [`check_json`] is `tsfc check --format json`'s
+//! document; [`schema`] the JSON Schemas of every JSON tsfc writes.
 
 pub mod adaptive;
 pub mod builder;
+pub mod check_json;
 pub mod compile;
 pub mod format;
 pub mod frontend;
 pub mod pipeline;
 pub mod prepare;
 pub mod reuse;
+pub mod schema;
 pub mod summary;
 
 pub use builder::Builder;

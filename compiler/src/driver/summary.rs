@@ -25,7 +25,7 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
         "synthesis: tsfc designs the gains"
     };
     let _ = writeln!(s, "  mode                 {mode}");
-    for (k, v) in &r.objectives {
+    for (k, v) in r.objectives.entries() {
         let _ = writeln!(s, "  {k:<20} {v}");
     }
     // A refused analysis lists its verdicts under the diagnosis.

@@ -30,7 +30,7 @@ const LINEAR_HELP: &str = "bound premises that are states (or linear combination
 const RANK_TOL: f64 = 1e-10;
 
 /// One face pair of the box in state coordinates: |row x| <= bound.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Face {
     /// The premise component, e.g. `q[1]`.
     pub name: String,
@@ -42,7 +42,7 @@ pub struct Face {
 }
 
 /// The premise box of the `region` settings.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct PremiseBox {
     /// Per component of z: its interval (the premise's range where no region is given).
     pub z: Vec<(f64, f64)>,
@@ -398,7 +398,7 @@ fn distinct(points: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
 }
 
 /// A vertex set enclosing the convex hull of some points.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Enclosure {
     /// The vertices.
     #[serde(skip)]

@@ -11,7 +11,7 @@ use tsf_lang::modes::ModeDesign;
 use tsf_lang::spec::{Objective, Target};
 
 /// One mode in the report.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct ModeReport {
     /// The mode's name.
     pub name: String,
@@ -81,38 +81,65 @@ pub fn sections(
 /// The `objectives.finite_time` section: c1, c2 (the bound the design's P_a
 /// prove), T, alpha, w2, lambda1..3, the weight R, and the bound asked for
 /// (`c2_bound`) when c2 was bounded rather than minimized.
-pub fn finite_time(model: &TsModel, md: &ModesDesign) -> Option<serde_json::Value> {
+pub fn finite_time(model: &TsModel, md: &ModesDesign) -> Option<FiniteTimeReport> {
     let (f, numbers) = md.finite_time()?;
-    let mut v = serde_json::json!({
-        "c1": f.c1,
-        "c2": numbers.c2,
-        "T": f.horizon,
-        "alpha": f.alpha,
-        "w2": f.w2,
-        "lambda1": numbers.lambda1,
-        "lambda2": numbers.lambda2,
-        "lambda3": numbers.lambda3,
-        "R": rows(&f.r),
-        "sense": match md.design {
-            ModeDesign::Dependent => "mean square (E x' R x), under the Markov chain",
-            ModeDesign::Independent => "along every switching path (a mode-independent V)",
-        },
-    });
-    let bound = model.spec.objectives.iter().find_map(|o| match &o.node {
+    let c2_bound = model.spec.objectives.iter().find_map(|o| match &o.node {
         Objective::FiniteTime(ft) => match ft.target {
             Target::Fixed(c2) => Some(c2),
             Target::Optimize => None,
         },
         _ => None,
     });
-    if let Some(bound) = bound {
-        v["c2_bound"] = serde_json::json!(bound);
-    }
-    Some(v)
+    Some(FiniteTimeReport {
+        r: rows(&f.r),
+        t: f.horizon,
+        alpha: f.alpha,
+        c1: f.c1,
+        c2: numbers.c2,
+        c2_bound,
+        lambda1: numbers.lambda1,
+        lambda2: numbers.lambda2,
+        lambda3: numbers.lambda3,
+        sense: match md.design {
+            ModeDesign::Dependent => "mean square (E x' R x), under the Markov chain",
+            ModeDesign::Independent => "along every switching path (a mode-independent V)",
+        },
+        w2: f.w2,
+    })
+}
+
+/// Finite-time boundedness of a mode design (fields in name order).
+#[derive(Debug, Serialize, schemars::JsonSchema)]
+pub struct FiniteTimeReport {
+    /// The weight R of x' R x (n x n rows).
+    #[serde(rename = "R")]
+    pub r: Vec<Vec<f64>>,
+    /// The horizon T (s).
+    #[serde(rename = "T")]
+    pub t: f64,
+    /// The growth rate alpha of the conditions.
+    pub alpha: f64,
+    /// The initial bound c1 (x0' R x0 <= c1).
+    pub c1: f64,
+    /// The bound c2 the design's P_a prove (x' R x < c2 on [0, T]).
+    pub c2: f64,
+    /// The bound c2 asked for (absent when c2 was minimized).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub c2_bound: Option<f64>,
+    /// lambda1 of the conditions.
+    pub lambda1: f64,
+    /// lambda2 of the conditions.
+    pub lambda2: f64,
+    /// lambda3 of the conditions.
+    pub lambda3: f64,
+    /// In what sense the bound holds.
+    pub sense: &'static str,
+    /// The disturbance energy bound w2.
+    pub w2: f64,
 }
 
 /// One mode's matrices of the sampled loop's functional.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct ModeSampledReport {
     /// The mode's name.
     pub name: String,

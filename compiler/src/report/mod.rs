@@ -1,19 +1,20 @@
 //! The JSON report of `tsfc compile`: it reads the design and its certificate.
 
 pub mod markov;
+pub mod objectives;
 
 use crate::certify::Certificate;
 use crate::model::TsModel;
 use crate::synth::{Design, SolverLog, SynthError};
+pub use objectives::{Objectives, Problem, ProblemSize};
 use serde::Serialize;
-use std::collections::BTreeMap;
 
 pub use crate::util::matrix::rows;
 
 pub use crate::util::hash::sha256_hex;
 
 /// `spec` section.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct SpecInfo {
     /// Path as given.
     pub path: String,
@@ -22,7 +23,7 @@ pub struct SpecInfo {
 }
 
 /// One gain.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct Gain {
     /// Rule name.
     pub rule: String,
@@ -47,7 +48,7 @@ impl Gain {
 
 /// The gains and P of a refused design, not certified, kept so it can be
 /// inspected: `gains` and `P` as the certified report writes them.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct CandidateReport {
     /// What refused it (the refusal's first line).
     pub refused_by: String,
@@ -63,7 +64,7 @@ pub struct CandidateReport {
 }
 
 /// The stability of one plant/controller rule pair.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct PairReport {
     /// Plant rule.
     pub plant: String,
@@ -104,7 +105,7 @@ impl CandidateReport {
 }
 
 /// `solver` section.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct SolverInfo {
     /// Solver name.
     pub name: &'static str,
@@ -118,11 +119,11 @@ pub struct SolverInfo {
     /// numerical failure in the first iterations (docs/limits.md, "solver scaling").
     pub unscaled_retries: usize,
     /// Size of the kept SDP.
-    pub problem: BTreeMap<String, serde_json::Value>,
+    pub problem: Problem,
 }
 
 /// `timings_s` section.
-#[derive(Debug, Serialize, Default)]
+#[derive(Debug, Serialize, Default, schemars::JsonSchema)]
 pub struct Timings {
     /// Language stage.
     pub parse: f64,
@@ -140,7 +141,7 @@ pub struct Timings {
 
 /// The ellipsoid {x : x' U x <= 1} certified invariant and inside the linear
 /// region of the saturation (generalized sector condition).
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct RegionOfAttraction {
     /// U = P / c (n x n rows): the certified region E(P, c) is {x : x' U x <= 1}.
     #[serde(rename = "U")]
@@ -162,7 +163,7 @@ pub use crate::synth::loops::{RegionReport, TriggerReport};
 /// state-dependent M(x) (M = A, B) on a grid over the rules' operating points,
 /// relative to the largest local model (Frobenius norms). The certificate
 /// covers the blended model; an exact sector model gives 0.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct ConsistencyReport {
     /// States compared (inside the premise region).
     pub points: usize,
@@ -184,7 +185,7 @@ pub struct ConsistencyReport {
 
 /// The certified sampled loop: every sample transmitted, the command held
 /// (zero-order hold) for intervals in `sampling`.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct SampledReport {
     /// [h_min, h_max] in s (equal for a periodic trigger).
     pub sampling: [f64; 2],
@@ -204,7 +205,7 @@ pub struct SampledReport {
 }
 
 /// One objective's verdict for given gains (analysis mode).
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct VerdictReport {
     /// The objective (or loop) in the spec's words.
     pub objective: String,
@@ -235,7 +236,7 @@ impl From<&crate::synth::Verdict> for VerdictReport {
 }
 
 /// Why there is no certified design.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct Diagnosis {
     /// The verdict.
     pub message: String,
@@ -243,9 +244,26 @@ pub struct Diagnosis {
     pub achievable: Vec<String>,
 }
 
-/// The whole report.
-#[derive(Debug, Serialize)]
+/// Version of the JSON Schemas of tsfc's documents (the `vN` of their
+/// `$id`, `tsfc schema`): it changes when a document changes incompatibly
+/// (a field removed, renamed or retyped).
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The `$id` of the schema of documents of kind `kind` (`report`, ...): the
+/// repository URL, `/schema/vN/<kind>.json`.
+pub fn schema_id(kind: &str) -> String {
+    // The workspace's `repository`.
+    let repo = env!("CARGO_PKG_REPOSITORY").trim_end_matches('/');
+    format!("{repo}/schema/v{SCHEMA_VERSION}/{kind}.json")
+}
+
+/// The JSON report of `tsfc compile`: the design, its certificate and how it was found.
+#[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct Report {
+    /// The report's JSON Schema (`report`, or `failed-report` when not
+    /// certified; docs/schema/).
+    #[serde(rename = "$schema")]
+    pub schema: String,
     /// tsfc version.
     pub tsfc_version: &'static str,
     /// The spec.
@@ -280,7 +298,7 @@ pub struct Report {
     /// Margin eps of strict LMIs.
     pub lmi_margin_eps: Option<f64>,
     /// Achieved objective values.
-    pub objectives: BTreeMap<String, serde_json::Value>,
+    pub objectives: Objectives,
     /// Gains (empty unless certified).
     pub gains: Vec<Gain>,
     /// Lyapunov matrix P (empty unless a design was found).
@@ -330,7 +348,7 @@ pub struct Report {
 
 /// The mismatch bound of `membership_mismatch(kappa = ..)` and whether the
 /// certificate relies on it.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct MismatchReport {
     /// The spec's kappa.
     pub kappa: f64,
@@ -367,46 +385,6 @@ impl MismatchReport {
     }
 }
 
-fn objectives(model: &TsModel, design: &Design) -> BTreeMap<String, serde_json::Value> {
-    let a = &design.achieved;
-    let mut o = BTreeMap::new();
-    if a.get(crate::synth::Quantity::LinfGamma).is_some() {
-        if let Some(g) = model.spec.linf_paper {
-            o.insert("linf_gamma_paper".into(), serde_json::json!(g));
-        }
-    }
-    if let Some(t) = design.loop_design.event() {
-        o.insert(
-            "linf_gamma_event_triggered".into(),
-            serde_json::json!(t.gamma),
-        );
-    }
-    for (q, v) in a.iter() {
-        o.insert(q.key().to_string(), serde_json::json!(v));
-    }
-    if let Some(ft) = design
-        .modes
-        .as_ref()
-        .and_then(|md| markov::finite_time(model, md))
-    {
-        o.insert("finite_time".into(), ft);
-    }
-    if let Some((lo, hi)) = a.decay_bracket {
-        o.insert(
-            "decay_rate_bracket".into(),
-            serde_json::json!([
-                lo,
-                if hi.is_finite() {
-                    serde_json::json!(hi)
-                } else {
-                    serde_json::Value::Null
-                }
-            ]),
-        );
-    }
-    o
-}
-
 /// Assembles the report.
 pub fn report(
     model: &TsModel,
@@ -424,9 +402,10 @@ pub fn report(
         Err(_) => Vec::new(),
     };
     let certified = status == "certified";
-    let problem = problem_stats(log);
+    let problem = Problem::of(log);
     let (modes, transition_rates) = markov::sections(model, design, cert.as_ref(), certified);
     Report {
+        schema: schema_id(if certified { "report" } else { "failed-report" }),
         modes,
         transition_rates,
         tsfc_version: env!("CARGO_PKG_VERSION"),
@@ -449,7 +428,7 @@ pub fn report(
             .and_then(|d| d.fuzzy.as_ref())
             .map(FuzzyLyapunovReport::of),
         lmi_margin_eps: design.map(|d| d.eps),
-        objectives: design.map(|d| objectives(model, d)).unwrap_or_default(),
+        objectives: design.map(|d| Objectives::of(model, d)).unwrap_or_default(),
         gains: if certified {
             design
                 .map(|d| Gain::of_rules(model, &d.gains))
@@ -617,31 +596,6 @@ fn status_of(
     }
 }
 
-/// The size of the last solved problem, and the memory estimate.
-fn problem_stats(log: &SolverLog) -> BTreeMap<String, serde_json::Value> {
-    let mut problem = BTreeMap::new();
-    if let Some(s) = &log.stats {
-        let largest = s.psd_cones.iter().copied().max().unwrap_or(0);
-        for (k, v) in [
-            ("variables", s.variables),
-            ("scalar_unknowns", s.scalar_unknowns),
-            ("lmis", s.lmis),
-            ("scalar_constraints", s.scalar_constraints),
-            ("psd_cones", s.psd_cones.len()),
-            ("largest_psd_cone", largest),
-            ("rows", s.rows),
-            ("nnz", s.nnz),
-        ] {
-            problem.insert(k.to_string(), serde_json::json!(v));
-        }
-        problem.insert(
-            "memory_estimate_bytes".into(),
-            serde_json::json!(log.memory_estimate),
-        );
-    }
-    problem
-}
-
 /// The certified region of attraction of design `d`'s shipped loop, and
 /// whether it contains the initial states of the objective and the scenario.
 fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttraction> {
@@ -670,7 +624,7 @@ fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttractio
 
 /// A fuzzy Lyapunov function V = x' (sum_k h_k P_k) x and what its
 /// certificate assumes.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct FuzzyLyapunovReport {
     /// The assumption the certificate relies on.
     pub assumption: &'static str,

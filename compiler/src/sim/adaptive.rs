@@ -46,7 +46,7 @@ pub struct Sample {
 }
 
 /// A convergence claim of the block and whether the run met it.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct Claim {
     /// `|name| <= tol by t`.
     pub claim: String,
@@ -57,7 +57,7 @@ pub struct Claim {
 }
 
 /// What the run did.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct Metrics {
     /// Controller steps.
     pub steps: usize,

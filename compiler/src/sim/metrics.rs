@@ -35,7 +35,7 @@ pub struct Trace {
 }
 
 /// Figures of merit of one run (written as `<controller>.metrics.json`).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct Metrics {
     /// `final_state_norm <= convergence_tolerance`, both finite, and the run
     /// finished.

@@ -156,7 +156,7 @@ impl Actuation {
 }
 
 /// Per-mode figures of a run (in `<controller>.metrics.json`).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct ModeMetrics {
     /// `mode_dependent` (the controller is told the mode) or `mode_independent` (fault-blind).
     pub design: String,
@@ -171,7 +171,7 @@ pub struct ModeMetrics {
 }
 
 /// One mode's share of a run.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct ModeStat {
     /// Its name.
     pub name: String,

@@ -32,7 +32,7 @@ pub const IMAGE_TOL: f64 = 1e-9;
 const MARGIN: f64 = 1e-7;
 
 /// The certified mixed-trigger loop.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct SignalTrigger {
     /// The monitored signal.
     pub signal: String,

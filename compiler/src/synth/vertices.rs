@@ -33,7 +33,7 @@ impl PlantVertex {
 }
 
 /// How the vertex sets of a regional certificate were found (for the report).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct RegionVertices {
     /// Enclosure of the blended plant data.
     pub plant: Enclosure,

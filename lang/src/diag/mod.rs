@@ -17,7 +17,7 @@ use serde::Serialize;
 use view::{Lines, Snippet};
 
 /// How serious a diagnostic is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Severity {
     /// The spec is invalid.
@@ -27,7 +27,7 @@ pub enum Severity {
 }
 
 /// A secondary label: a span and what it shows.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Label {
     /// Where.
     pub span: Span,
@@ -36,7 +36,7 @@ pub struct Label {
 }
 
 /// One diagnostic about a spec.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Diagnostic {
     /// Error or warning.
     pub severity: Severity,
@@ -251,7 +251,7 @@ fn to_codespan(d: &Diagnostic, file: &Snippet) -> CsDiagnostic<()> {
 }
 
 /// A diagnostic in the JSON form printed by `tsfc check --format json`.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct JsonDiagnostic<'a> {
     /// File name as given.
     pub file: &'a str,

@@ -1,6 +1,8 @@
 //! Helpers shared by the end-to-end tests.
 #![allow(dead_code)] // each test crate uses a subset
 
+pub mod schema;
+
 use std::path::{Path, PathBuf};
 use tsfc::driver::frontend::{self, Source};
 use tsfc::model::TsModel;
@@ -94,6 +96,8 @@ fn compile_model(
         &tsfc::synth::Settings::default(),
         Default::default(),
     );
+    // Every report the suite compiles validates against its schema.
+    schema::report_json(&c.report);
     (model, c)
 }
 

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 pub const SHARD_FORMAT: &str = "tsfc-monte-carlo-shard/2";
 
 /// The figures of merit of one run (nothing per step).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RunRecord {
     /// Run index in `0 .. runs`.
     pub index: u64,
@@ -64,7 +64,7 @@ impl RunRecord {
 }
 
 /// Per time bin, the min and max of every state component across runs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Envelope {
     /// Start and end of the time axis.
     pub span: (f64, f64),
@@ -124,7 +124,7 @@ impl Envelope {
 }
 
 /// The output of one shard (or of a whole campaign, shard 1 of 1).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Partial {
     /// [`SHARD_FORMAT`].
     pub format: String,
@@ -216,7 +216,7 @@ pub fn merge(mut parts: Vec<Partial>) -> Result<Partial, String> {
 }
 
 /// Minimum, median, 95th percentile and maximum (nearest rank) of `v`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Spread {
     /// Smallest.
     pub min: f64,
@@ -241,7 +241,7 @@ fn spread(mut v: Vec<f64>) -> Option<Spread> {
 }
 
 /// A failed run in the summary.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Failure {
     /// Run index.
     pub index: u64,
@@ -255,7 +255,7 @@ pub struct Failure {
 pub const MAX_LISTED_FAILURES: usize = 100;
 
 /// The campaign's summary.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Summary {
     /// Controller name.
     pub name: String,

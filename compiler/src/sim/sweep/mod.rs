@@ -133,7 +133,7 @@ pub fn run_sweep(
     opts: &Options,
     cfg: &Config,
     compile: CompileLaw<'_>,
-) -> Result<(Table, Vec<serde_json::Value>), SimError> {
+) -> Result<(Table, Vec<ScenarioMetrics>), SimError> {
     let entries: Vec<&Prepared> = std::iter::once(main).chain(compare).collect();
     let spec = &main.model.spec;
     let sim = spec.simulate.as_ref().ok_or_else(|| {
@@ -213,7 +213,7 @@ pub fn run_sweep(
             .position(|(k, s)| *k == j.spec && s.trigger == sc.trigger)
             .map(|i| &designs[i])
     };
-    let results: Vec<(Row, serde_json::Value)> = pool.install(|| {
+    let results: Vec<(Row, ScenarioMetrics)> = pool.install(|| {
         jobs.par_iter()
             .map(|j| {
                 let base = entries[j.spec];
@@ -247,17 +247,17 @@ pub fn run_sweep(
                         .map_err(|e| e.message.as_str()),
                     norms.finish(),
                 );
-                let metrics = serde_json::json!({
-                    "spec": base.model.spec.controller.node,
-                    "scenario": scenario,
-                    "metrics": result.as_ref().ok().map(|r| &r.metrics),
-                    "error": result.as_ref().err().map(|e| &e.message),
-                });
+                let metrics = ScenarioMetrics {
+                    error: result.as_ref().err().map(|e| e.message.clone()),
+                    metrics: result.as_ref().ok().map(|r| r.metrics.clone()),
+                    scenario: scenario.to_string(),
+                    spec: base.model.spec.controller.node.clone(),
+                };
                 (row, metrics)
             })
             .collect()
     });
-    let (rows, metrics): (Vec<Row>, Vec<serde_json::Value>) = results.into_iter().unzip();
+    let (rows, metrics): (Vec<Row>, Vec<ScenarioMetrics>) = results.into_iter().unzip();
     let table = Table {
         format: TABLE_FORMAT.into(),
         name: spec.controller.node.clone(),
@@ -276,7 +276,7 @@ pub fn run_sweep(
 /// `<name>.sweep.metrics.json` into `dir`, each atomically.
 pub fn write_sweep(
     table: &Table,
-    metrics: &[serde_json::Value],
+    metrics: &[ScenarioMetrics],
     dir: &Path,
 ) -> Result<Vec<PathBuf>, SimError> {
     let name = &table.name;
@@ -284,9 +284,32 @@ pub fn write_sweep(
         (format!("{name}.sweep.md"), table.markdown().into_bytes()),
         (format!("{name}.sweep.csv"), table.csv().into_bytes()),
         (format!("{name}.sweep.json"), json(table)?),
-        (format!("{name}.sweep.metrics.json"), json(&metrics)?),
+        (
+            format!("{name}.sweep.metrics.json"),
+            json(&sorted(metrics)?)?,
+        ),
     ];
     files.into_iter().map(|(f, b)| write(dir, f, &b)).collect()
+}
+
+/// One row's run in `<name>.sweep.metrics.json`: its metrics, or why it has
+/// none. The file lists every object's keys in name order.
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct ScenarioMetrics {
+    /// Why the run stopped without metrics (null when it has them).
+    pub error: Option<String>,
+    /// The run's metrics (null on an error).
+    pub metrics: Option<super::metrics::Metrics>,
+    /// The scenario (`design`: the spec's own design).
+    pub scenario: String,
+    /// The spec's controller name.
+    pub spec: String,
+}
+
+/// `metrics` as a JSON value, whose objects list their keys in name order.
+fn sorted(metrics: &[ScenarioMetrics]) -> Result<serde_json::Value, SimError> {
+    serde_json::to_value(metrics)
+        .map_err(|e| SimError::usage(format!("cannot serialize the sweep metrics: {e}")))
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use serde::Serialize;
 pub const TABLE_FORMAT: &str = "tsfc-sweep/1";
 
 /// Whose gains a row ran.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Gains {
     /// The compiled design (the spec's own law).
@@ -59,7 +59,7 @@ impl Gains {
 }
 
 /// One scenario's figures.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Row {
     /// The spec's controller name.
     pub spec: String,
@@ -146,7 +146,7 @@ impl Row {
 }
 
 /// The table of a sweep.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Table {
     /// [`TABLE_FORMAT`].
     pub format: String,

@@ -76,7 +76,7 @@ impl Design {
 }
 
 /// The JSON report of an adaptive design (`<name>.adaptive.json`).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct Report {
     /// [`WELL_POSED`] or [`REFUSED`].
     pub status: String,

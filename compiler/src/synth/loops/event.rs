@@ -115,7 +115,7 @@ impl LoopCertificate for TriggerDesign {
 
 /// The synthesized event trigger: transmit x(t_k^l) when
 /// e' Upsilon e >= nu x(t_k)' Upsilon x(t_k), e = x(t_k^l) - x(t_k).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct TriggerReport {
     /// Upsilon (n x n rows).
     pub weight: Vec<Vec<f64>>,
@@ -144,7 +144,7 @@ pub struct TriggerReport {
 /// A local (regional) event-trigger certificate: the LMIs hold at vertices
 /// enclosing the model and gains the rules blend on the premise box, and the
 /// certified set E(P, c) (c = level) lies inside the box.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct RegionReport {
     /// The box, its memberships and the polytope of h.
     pub premise_box: crate::model::region::PremiseBox,

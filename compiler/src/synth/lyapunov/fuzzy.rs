@@ -65,7 +65,7 @@ pub struct FuzzyVars {
 }
 
 /// The fuzzy Lyapunov function of a design.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct FuzzyDesign {
     /// phi_k, the assumed bounds on |dh_k/dt|.
     pub phi: Vec<f64>,

@@ -31,7 +31,7 @@ pub const SHRINK: f64 = 0.81;
 const T_CAP: f64 = 1e6;
 
 /// Where the membership-derivative assumption was checked to hold.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct Region {
     /// The certified level c: on {V <= c} the sampled |dh_k/dt| <= phi_k.
     pub level: f64,
