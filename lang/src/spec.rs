@@ -33,6 +33,12 @@ impl Signal {
             }
         })
     }
+
+    /// The component names of a list of signals, in order (the states'
+    /// `w[0], w[1], w[2], rho[0], ..`).
+    pub fn names_of(signals: &[Signal]) -> Vec<String> {
+        signals.iter().flat_map(Signal::component_names).collect()
+    }
 }
 
 /// A performance output `y = C x + E u + G w`, linear by construction.

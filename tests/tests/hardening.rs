@@ -64,21 +64,14 @@ fn compile(tag: &str, text: &str) -> Result<tsfc::pipeline::Run, (String, u8)> {
 // ---------------------------------------------------------------- campaigns
 
 /// The campaign spec: an unstable scalar plant with a certified gain.
-const MC_SPEC: &str =
-    "tsf 1;\ncontroller mc_h;\nconst k = 1;\nstate x1;\ninput u;\ndisturbance d;\n\
-    A = k; B = 1; D = 1;\n\
-    premise x1 range -2 .. 2 { all = trap(-2, -2, 2, 2); }\n\
-    rule R: x1 is all => A = k;\n\
-    objective decay_rate >= 1;\n\
-    simulate {\n  x0 = 0.5;\n  time = 0 .. 4 step 0.01;\n  d(t) = 0.01 * sin(t);\n\
-      dynamics { x1' = k * x1 + u + d; }\n\
-      monte_carlo { runs = 12; k scale uniform(0.5, 1.5); x0 offset uniform(-0.2, 0.2);\n\
-        d scale uniform(0.5, 1.5); converged |x1| <= 0.05 by 3.5; }\n}\n";
+fn mc_spec() -> String {
+    crate::common::scalar_campaign_spec("mc_h", 12, "")
+}
 
 fn mc() -> &'static Prepared {
     static P: OnceLock<Prepared> = OnceLock::new();
     P.get_or_init(|| {
-        let path = spec_file(&scratch("mc-spec"), MC_SPEC);
+        let path = spec_file(&scratch("mc-spec"), &mc_spec());
         prepare(&path).unwrap_or_else(|e| panic!("{e}"))
     })
 }
@@ -303,7 +296,7 @@ fn shards_carry_their_identity_and_every_field_is_checked() {
     write_shard(&shard(1, 2), &dir).expect("shard");
     let other = spec_file(
         &scratch("two-specs-b"),
-        &MC_SPEC.replace("const k = 1;", "const k = 1.01;"),
+        &mc_spec().replace("const k = 1;", "const k = 1.01;"),
     );
     let other = prepare(&other).unwrap_or_else(|e| panic!("{e}"));
     let cfg = Config {

@@ -23,16 +23,11 @@ fn fresh(tag: &str) -> PathBuf {
 /// An unstable scalar plant stabilized by a certified gain, with a Monte
 /// Carlo block and a sweep of one periodic law (every kind of run output).
 fn small_spec(dir: &Path) -> PathBuf {
-    let text = "tsf 1;\ncontroller schema_demo;\nconst k = 1;\nstate x1;\ninput u;\ndisturbance d;\n\
-         A = k; B = 1; D = 1;\n\
-         premise x1 range -2 .. 2 { all = trap(-2, -2, 2, 2); }\n\
-         rule R: x1 is all => A = k;\n\
-         objective decay_rate >= 1;\n\
-         simulate {\n  x0 = 0.5;\n  time = 0 .. 4 step 0.01;\n  d(t) = 0.01 * sin(t);\n\
-           dynamics { x1' = k * x1 + u + d; }\n\
-           monte_carlo { runs = 6; k scale uniform(0.5, 1.5); x0 offset uniform(-0.2, 0.2);\n\
-             d scale uniform(0.5, 1.5); converged |x1| <= 0.05 by 3.5; }\n\
-           sweep { trigger periodic { every = [0.05]; } window = 1 .. 4; columns { s = x1; } }\n}\n";
+    let text = crate::common::scalar_campaign_spec(
+        "schema_demo",
+        6,
+        "  sweep { trigger periodic { every = [0.05]; } window = 1 .. 4; columns { s = x1; } }\n",
+    );
     let path = dir.join("schema_demo.tsf");
     std::fs::write(&path, text).expect("write spec");
     path

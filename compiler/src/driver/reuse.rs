@@ -175,7 +175,7 @@ pub fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepare
         Some(t) => Some(matrix(&t.weight, n, n, "trigger weight")?),
         None => None,
     };
-    let names = |s: &[tsf_lang::spec::Signal]| s.iter().flat_map(|s| s.component_names()).collect();
+    let names = tsf_lang::spec::Signal::names_of;
     let tables = Tables {
         name: spec.controller.node.clone(),
         header: Header {

@@ -163,12 +163,7 @@ pub fn membership_figure(model: &TsModel, k: usize) -> Result<Svg, SimError> {
 /// curve per component: the worst relative mismatch of the blended model
 /// against A(x), B(x) over the grid states with that component at each value.
 pub fn consistency_figure(model: &TsModel, c: &Consistency) -> Result<Option<Svg>, SimError> {
-    let names: Vec<String> = model
-        .spec
-        .states
-        .iter()
-        .flat_map(|s| s.component_names())
-        .collect();
+    let names = tsf_lang::spec::Signal::names_of(&model.spec.states);
     let mut panels = Vec::new();
     for (base, idx) in groups(&names) {
         let varying: Vec<usize> = idx

@@ -413,11 +413,7 @@ pub fn run(
         trace,
         metrics,
         name: spec.controller.node.clone(),
-        state_names: spec
-            .states
-            .iter()
-            .flat_map(|s| s.component_names())
-            .collect(),
+        state_names: tsf_lang::spec::Signal::names_of(&spec.states),
     })
 }
 

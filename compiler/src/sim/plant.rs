@@ -189,11 +189,7 @@ impl<'a> Plant<'a> {
     /// Names of the extra state components (the controller does not see them).
     pub fn extra_names(&self) -> Vec<String> {
         match &self.truth {
-            Truth::Dynamics(d) => d
-                .extra_states
-                .iter()
-                .flat_map(|s| s.component_names())
-                .collect(),
+            Truth::Dynamics(d) => tsf_lang::spec::Signal::names_of(&d.extra_states),
             Truth::Model { .. } => Vec::new(),
         }
     }

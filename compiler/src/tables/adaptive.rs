@@ -3,9 +3,10 @@
 //! for a PDC controller, so the firing strengths are the runtime's), the
 //! law's tables and initial estimates, and the controller period.
 
-use super::{component_names, premise_code, FactoredTerms, Header, Tables, TablesError};
+use super::{premise_code, FactoredTerms, Header, Tables, TablesError};
 use crate::model::TsModel;
 use crate::synth::adaptive::Design;
+use tsf_lang::spec::Signal;
 
 /// Everything a generator needs for an adaptive controller.
 #[derive(Debug, Clone)]
@@ -53,8 +54,8 @@ pub fn adaptive_tables(
         m: model.m,
         p: model.premises.len(),
         r: model.r(),
-        state_names: component_names(&spec.states),
-        input_names: component_names(&spec.inputs),
+        state_names: Signal::names_of(&spec.states),
+        input_names: Signal::names_of(&spec.inputs),
         rule_names: model.rules.iter().map(|r| r.name.clone()).collect(),
         premise: premise_code(model)?,
         terms: model.terms.clone(),

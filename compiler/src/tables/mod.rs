@@ -183,10 +183,6 @@ fn mode_tables(model: &TsModel, design: &Design) -> Option<ModeTables> {
     })
 }
 
-fn component_names(signals: &[tsf_lang::spec::Signal]) -> Vec<String> {
-    signals.iter().flat_map(|s| s.component_names()).collect()
-}
-
 /// The achieved objectives named in generated headers, `(name, value)` with
 /// the value formatted.
 fn achieved_objectives(a: &Achieved) -> Vec<(String, String)> {
@@ -280,8 +276,8 @@ pub fn tables(
         m: model.m,
         p: model.premises.len(),
         r: model.r(),
-        state_names: component_names(&spec.states),
-        input_names: component_names(&spec.inputs),
+        state_names: tsf_lang::spec::Signal::names_of(&spec.states),
+        input_names: tsf_lang::spec::Signal::names_of(&spec.inputs),
         rule_names: model.rules.iter().map(|r| r.name.clone()).collect(),
         premise,
         terms: model.terms.clone(),

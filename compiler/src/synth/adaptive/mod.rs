@@ -149,12 +149,7 @@ fn x0_outside(model: &TsModel) -> Vec<String> {
     let (Some(range), Some(sim)) = (operating_range(model), model.spec.simulate.as_ref()) else {
         return Vec::new();
     };
-    let names: Vec<String> = model
-        .spec
-        .states
-        .iter()
-        .flat_map(|s| s.component_names())
-        .collect();
+    let names = tsf_lang::spec::Signal::names_of(&model.spec.states);
     sim.x0
         .iter()
         .zip(&range)
