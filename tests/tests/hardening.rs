@@ -65,7 +65,7 @@ fn compile(tag: &str, text: &str) -> Result<tsfc::pipeline::Run, (String, u8)> {
 
 /// The campaign spec: an unstable scalar plant with a certified gain.
 fn mc_spec() -> String {
-    crate::common::scalar_campaign_spec("mc_h", 12, "")
+    crate::common::scalar_campaign_spec("mc_h", 12, 1.5, "")
 }
 
 fn mc() -> &'static Prepared {

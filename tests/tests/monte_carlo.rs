@@ -13,17 +13,7 @@ use tsfc::sim::{Options, Prepared};
 /// An unstable scalar plant `x' = k x + u + d` stabilized by a certified gain;
 /// the campaign scales `k` (up to `k_hi`), the initial state and the disturbance.
 fn small_spec(tag: &str, k_hi: f64) -> PathBuf {
-    let text = format!(
-        "tsf 1;\ncontroller mc_{tag};\nconst k = 1;\nstate x1;\ninput u;\ndisturbance d;\n\
-         A = k; B = 1; D = 1;\n\
-         premise x1 range -2 .. 2 {{ all = trap(-2, -2, 2, 2); }}\n\
-         rule R: x1 is all => A = k;\n\
-         objective decay_rate >= 1;\n\
-         simulate {{\n  x0 = 0.5;\n  time = 0 .. 4 step 0.01;\n  d(t) = 0.01 * sin(t);\n\
-           dynamics {{ x1' = k * x1 + u + d; }}\n\
-           monte_carlo {{ runs = 24; k scale uniform(0.5, {k_hi}); x0 offset uniform(-0.2, 0.2);\n\
-             d scale uniform(0.5, 1.5); converged |x1| <= 0.05 by 3.5; }}\n}}\n"
-    );
+    let text = crate::common::scalar_campaign_spec(&format!("mc_{tag}"), 24, k_hi, "");
     let dir = std::env::temp_dir().join(format!("tsfc-mc-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("spec.tsf");

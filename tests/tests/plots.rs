@@ -146,7 +146,7 @@ fn rendering_is_deterministic() {
 
 #[test]
 fn campaign_figures_have_bands_histograms_and_the_convergence_marker() {
-    let text = crate::common::scalar_campaign_spec("mc_plot", 12, "");
+    let text = crate::common::scalar_campaign_spec("mc_plot", 12, 1.5, "");
     let dir = std::env::temp_dir().join(format!("tsfc-plots-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("mc_plot.tsf");

@@ -26,6 +26,7 @@ fn small_spec(dir: &Path) -> PathBuf {
     let text = crate::common::scalar_campaign_spec(
         "schema_demo",
         6,
+        1.5,
         "  sweep { trigger periodic { every = [0.05]; } window = 1 .. 4; columns { s = x1; } }\n",
     );
     let path = dir.join("schema_demo.tsf");

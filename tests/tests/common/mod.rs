@@ -187,9 +187,10 @@ pub fn tsfc_binary() -> PathBuf {
 }
 
 /// The Monte Carlo demo spec: an unstable scalar plant x1' = k x1 + u + d with
-/// a certified gain, a `monte_carlo` block of `runs` draws (k, x0 and d
-/// varied) and `extra` appended inside `simulate { }` (e.g. a sweep).
-pub fn scalar_campaign_spec(controller: &str, runs: usize, extra: &str) -> String {
+/// a certified gain, a `monte_carlo` block of `runs` draws (k scaled in
+/// [0.5, k_hi], x0 and d varied) and `extra` appended inside `simulate { }`
+/// (e.g. a sweep).
+pub fn scalar_campaign_spec(controller: &str, runs: usize, k_hi: f64, extra: &str) -> String {
     format!(
         "tsf 1;\ncontroller {controller};\nconst k = 1;\nstate x1;\ninput u;\ndisturbance d;\n\
          A = k; B = 1; D = 1;\n\
@@ -198,7 +199,7 @@ pub fn scalar_campaign_spec(controller: &str, runs: usize, extra: &str) -> Strin
          objective decay_rate >= 1;\n\
          simulate {{\n  x0 = 0.5;\n  time = 0 .. 4 step 0.01;\n  d(t) = 0.01 * sin(t);\n\
            dynamics {{ x1' = k * x1 + u + d; }}\n\
-           monte_carlo {{ runs = {runs}; k scale uniform(0.5, 1.5); x0 offset uniform(-0.2, 0.2);\n\
+           monte_carlo {{ runs = {runs}; k scale uniform(0.5, {k_hi}); x0 offset uniform(-0.2, 0.2);\n\
              d scale uniform(0.5, 1.5); converged |x1| <= 0.05 by 3.5; }}\n{extra}}}\n"
     )
 }
