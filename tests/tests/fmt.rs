@@ -43,10 +43,7 @@ fn run(args: &[&str], files: &[&Path]) -> Output {
 
 /// A fresh scratch folder.
 fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tsfc-fmt-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch");
-    dir
+    crate::common::fresh_dir("fmt", tag)
 }
 
 /// `text` without the byte spans of a Debug dump (`Span { start: 3, end: 9 }`).

@@ -21,10 +21,7 @@ use tsfc::synth::Settings;
 
 /// A fresh folder for one test.
 fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tsfc-harden-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    crate::common::fresh_dir("harden", tag)
 }
 
 /// Writes `text` as `<dir>/spec.tsf`.

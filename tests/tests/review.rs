@@ -12,10 +12,7 @@ const ZHANG: &str = "zhang2013_multiobjective.tsf";
 
 /// A fresh scratch folder for `tag`.
 fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tsfc-review-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
+    crate::common::fresh_dir("review", tag)
 }
 
 fn spec(name: &str) -> PathBuf {

@@ -14,10 +14,7 @@ const REGENERATE: &str = "cargo run --release -p tsfc -- schema --out docs/schem
 
 /// A fresh temporary folder for `tag`.
 fn fresh(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tsfc-schema-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    crate::common::fresh_dir("schema", tag)
 }
 
 /// An unstable scalar plant stabilized by a certified gain, with a Monte

@@ -203,3 +203,12 @@ pub fn scalar_campaign_spec(controller: &str, runs: usize, k_hi: f64, extra: &st
              d scale uniform(0.5, 1.5); converged |x1| <= 0.05 by 3.5; }}\n{extra}}}\n"
     )
 }
+
+/// A fresh, empty folder `tsfc-<prefix>-<tag>-<pid>` under the system's
+/// temporary folder (removed first if an earlier run left it).
+pub fn fresh_dir(prefix: &str, tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tsfc-{prefix}-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a fresh temporary folder");
+    dir
+}
