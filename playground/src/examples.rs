@@ -11,6 +11,8 @@ mod tests {
         let names: Vec<&str> = super::EXAMPLES.iter().map(|e| e.0).collect();
         assert!(names.contains(&"zhang2013_multiobjective.tsf"), "{names:?}");
         assert!(names.contains(&"xu2020_regional.tsf"), "{names:?}");
-        assert!(super::EXAMPLES.iter().all(|e| e.1.starts_with("tsf ") || e.1.contains("controller")));
+        assert!(super::EXAMPLES
+            .iter()
+            .all(|e| e.1.starts_with("tsf ") || e.1.contains("controller")));
     }
 }

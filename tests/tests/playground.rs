@@ -1,0 +1,504 @@
+//! The playground (docs/playground.md) in headless Chromium: `playground/build.sh`
+//! builds the page (or `TSFC_PLAYGROUND_DIR` names a folder CI built), a
+//! loopback file server in this test serves it, and the test drives the page
+//! over the DevTools protocol on a pipe (`--remote-debugging-pipe`): it
+//! certifies the Zhang and the regional Xu examples in the page and compares
+//! them with the native compiler, types a mistake and finds its diagnostic at
+//! the right line, and sees no console error. Skipped, with a message, when
+//! `chromium` or the `wasm32-wasip1` target is missing.
+
+use crate::common::{fresh_dir, spec_path, tsfc_binary};
+use serde_json::{json, Value};
+use std::io::{BufRead, BufReader, Write};
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The Chromium binary on PATH, if any.
+fn chromium() -> Option<PathBuf> {
+    std::env::var_os("PATH")?
+        .to_str()?
+        .split(':')
+        .map(|d| Path::new(d).join("chromium"))
+        .find(|p| p.is_file())
+}
+
+/// Whether rustup has the playground's target.
+fn wasm_target() -> bool {
+    Command::new("rustup")
+        .args(["target", "list", "--installed"])
+        .output()
+        .is_ok_and(|o| {
+            String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .any(|l| l == "wasm32-wasip1")
+        })
+}
+
+/// The built page: `TSFC_PLAYGROUND_DIR`, else `playground/build.sh` into `dir`.
+fn built_page(dir: &Path) -> PathBuf {
+    if let Some(d) = std::env::var_os("TSFC_PLAYGROUND_DIR") {
+        return PathBuf::from(d);
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let out = dir.join("site");
+    let status = Command::new("sh")
+        .arg(root.join("playground/build.sh"))
+        .arg(&out)
+        .status()
+        .expect("run playground/build.sh");
+    assert!(status.success(), "playground/build.sh failed");
+    out
+}
+
+/// Serves the files of `dir` on a loopback port (GET only, no listing);
+/// returns the base URL. Any path outside the folder's files is a 404.
+fn serve(dir: PathBuf) -> String {
+    let listener = TcpListener::bind("127.0.0.1:0").expect("a loopback port");
+    let port = listener.local_addr().expect("its address").port();
+    std::thread::spawn(move || {
+        for stream in listener.incoming().flatten() {
+            let dir = dir.clone();
+            std::thread::spawn(move || {
+                let mut stream = stream;
+                let mut line = String::new();
+                let mut reader = BufReader::new(&mut stream);
+                if reader.read_line(&mut line).is_err() {
+                    return;
+                }
+                loop {
+                    let mut h = String::new();
+                    if reader.read_line(&mut h).map_or(true, |n| n == 0) || h.trim().is_empty() {
+                        break;
+                    }
+                }
+                let path = line.split(' ').nth(1).unwrap_or("/");
+                let path = path
+                    .split('?')
+                    .next()
+                    .unwrap_or("/")
+                    .trim_start_matches('/');
+                let name = if path.is_empty() { "index.html" } else { path };
+                let file = (!name.contains("..") && !name.contains('/'))
+                    .then(|| std::fs::read(dir.join(name)).ok())
+                    .flatten();
+                let kind = match name.rsplit('.').next() {
+                    Some("html") => "text/html; charset=utf-8",
+                    Some("js") => "text/javascript",
+                    Some("css") => "text/css",
+                    Some("wasm") => "application/wasm",
+                    _ => "application/octet-stream",
+                };
+                let (head, body) = match file {
+                    Some(b) => (format!("200 OK\r\nContent-Type: {kind}"), b),
+                    None => ("404 Not Found".to_string(), b"not found".to_vec()),
+                };
+                let _ = write!(
+                    stream,
+                    "HTTP/1.1 {head}\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
+                    body.len()
+                );
+                let _ = stream.write_all(&body);
+            });
+        }
+    });
+    format!("http://127.0.0.1:{port}/")
+}
+
+/// A DevTools protocol session with one page over Chromium's pipe (fd 3 in,
+/// fd 4 out, messages separated by NUL); every event seen is kept.
+struct Browser {
+    child: Child,
+    to: ChildStdin,
+    from: BufReader<ChildStdout>,
+    next: u64,
+    session: String,
+    events: Vec<Value>,
+}
+
+impl Browser {
+    fn launch(chromium: &Path, profile: &Path) -> Browser {
+        // sh puts our pipes on the descriptors Chromium reads and writes.
+        let mut child = Command::new("sh")
+            .arg("-c")
+            .arg(r#"exec "$0" "$@" 3<&0 4>&1 </dev/null >/dev/null 2>/dev/null"#)
+            .arg(chromium)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--no-first-run",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--hide-scrollbars",
+                "--remote-debugging-pipe",
+                "--window-size=1400,1000",
+            ])
+            .arg(format!("--user-data-dir={}", profile.display()))
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .expect("chromium starts");
+        let to = child.stdin.take().expect("its input pipe");
+        let from = BufReader::new(child.stdout.take().expect("its output pipe"));
+        let mut b = Browser {
+            child,
+            to,
+            from,
+            next: 0,
+            session: String::new(),
+            events: Vec::new(),
+        };
+        let target = b.call("Target.createTarget", json!({ "url": "about:blank" }));
+        let attached = b.call(
+            "Target.attachToTarget",
+            json!({ "targetId": target["targetId"], "flatten": true }),
+        );
+        b.session = attached["sessionId"]
+            .as_str()
+            .expect("a session")
+            .to_string();
+        for domain in ["Runtime.enable", "Log.enable", "Page.enable"] {
+            b.call(domain, json!({}));
+        }
+        b
+    }
+
+    /// Sends a command (to the page once attached) and returns its result.
+    fn call(&mut self, method: &str, params: Value) -> Value {
+        self.next += 1;
+        let mut msg = json!({ "id": self.next, "method": method, "params": params });
+        if !self.session.is_empty() {
+            msg["sessionId"] = json!(self.session);
+        }
+        self.to
+            .write_all(msg.to_string().as_bytes())
+            .expect("write to chromium");
+        self.to.write_all(b"\0").expect("write to chromium");
+        self.to.flush().expect("flush");
+        loop {
+            let mut buf = Vec::new();
+            let n = self
+                .from
+                .read_until(0, &mut buf)
+                .expect("read from chromium");
+            assert!(n > 0, "chromium closed the pipe");
+            buf.pop();
+            let v: Value = serde_json::from_slice(&buf).expect("a DevTools message");
+            if v["id"] == json!(self.next) {
+                assert!(v.get("error").is_none(), "{method}: {v}");
+                return v["result"].clone();
+            }
+            self.events.push(v);
+        }
+    }
+
+    /// Evaluates `expr` in the page (awaiting a promise) and returns its value.
+    fn eval(&mut self, expr: &str) -> Value {
+        let r = self.call(
+            "Runtime.evaluate",
+            json!({ "expression": expr, "awaitPromise": true, "returnByValue": true }),
+        );
+        assert!(r.get("exceptionDetails").is_none(), "{expr}: {r}");
+        r["result"]["value"].clone()
+    }
+
+    /// Polls `expr` until it is true (panics after `secs` seconds).
+    fn wait(&mut self, expr: &str, secs: u64) {
+        let start = Instant::now();
+        while self.eval(expr) != json!(true) {
+            assert!(
+                start.elapsed() < Duration::from_secs(secs),
+                "timed out waiting for {expr}"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    /// The console errors, exceptions and error log entries seen so far.
+    fn errors(&self) -> Vec<String> {
+        self.events
+            .iter()
+            .filter(|e| {
+                let p = &e["params"];
+                match e["method"].as_str() {
+                    Some("Runtime.consoleAPICalled") => p["type"] == "error",
+                    Some("Runtime.exceptionThrown") => true,
+                    Some("Log.entryAdded") => p["entry"]["level"] == "error",
+                    _ => false,
+                }
+            })
+            .map(Value::to_string)
+            .collect()
+    }
+
+    /// A PNG screenshot of the page.
+    fn screenshot(&mut self, path: &Path) {
+        let r = self.call("Page.captureScreenshot", json!({ "format": "png" }));
+        let png = decode_base64(r["data"].as_str().expect("image data"));
+        std::fs::write(path, png).expect("write the screenshot");
+    }
+}
+
+impl Drop for Browser {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn decode_base64(s: &str) -> Vec<u8> {
+    let val = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        _ => 63,
+    };
+    let bytes: Vec<u8> = s.bytes().filter(|&c| c != b'=').collect();
+    let mut out = Vec::new();
+    for chunk in bytes.chunks(4) {
+        let n = chunk
+            .iter()
+            .fold(0u32, |a, &c| (a << 6) | u32::from(val(c)))
+            << (6 * (4 - chunk.len()));
+        out.extend(&n.to_be_bytes()[1..chunk.len()]);
+    }
+    out
+}
+
+/// The native compile of a shipped spec: (report, generated C).
+fn native(name: &str, out: &Path) -> (Value, String) {
+    let o = Command::new(tsfc_binary())
+        .arg("compile")
+        .arg(spec_path(name))
+        .arg("--out")
+        .arg(out)
+        .args(["--emit", "c"])
+        .output()
+        .expect("tsfc runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut report = None;
+    let mut c = None;
+    for e in std::fs::read_dir(out).expect("the output folder").flatten() {
+        let p = e.path();
+        let n = p
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("")
+            .to_string();
+        if n.ends_with(".report.json") {
+            report =
+                Some(serde_json::from_slice(&std::fs::read(&p).expect("report")).expect("JSON"));
+        } else if n.ends_with(".c") && n != "tsf_runtime.c" {
+            c = Some(std::fs::read_to_string(&p).expect("C"));
+        }
+    }
+    (report.expect("a report"), c.expect("a C file"))
+}
+
+/// The C of a shipped spec compiled natively with the playground's linear
+/// solver (QDLDL, [`tsf_lmi::LinearSolver::DEFAULT`] on wasm32) and its gamma.
+fn native_qdldl(name: &str) -> (String, f64) {
+    let mut settings = tsfc::synth::Settings::default();
+    settings.solver.linear_solver = tsf_lmi::LinearSolver::Qdldl;
+    let run = tsfc::pipeline::read(&spec_path(name))
+        .expect("read")
+        .compile(&settings)
+        .expect("compile");
+    let files = run.generate(&[tsf_lang::spec::Emit::C]).expect("generate");
+    let c = files
+        .iter()
+        .find(|f| f.name.ends_with(".c") && f.name != "tsf_runtime.c");
+    let report = serde_json::to_value(&run.compiled.report).expect("report");
+    (c.expect("a C file").text.clone(), gamma(&report))
+}
+
+/// `s` with every decimal number (with a point or exponent) replaced by `#`,
+/// and those numbers.
+fn masked(s: &str) -> (Vec<u8>, Vec<f64>) {
+    let b = s.as_bytes();
+    let (mut text, mut nums, mut i) = (Vec::new(), Vec::new(), 0);
+    while i < b.len() {
+        let after_ident = i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_');
+        if !after_ident && b[i].is_ascii_digit() {
+            let mut j = i;
+            while j < b.len()
+                && (b[j].is_ascii_digit()
+                    || matches!(b[j], b'.' | b'e' | b'E')
+                    || (matches!(b[j], b'-' | b'+') && matches!(b[j - 1], b'e' | b'E')))
+            {
+                j += 1;
+            }
+            let word = &s[i..j];
+            match word.parse::<f64>() {
+                Ok(v) if word.contains(['.', 'e', 'E']) => {
+                    nums.push(v);
+                    text.push(b'#');
+                }
+                _ => text.extend_from_slice(word.as_bytes()),
+            }
+            i = j;
+        } else {
+            text.push(b[i]);
+            i += 1;
+        }
+    }
+    (text, nums)
+}
+
+/// `a` and `b` are the same text once the numbers are masked, and each pair
+/// of numbers differs by at most 1e-3 times the largest magnitude in `b`.
+fn same_c_up_to_rounding(a: &str, b: &str, spec: &str) {
+    let ((ta, na), (tb, nb)) = (masked(a), masked(b));
+    assert!(
+        ta == tb,
+        "{spec}: the generated C differs beyond its numbers"
+    );
+    let scale = nb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (x, y) in na.iter().zip(&nb) {
+        assert!(
+            (x - y).abs() <= 1e-3 * scale,
+            "{spec}: {x} in the page, {y} natively"
+        );
+    }
+}
+
+fn gamma(report: &Value) -> f64 {
+    report["objectives"]["hinf_gamma"]
+        .as_f64()
+        .expect("an H-infinity gamma")
+}
+
+/// Certifies the example `name` in the page; returns the page's answer.
+fn certify_in_page(b: &mut Browser, name: &str) -> Value {
+    b.eval(&format!(
+        "(async () => {{ openExample({name:?}); await certify(); \
+         const r = window.lastCertify; return {{ ms: r.ms, status: r.result.status, \
+         report: r.result.report, files: r.result.files, \
+         summary: document.getElementById('summary').textContent, \
+         rows: document.querySelectorAll('#certificate tbody tr').length }}; }})()"
+    ))
+}
+
+#[test]
+fn playground_certifies_in_chromium_like_the_native_compiler() {
+    let Some(chromium) = chromium() else {
+        eprintln!("SKIPPED playground_certifies_in_chromium_like_the_native_compiler: `chromium` is not installed (apt-get install chromium)");
+        return;
+    };
+    if std::env::var_os("TSFC_PLAYGROUND_DIR").is_none() && !wasm_target() {
+        eprintln!("SKIPPED playground_certifies_in_chromium_like_the_native_compiler: the wasm32-wasip1 target is not installed (rustup target add wasm32-wasip1)");
+        return;
+    }
+    let dir = fresh_dir("playground", "chromium");
+    let url = serve(built_page(&dir));
+    let mut b = Browser::launch(&chromium, &dir.join("profile"));
+    b.call("Page.navigate", json!({ "url": url }));
+    b.wait("document.body && document.body.dataset.ready === '1'", 120);
+    // The console route sees an error (then the page must log none).
+    b.eval("console.error('tsfc-probe-error')");
+    assert!(
+        b.errors().iter().any(|e| e.contains("tsfc-probe-error")),
+        "no console route"
+    );
+    b.events.clear();
+
+    let shots = std::env::var_os("TSFC_PLAYGROUND_SHOTS").map(PathBuf::from);
+    for (spec, tag) in [
+        ("zhang2013_multiobjective.tsf", "zhang"),
+        ("xu2020_regional.tsf", "xu"),
+    ] {
+        let page = certify_in_page(&mut b, spec);
+        assert_eq!(page["status"], "certified", "{spec}: {page}");
+        let report: Value =
+            serde_json::from_str(page["report"].as_str().expect("report")).expect("JSON");
+        let lmis = report["certificate"]["lmis"]
+            .as_array()
+            .expect("LMIs")
+            .len();
+        assert_eq!(page["rows"], json!(lmis), "{spec}: a table row per LMI");
+        let c_page = page["files"]
+            .as_array()
+            .expect("files")
+            .iter()
+            .find(|f| {
+                f["name"]
+                    .as_str()
+                    .is_some_and(|n| n.ends_with(".c") && n != "tsf_runtime.c")
+            })
+            .and_then(|f| f["text"].as_str())
+            .expect("generated C")
+            .to_string();
+        let (native_report, native_c) = native(spec, &dir.join(tag));
+        let (qdldl_c, qdldl_gamma) = native_qdldl(spec);
+        let (g_page, g_native) = (gamma(&report), gamma(&native_report));
+        eprintln!(
+            "{spec}: page {:.0} ms, gamma page {g_page:e}, native {g_native:e} (QDLDL {qdldl_gamma:e}), C identical to native: {}, to native QDLDL: {}",
+            page["ms"].as_f64().unwrap_or(f64::NAN),
+            c_page == native_c,
+            c_page == qdldl_c
+        );
+        assert!(
+            page["summary"]
+                .as_str()
+                .is_some_and(|s| s.contains("hinf_gamma")),
+            "{page}"
+        );
+        assert!(
+            (g_page - g_native).abs() <= 1e-8 * g_native.abs(),
+            "{spec}: gamma {g_page} in the page, {g_native} natively"
+        );
+        // Not byte-identical (docs/playground.md, "Same results?"): the same
+        // text, the numbers within a thousandth of the file's largest one.
+        same_c_up_to_rounding(&c_page, &native_c, spec);
+        if let Some(d) = &shots {
+            b.screenshot(&d.join(format!("playground_{tag}.png")));
+        }
+    }
+
+    // A mistake on line 3: the page lists it at line 3 (as `tsfc check` does).
+    let text = std::fs::read_to_string(spec_path("zhang2013_multiobjective.tsf")).expect("spec");
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.insert(2, "stat x9 = ;");
+    let broken = lines.join("\n") + "\n";
+    b.eval(&format!(
+        "(() => {{ const s = document.getElementById('source'); s.value = {broken:?}; \
+         s.dispatchEvent(new Event('input')); }})()"
+    ));
+    b.wait(
+        "document.querySelector('#diagnostics li.error') !== null",
+        30,
+    );
+    let first = b.eval("document.querySelector('#diagnostics li.error').dataset.line");
+    let check_file = dir.join("broken.tsf");
+    std::fs::write(&check_file, &broken).expect("write");
+    let o = Command::new(tsfc_binary())
+        .args(["check", "--format", "json"])
+        .arg(&check_file)
+        .output()
+        .expect("tsfc check");
+    let doc: Value = serde_json::from_slice(&o.stdout).expect("check JSON");
+    let native_line = &doc["files"][0]["diagnostics"][0]["line"];
+    assert_eq!(native_line, &json!(3), "{doc}");
+    assert_eq!(
+        first.as_str(),
+        Some("3"),
+        "the page's first error is not at line 3"
+    );
+    assert_eq!(
+        b.eval("document.querySelectorAll('#highlight .err').length > 0"),
+        json!(true),
+        "the mistake is not underlined in the editor"
+    );
+    if let Some(d) = &shots {
+        b.eval("window.scrollTo(0, 0)");
+        b.screenshot(&d.join("playground_diagnostic.png"));
+    }
+    let errors = b.errors();
+    assert!(errors.is_empty(), "console errors: {errors:#?}");
+    drop(b);
+    let _ = std::fs::remove_dir_all(&dir);
+}
