@@ -258,6 +258,7 @@ async function simulate() {
   const h = parseFloat($("horizon").value);
   try {
     const { result: r, ms } = await solver.call({ op: "simulate", name: specName, text: source.value, horizon: Number.isFinite(h) ? h : 0 });
+    window.lastSimulate = { result: r, ms };
     if (r.error) {
       status(r.error, true);
       return;

@@ -459,6 +459,40 @@ fn playground_certifies_in_chromium_like_the_native_compiler() {
         }
     }
 
+    // The Zhang scenario simulated in the page: its plots drawn, the samples
+    // and the verdict the native simulator gives.
+    let sim = b.eval(
+        "(async () => { openExample('zhang2013_multiobjective.tsf'); await simulate(); \
+         const r = window.lastSimulate.result; return { error: r.error || null, \
+         samples: r.metrics && r.metrics.samples, converged: r.metrics && r.metrics.converged, \
+         svgs: (r.plots || []).filter(p => p.svg.startsWith('<svg') && p.svg.includes('<text')).length, \
+         imgs: document.querySelectorAll('#plots img').length }; })()",
+    );
+    let o = Command::new(tsfc_binary())
+        .arg("simulate")
+        .arg(spec_path("zhang2013_multiobjective.tsf"))
+        .arg("--out")
+        .arg(dir.join("sim"))
+        .output()
+        .expect("tsfc simulate");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let metrics: Value = serde_json::from_slice(
+        &std::fs::read(dir.join("sim/zhang_multiobjective.metrics.json")).expect("metrics"),
+    )
+    .expect("JSON");
+    assert_eq!(sim["error"], Value::Null, "{sim}");
+    assert_eq!(sim["samples"], metrics["samples"], "{sim}");
+    assert_eq!(sim["converged"], metrics["converged"], "{sim}");
+    assert!(
+        sim["svgs"].as_u64() >= Some(3) && sim["imgs"] == sim["svgs"],
+        "{sim}"
+    );
+
+    if let Some(d) = &shots {
+        b.eval("document.getElementById('plots').scrollIntoView()");
+        b.screenshot(&d.join("playground_simulate.png"));
+    }
+
     // A mistake on line 3: the page lists it at line 3 (as `tsfc check` does).
     let text = std::fs::read_to_string(spec_path("zhang2013_multiobjective.tsf")).expect("spec");
     let mut lines: Vec<&str> = text.lines().collect();
