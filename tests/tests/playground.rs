@@ -7,22 +7,13 @@
 //! the right line, and sees no console error. Skipped, with a message, when
 //! `chromium` or the `wasm32-wasip1` target is missing.
 
-use crate::common::{fresh_dir, spec_path, tsfc_binary};
+use crate::common::{chromium, fresh_dir, spec_path, tsfc_binary};
 use serde_json::{json, Value};
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::time::{Duration, Instant};
-
-/// The Chromium binary on PATH, if any.
-fn chromium() -> Option<PathBuf> {
-    std::env::var_os("PATH")?
-        .to_str()?
-        .split(':')
-        .map(|d| Path::new(d).join("chromium"))
-        .find(|p| p.is_file())
-}
 
 /// Whether rustup has the playground's target.
 fn wasm_target() -> bool {
