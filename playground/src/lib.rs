@@ -129,6 +129,17 @@ pub extern "C" fn tsfc_about() -> usize {
     }))
 }
 
+/// The plots' font: DejaVu Sans, the bytes the native plots embed. The page
+/// registers it (`FontFace`) for the inline SVG plots, so their text is drawn
+/// with the font shipped inside tsfc, never a system font.
+#[no_mangle]
+pub extern "C" fn tsfc_font() -> usize {
+    let bytes = dejavu::sans::regular().to_vec();
+    let len = bytes.len();
+    RESULT.with(|r| *r.borrow_mut() = bytes);
+    len
+}
+
 #[cfg(test)]
 mod tests {
     /// A string passed through the exported buffer calls comes back as the

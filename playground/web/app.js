@@ -265,10 +265,13 @@ async function simulate() {
     }
     const m = r.metrics;
     for (const p of r.plots) {
-      const img = document.createElement("img");
-      img.alt = p.name;
-      img.src = URL.createObjectURL(new Blob([p.svg], { type: "image/svg+xml" }));
-      $("plots").append(img);
+      // Inline (not an <img>), so the text uses the page's registered DejaVu
+      // Sans (style.css), the font tsfc ships, not a system font.
+      const svg = new DOMParser().parseFromString(p.svg, "image/svg+xml").documentElement;
+      if (svg.nodeName !== "svg") continue;
+      svg.setAttribute("role", "img");
+      svg.setAttribute("aria-label", p.name);
+      $("plots").append(document.importNode(svg, true));
     }
     const notes = [...r.warnings, ...r.failures].join("; ");
     status(`simulated in ${(ms / 1000).toFixed(2)} s: ${m.samples} samples, final ||x|| = ${m.final_state_norm.toExponential(3)}` +
@@ -313,6 +316,13 @@ $("examples").addEventListener("change", (e) => {
     status(`the compiler did not load: ${e.message}`, true);
     console.error(`tsfc playground: ${e.message}`);
     return;
+  }
+  try {
+    // The plots' font, from the module (the bytes the native plots embed).
+    const face = new FontFace("tsfc-sans", (await checker.call({ op: "font" })).result);
+    document.fonts.add(await face.load());
+  } catch (e) {
+    console.warn(`tsfc playground: the plots' font did not load: ${e.message}`);
   }
   for (const e of about.examples) $("examples").append(new Option(e.name, e.name));
   const l = about.limits;

@@ -89,6 +89,11 @@ async function tsfcInstantiate(module, log) {
   };
   return {
     about: () => answer(ex.tsfc_about()),
+    // The plots' font (DejaVu Sans) as a copy of its bytes.
+    font: () => {
+      const len = ex.tsfc_font() >>> 0;
+      return new Uint8Array(memory.buffer, ex.tsfc_result_ptr() >>> 0, len).slice().buffer;
+    },
     check: (name, text) => answer(ex.tsfc_check(...pass(name), ...pass(text))),
     certify: (name, text) => answer(ex.tsfc_certify(...pass(name), ...pass(text))),
     simulate: (name, text, horizon) =>

@@ -1,6 +1,6 @@
 // The page's worker: runs tsfc (tsfc.js, tsfc_playground.wasm) off the page's
 // thread, so a solve never freezes the editor. Messages in:
-// {id, op: "about" | "check" | "certify" | "simulate", name, text, horizon};
+// {id, op: "about" | "font" | "check" | "certify" | "simulate", name, text, horizon};
 // out: {id, ok: true, result, ms} or {id, ok: false, error}. A trap (a panic)
 // loses the instance; the next message makes a fresh one.
 "use strict";
@@ -28,6 +28,7 @@ self.onmessage = async (e) => {
     const t0 = performance.now();
     let result;
     if (op === "about") result = t.about();
+    else if (op === "font") result = t.font();
     else if (op === "check") result = t.check(name, text);
     else if (op === "certify") result = t.certify(name, text);
     else if (op === "simulate") result = t.simulate(name, text, horizon);

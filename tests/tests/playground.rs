@@ -457,7 +457,8 @@ fn playground_certifies_in_chromium_like_the_native_compiler() {
          const r = window.lastSimulate.result; return { error: r.error || null, \
          samples: r.metrics && r.metrics.samples, converged: r.metrics && r.metrics.converged, \
          svgs: (r.plots || []).filter(p => p.svg.startsWith('<svg') && p.svg.includes('<text')).length, \
-         imgs: document.querySelectorAll('#plots img').length }; })()",
+         imgs: document.querySelectorAll('#plots svg').length, \
+         font: [...document.fonts].some(f => f.family.replace(/\"/g, '') === 'tsfc-sans' && f.status === 'loaded') }; })()",
     );
     let o = Command::new(tsfc_binary())
         .arg("simulate")
@@ -475,7 +476,7 @@ fn playground_certifies_in_chromium_like_the_native_compiler() {
     assert_eq!(sim["samples"], metrics["samples"], "{sim}");
     assert_eq!(sim["converged"], metrics["converged"], "{sim}");
     assert!(
-        sim["svgs"].as_u64() >= Some(3) && sim["imgs"] == sim["svgs"],
+        sim["svgs"].as_u64() >= Some(3) && sim["imgs"] == sim["svgs"] && sim["font"] == true,
         "{sim}"
     );
 
