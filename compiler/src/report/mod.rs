@@ -15,7 +15,7 @@ pub use crate::util::matrix::rows;
 pub use crate::util::hash::sha256_hex;
 
 /// `spec` section.
-#[derive(Debug, Serialize, schemars::JsonSchema)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct SpecInfo {
     /// Path as given.
     pub path: String,

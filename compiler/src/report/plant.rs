@@ -106,6 +106,13 @@ pub fn not_covered(model: &TsModel) -> Option<String> {
     if !matches!(spec.lyapunov.node, Lyapunov::Quadratic) {
         return Some("a fuzzy Lyapunov function".into());
     }
+    let region_objective = spec
+        .objectives
+        .iter()
+        .any(|o| matches!(o.node, Objective::SaturationRegion { .. }));
+    if spec.saturation.is_some() && !region_objective {
+        return Some("saturation without `objective saturation region` (its E(P, 1) sizes the claim)".into());
+    }
     spec.objectives.iter().find_map(|o| match &o.node {
         Objective::Hinf { .. } => Some("the H-inf objective".to_string()),
         Objective::Linf { .. } => Some("the L-inf objective".to_string()),
