@@ -111,7 +111,9 @@ pub fn not_covered(model: &TsModel) -> Option<String> {
         .iter()
         .any(|o| matches!(o.node, Objective::SaturationRegion { .. }));
     if spec.saturation.is_some() && !region_objective {
-        return Some("saturation without `objective saturation region` (its E(P, 1) sizes the claim)".into());
+        return Some(
+            "saturation without `objective saturation region` (its E(P, 1) sizes the claim)".into(),
+        );
     }
     spec.objectives.iter().find_map(|o| match &o.node {
         Objective::Hinf { .. } => Some("the H-inf objective".to_string()),
