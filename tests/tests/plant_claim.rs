@@ -301,3 +301,24 @@ fn the_textbook_spec_gets_a_positive_bound_and_a_smaller_region_from_the_real_bo
     let (lo, hi) = plant.region[0].expect("x1 bounded");
     assert!(hi < R && lo > -R);
 }
+
+#[test]
+#[ignore = "needs branch bound: model::error_bound::bound wired into driver::plant::production_bound"]
+fn the_sector_specs_get_error_bound_zero_and_a_plant_claim_from_the_real_bound() {
+    let bound = tsfc::driver::plant::production_bound().expect("the bound is wired");
+    for name in ["lorenz_sector.tsf", "truck_trailer_sector.tsf"] {
+        let model = common::shipped(name);
+        let c = run(
+            &model,
+            PlantRequest {
+                bound: Some(bound),
+                region: None,
+            },
+        );
+        let plant = &c.report.plant;
+        let b = plant.error_bound.as_ref().expect("bound");
+        assert!(b.a <= 1e-9 && b.b <= 1e-9, "{name}: {} {}", b.a, b.b);
+        assert!(plant.claim.is_some(), "{name}: {:?}", plant.note);
+        assert!(plant.note.is_none(), "{name}: the whole region certifies");
+    }
+}
