@@ -63,11 +63,12 @@ pub fn compile(
         .region
         .cloned()
         .unwrap_or_else(|| default_region(model));
-    let attempt = |s: f64| -> Result<Compiled, (Compiled, String)> {
+    // Err: the compile that failed (None when the bound itself failed) and why.
+    let attempt = |s: f64| -> Result<Compiled, (Option<Compiled>, String)> {
         let region = scaled(&r0, s);
         let pe = match bound(model, &region) {
             Ok(pe) => pe,
-            Err(d) => return Err((nominal(), format!("model-error bound: {}", d.message))),
+            Err(d) => return Err((None, format!("no model-error bound: {}", d.message))),
         };
         let mut robust = model.clone();
         robust.plant_error = Some(pe.clone());
@@ -104,13 +105,25 @@ pub fn compile(
                     region_words(model, &region)
                 );
                 c.report.plant = without_claim(model, &region, Some(&pe), None, why.clone());
-                Err((c, why))
+                Err((Some(c), why))
             }
         }
     };
-    let first = match attempt(1.0) {
+    let (first, why) = match attempt(1.0) {
         Ok(c) => return c,
-        Err(failed) => failed,
+        Err((Some(c), why)) => (c, why),
+        Err((None, why)) => {
+            let mut c = nominal();
+            let p = c.outcome.as_ref().ok().map(|(d, _)| d.p.clone());
+            c.report.plant = without_claim(
+                model,
+                &r0,
+                None,
+                p.as_ref(),
+                format!("no plant claim: {why}"),
+            );
+            return c;
+        }
     };
     let (mut lo, mut hi, mut best) = (0.0f64, 1.0f64, None);
     for _ in 0..SHRINK_STEPS {
@@ -132,7 +145,7 @@ pub fn compile(
             "no region certifies down to scale 2^-{SHRINK_STEPS} of it ({SHRINK_STEPS} bisection steps)"
         ),
     };
-    let (mut failed, why) = first;
+    let mut failed = first;
     if request.region.is_some() {
         let message = format!("plant claim refused: {why}; {largest}");
         failed.status = Status::Refused;
