@@ -33,8 +33,9 @@ pub const SHRINK_STEPS: usize = 8;
 pub struct PlantRequest<'a> {
     /// The model-error bound (`None`: none available; the report says so).
     pub bound: Option<ErrorBound<'a>>,
-    /// The region the user asks the claim for (`None`: the default region,
-    /// shrunk if needed). An explicit region that fails is refused.
+    /// The region the user asks the claim for (`None`: the spec's `plant
+    /// region`, else the default region, shrunk if needed). An explicit
+    /// region (here or in the spec) that fails is refused.
     pub region: Option<&'a StateBox>,
 }
 
@@ -59,10 +60,9 @@ pub fn compile(
     if not_covered(model).is_some() {
         return nominal();
     }
-    let r0 = request
-        .region
-        .cloned()
-        .unwrap_or_else(|| default_region(model));
+    // The request's region, else the spec's `plant region`, else the default.
+    let explicit = request.region.or(model.spec.plant_region.as_ref());
+    let r0 = explicit.cloned().unwrap_or_else(|| default_region(model));
     // Err: the compile that failed (None when the bound itself failed) and why.
     let attempt = |s: f64| -> Result<Compiled, (Option<Compiled>, String)> {
         let region = scaled(&r0, s);
@@ -146,7 +146,7 @@ pub fn compile(
         ),
     };
     let mut failed = first;
-    if request.region.is_some() {
+    if explicit.is_some() {
         let message = format!("plant claim refused: {why}; {largest}");
         failed.status = Status::Refused;
         failed.report.status = "refused";

@@ -217,7 +217,11 @@ pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
 
 /// The default section of a compile without a model-error bound.
 pub fn nominal(model: &TsModel, p: Option<&DMatrix<f64>>) -> PlantSection {
-    let region = crate::model::plant_error::default_region(model);
+    let region = model
+        .spec
+        .plant_region
+        .clone()
+        .unwrap_or_else(|| crate::model::plant_error::default_region(model));
     let note = match (not_covered(model), &model.consistency) {
         (Some(what), _) => format!(
             "no plant claim: the robust conditions do not cover {what}; the certificate covers the rules' blend"
