@@ -31,6 +31,7 @@ mod model_consistency;
 mod monte_carlo;
 mod newcomer;
 mod objectives;
+mod plant_claim;
 mod playground;
 mod plots;
 mod region;
