@@ -99,13 +99,15 @@ impl Problem<'_> {
         let total = Affine::combine(&parts, 0.0, noise)?;
         let inv = recip(&total, noise)?;
         let (s_lo, _) = total.range();
+        let dense = Dense::new(&weights);
         let mut at = self.nz;
         let mut out = Vec::with_capacity(self.targets.len());
         for ((rows, cols), locals) in &self.targets {
             let mut m = DMatrix::zeros(*rows, *cols);
             for e in 0..rows * cols {
                 let exact = forms[at + e].as_ref().map_err(|u| *u)?;
-                m.as_mut_slice()[e] = entry_bound(&weights, locals, e, exact, (&inv, s_lo), noise)?;
+                m.as_mut_slice()[e] =
+                    entry_bound(&dense, locals, e, exact, (&total, &inv, s_lo), noise)?;
             }
             at += rows * cols;
             out.push(m);
@@ -114,18 +116,18 @@ impl Problem<'_> {
     }
 }
 
-/// The bound of `|sum_i h_i M_i[e] - M(x)[e]|` with `h_i = w_i / S` (`inv`
-/// encloses 1 / S, `s_lo` is a lower bound of S > 0). As `sum_i h_i = 1`,
+/// The bound of `|sum_i h_i M_i[e] - M(x)[e]|` with `h_i = w_i / S` (`s`
+/// encloses S, `inv` 1 / S, `s_lo` is a lower bound of S > 0). As `sum_i h_i = 1`,
 /// the error is `N / S - (M(x)[e] - C)` with `N = sum_i w_i (M_i[e] - C)`
 /// for any constant C (the centre of M(x)[e]: rules equal to a constant
 /// M(x) give 0), and also `(N - S (M(x)[e] - C)) / S`, bounded by
 /// `max |numerator| / s_lo`; the smaller of the two bounds is returned.
 fn entry_bound(
-    weights: &[Affine],
+    weights: &Dense,
     locals: &[&DMatrix<f64>],
     e: usize,
     exact: &Affine,
-    (inv, s_lo): (&Affine, f64),
+    (s, inv, s_lo): (&Affine, &Affine, f64),
     noise: &mut Noise,
 ) -> Result<f64, Unbounded> {
     let c = exact.center();
@@ -139,18 +141,79 @@ fn entry_bound(
         .iter()
         .map(|d| affine::rounding(d.abs(), 0))
         .fold(0.0, f64::max);
-    let parts: Vec<(f64, &Affine)> = diffs.iter().copied().zip(weights).collect();
-    let n = Affine::combine(&parts, 0.0, noise)?;
+    if exact.is_constant() && diffs.iter().all(|d| *d == 0.0) {
+        // Every rule has the plant's constant entry: exact.
+        return Ok(0.0);
+    }
+    let n = weights.combine(&diffs, noise)?;
     let shifted = exact.add_const(-c, noise)?;
     let a = Affine::combine(&[(1.0, &n.mul(inv, noise)?), (-1.0, &shifted)], 0.0, noise)?.abs_bound();
-    let s = Affine::combine(&parts_total(weights), 0.0, noise)?;
     let num = Affine::combine(&[(1.0, &n), (-1.0, &s.mul(&shifted, noise)?)], 0.0, noise)?;
     let b = num.abs_bound() / s_lo * (1.0 + 4.0 * f64::EPSILON);
     Ok(affine::add_up(a.min(b), rounded))
 }
 
-fn parts_total(weights: &[Affine]) -> Vec<(f64, &Affine)> {
-    weights.iter().map(|w| (1.0, w)).collect()
+/// The rules' weights as a dense table over the union of their symbols
+/// (linear combinations of them, one per matrix entry, are the hot path).
+struct Dense {
+    symbols: Vec<u32>,
+    centers: Vec<f64>,
+    /// Per rule: its coefficient of each symbol.
+    rows: Vec<Vec<f64>>,
+}
+
+impl Dense {
+    fn new(weights: &[Affine]) -> Dense {
+        let mut symbols: Vec<u32> = weights
+            .iter()
+            .flat_map(|w| w.terms().iter().map(|t| t.0))
+            .collect();
+        symbols.sort_unstable();
+        symbols.dedup();
+        let rows = weights
+            .iter()
+            .map(|w| {
+                let mut row = vec![0.0; symbols.len()];
+                for &(s, a) in w.terms() {
+                    if let Ok(k) = symbols.binary_search(&s) {
+                        row[k] = a;
+                    }
+                }
+                row
+            })
+            .collect();
+        Dense {
+            centers: weights.iter().map(Affine::center).collect(),
+            symbols,
+            rows,
+        }
+    }
+
+    /// `sum_i d_i w_i`, with the rounding of each centre and coefficient
+    /// (`r` products and sums) in a fresh symbol.
+    fn combine(&self, d: &[f64], noise: &mut Noise) -> Form {
+        let r = d.len();
+        let (mut c, mut mag) = (0.0, 0.0);
+        for (di, ci) in d.iter().zip(&self.centers) {
+            c += di * ci;
+            mag += (di * ci).abs();
+        }
+        let mut err = affine::rounding(mag, r);
+        let mut terms = Vec::with_capacity(self.symbols.len());
+        for (k, &s) in self.symbols.iter().enumerate() {
+            let (mut a, mut m) = (0.0, 0.0);
+            for (di, row) in d.iter().zip(&self.rows) {
+                let t = di * row[k];
+                a += t;
+                m += t.abs();
+            }
+            if m > 0.0 {
+                err = affine::add_up(err, affine::rounding(m, r));
+                terms.push((s, a));
+            }
+        }
+        Affine::from_parts(c, terms, err, noise)
+    }
 }
 
 /// The degree of one premise term as a form over the box's noise symbols.

@@ -199,6 +199,18 @@ impl Affine {
         Ok(Affine { center, terms })
     }
 
+    /// The form `center + sum terms` (sorted by symbol, distinct) plus a
+    /// fresh symbol of radius `err`, which must bound the rounding errors of
+    /// the centre and the coefficients the caller computed.
+    pub fn from_parts(center: f64, terms: Vec<(u32, f64)>, err: f64, noise: &mut Noise) -> Form {
+        Affine::with_error(center, terms, err, Some(noise))
+    }
+
+    /// The `(symbol, coefficient)` pairs, sorted by symbol.
+    pub fn terms(&self) -> &[(u32, f64)] {
+        &self.terms
+    }
+
     /// The central value.
     pub fn center(&self) -> f64 {
         self.center
@@ -258,23 +270,38 @@ impl Affine {
             mag += t.abs();
         }
         let mut err = rounding(mag, parts.len() + 1);
-        let mut all: Vec<(u32, f64)> = parts
-            .iter()
-            .flat_map(|(w, x)| x.terms.iter().map(move |&(s, a)| (s, w * a)))
-            .collect();
-        all.sort_by_key(|t| t.0);
-        let mut terms: Vec<(u32, f64)> = Vec::with_capacity(all.len());
-        let mut i = 0;
-        while i < all.len() {
-            let s = all[i].0;
-            let (mut sum, mut mag, mut k) = (0.0, 0.0, 0);
-            while i < all.len() && all[i].0 == s {
-                sum += all[i].1;
-                mag += all[i].1.abs();
-                k += 1;
-                i += 1;
+        // Merge the sorted terms: (symbol, sum, magnitude, count).
+        let mut acc: Vec<(u32, f64, f64, usize)> = Vec::new();
+        let mut next = Vec::new();
+        for (w, x) in parts {
+            if *w == 0.0 || x.terms.is_empty() {
+                continue;
             }
-            err = add_up(err, rounding(mag, k));
+            next.clear();
+            let (mut i, mut j) = (0, 0);
+            while i < acc.len() || j < x.terms.len() {
+                let take_acc = j >= x.terms.len() || (i < acc.len() && acc[i].0 < x.terms[j].0);
+                if take_acc {
+                    next.push(acc[i]);
+                    i += 1;
+                    continue;
+                }
+                let (s, a) = x.terms[j];
+                let t = w * a;
+                if i < acc.len() && acc[i].0 == s {
+                    let (_, sum, m, k) = acc[i];
+                    next.push((s, sum + t, m + t.abs(), k + 1));
+                    i += 1;
+                } else {
+                    next.push((s, t, t.abs(), 1));
+                }
+                j += 1;
+            }
+            std::mem::swap(&mut acc, &mut next);
+        }
+        let mut terms: Vec<(u32, f64)> = Vec::with_capacity(acc.len() + 1);
+        for (s, sum, m, k) in acc {
+            err = add_up(err, rounding(m, k));
             terms.push((s, sum));
         }
         Affine::with_error(center, terms, err, Some(noise))
