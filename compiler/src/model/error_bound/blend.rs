@@ -11,7 +11,7 @@
 //! values are in range.
 
 use crate::model::premise::TermSpec;
-use crate::tape::affine::{self, recip, unary, Affine, Form, Noise, Unbounded};
+use crate::tape::affine::{self, recip, recip_within, unary, Affine, Form, Noise, Unbounded};
 use crate::tape::{Builder, Id, Unary};
 use nalgebra::DMatrix;
 use tsf_lang::spec::SetShape;
@@ -80,7 +80,10 @@ impl Problem<'_> {
         }
         let mut cache: Vec<(&TermSpec, Affine)> = Vec::new();
         let mut weights = Vec::with_capacity(self.terms.len());
+        // Interval bounds of the total weight: degrees lie in [0, 1].
+        let (mut s_lo, mut s_hi) = (0.0f64, 0.0f64);
         for rule in self.terms {
+            let (mut p_lo, mut p_hi) = (1.0f64, 1.0f64);
             let mut w = Affine::constant(1.0)?;
             for t in rule {
                 let d = match cache.iter().find(|(u, _)| *u == t) {
@@ -91,14 +94,20 @@ impl Problem<'_> {
                         d
                     }
                 };
+                let (lo, hi) = d.range();
+                p_lo = (p_lo * lo.clamp(0.0, 1.0)).next_down().max(0.0);
+                p_hi = affine::mul_up(p_hi, hi.clamp(0.0, 1.0));
                 w = w.mul(&d, noise)?;
             }
+            s_lo = (s_lo + p_lo).next_down();
+            s_hi = affine::add_up(s_hi, p_hi);
             weights.push(w);
         }
         let parts: Vec<(f64, &Affine)> = weights.iter().map(|w| (1.0, w)).collect();
         let total = Affine::combine(&parts, 0.0, noise)?;
-        let inv = recip(&total, noise)?;
-        let (s_lo, _) = total.range();
+        let (lo, hi) = total.range();
+        let (s_lo, s_hi) = (lo.max(s_lo), hi.min(s_hi));
+        let inv = recip_within(&total, (s_lo, s_hi), noise)?;
         let dense = Dense::new(&weights);
         let mut at = self.nz;
         let mut out = Vec::with_capacity(self.targets.len());

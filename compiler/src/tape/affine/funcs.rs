@@ -103,6 +103,13 @@ fn abs(x: &Affine, noise: &mut Noise) -> Form {
 /// `1 / x` (`Unbounded` when the range of x contains 0).
 pub fn recip(x: &Affine, noise: &mut Noise) -> Form {
     let (lo, hi) = x.range();
+    recip_within(x, (lo, hi), noise)
+}
+
+/// `1 / x` where every true value of x is known to lie in `[lo, hi]` (a
+/// range narrower than the form's, from other knowledge), `Unbounded` when
+/// it contains 0.
+pub fn recip_within(x: &Affine, (lo, hi): (f64, f64), noise: &mut Noise) -> Form {
     if !(lo > 0.0 || hi < 0.0) {
         return Err(Unbounded);
     }

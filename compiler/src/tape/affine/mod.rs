@@ -20,7 +20,7 @@ mod graph;
 #[cfg(test)]
 mod tests;
 
-pub use funcs::{binary, chebyshev, recip, unary};
+pub use funcs::{binary, chebyshev, recip, recip_within, unary};
 pub use graph::{depends_on, enclose};
 
 /// Relative slack of one rounding step (twice the unit roundoff).
@@ -86,16 +86,14 @@ pub(crate) fn sub_down(a: f64, b: f64) -> f64 {
     -add_up(-a, b)
 }
 
-/// `a * b` rounded upward (the FMA gives the rounding error's sign).
+/// `a * b` rounded upward, for `a, b >= 0` (a nonzero product is moved one
+/// ulp up: cheaper than an FMA test, which has no hardware form here).
 pub(crate) fn mul_up(a: f64, b: f64) -> f64 {
     let p = a * b;
-    if !p.is_finite() {
-        return p;
-    }
-    if a.mul_add(b, -p) > 0.0 {
-        p.next_up()
+    if p == 0.0 && (a == 0.0 || b == 0.0) {
+        0.0
     } else {
-        p
+        p.next_up()
     }
 }
 
@@ -122,8 +120,8 @@ fn condense(terms: &mut Vec<(u32, f64)>, first: u32) -> f64 {
         .filter(|t| t.0 >= first)
         .map(|t| t.1.abs())
         .collect();
-    mags.sort_by(|a, b| b.total_cmp(a));
-    let cut = mags[KEEP - 1];
+    let (_, cut, _) = mags.select_nth_unstable_by(KEEP - 1, |a, b| b.total_cmp(a));
+    let cut = *cut;
     let mut kept = 0;
     let mut folded = 0.0;
     terms.retain(|t| {
