@@ -52,8 +52,16 @@ fn sector_specs_have_a_zero_bound() {
             "{name}: A bound {:e} (largest entry {sa})",
             b.a_entry.amax()
         );
-        assert!(b.b_entry.amax() <= ZERO_TOL * sb.max(1.0), "{name}: B bound {:e}", b.b_entry.amax());
-        assert!(b.a_norm <= ZERO_TOL * sa * 3.0, "{name}: a_norm {:e}", b.a_norm);
+        assert!(
+            b.b_entry.amax() <= ZERO_TOL * sb.max(1.0),
+            "{name}: B bound {:e}",
+            b.b_entry.amax()
+        );
+        assert!(
+            b.a_norm <= ZERO_TOL * sa * 3.0,
+            "{name}: a_norm {:e}",
+            b.a_norm
+        );
     }
 }
 
@@ -61,7 +69,12 @@ fn sector_specs_have_a_zero_bound() {
 /// `samples` seeded states of `region` (interpreter and runtime memberships;
 /// states whose premise values leave their ranges are skipped), per target
 /// A, B.
-fn sampled(model: &TsModel, region: &StateBox, samples: usize, seed: u64) -> [(DMatrix<f64>, f64); 2] {
+fn sampled(
+    model: &TsModel,
+    region: &StateBox,
+    samples: usize,
+    seed: u64,
+) -> [(DMatrix<f64>, f64); 2] {
     let spec = &model.spec;
     let mut rng = SplitMix64::new(seed);
     let ranges: Vec<(f64, f64)> = model
@@ -93,7 +106,11 @@ fn sampled(model: &TsModel, region: &StateBox, samples: usize, seed: u64) -> [(D
             })
             .collect();
         let z = premise_values(spec, &x).expect("premises");
-        if !z.iter().zip(&ranges).all(|(v, (lo, hi))| v >= lo && v <= hi) {
+        if !z
+            .iter()
+            .zip(&ranges)
+            .all(|(v, (lo, hi))| v >= lo && v <= hi)
+        {
             continue;
         }
         let w: Vec<f64> = model.terms.iter().map(|t| rule_weight(t, &z)).collect();
@@ -115,7 +132,10 @@ fn sampled(model: &TsModel, region: &StateBox, samples: usize, seed: u64) -> [(D
         }
         counted += 1;
     }
-    assert!(counted > samples / 10, "{counted} states in the premise ranges");
+    assert!(
+        counted > samples / 10,
+        "{counted} states in the premise ranges"
+    );
     out
 }
 
@@ -131,14 +151,31 @@ fn check_above_sampling(name: &str, region: StateBox) -> f64 {
     let (ta, tb) = (1e-14 * ta, 1e-14 * tb);
     for (what, bound, found, tol) in [("A", &b.a_entry, &sa, ta), ("B", &b.b_entry, &sb, tb)] {
         for (u, v) in bound.iter().zip(found.iter()) {
-            assert!(u + tol >= *v, "{name}: {what} entry bound {u:e} below sampled {v:e}");
+            assert!(
+                u + tol >= *v,
+                "{name}: {what} entry bound {u:e} below sampled {v:e}"
+            );
         }
     }
-    assert!(b.a_norm + ta >= na, "{name}: a_norm {} < sampled {na}", b.a_norm);
-    assert!(b.b_norm + tb >= nb, "{name}: b_norm {} < sampled {nb}", b.b_norm);
-    assert!(b.sampled_max.0 <= b.a_norm + ta, "the bound's own samples are below it");
+    assert!(
+        b.a_norm + ta >= na,
+        "{name}: a_norm {} < sampled {na}",
+        b.a_norm
+    );
+    assert!(
+        b.b_norm + tb >= nb,
+        "{name}: b_norm {} < sampled {nb}",
+        b.b_norm
+    );
+    assert!(
+        b.sampled_max.0 <= b.a_norm + ta,
+        "the bound's own samples are below it"
+    );
     let ratio = b.a_norm / na.max(f64::MIN_POSITIVE);
-    eprintln!("{name}: A bound / sampled = {ratio:.3} ({} / {na:.4e}); B {} / {nb:.4e}", b.a_norm, b.b_norm);
+    eprintln!(
+        "{name}: A bound / sampled = {ratio:.3} ({} / {na:.4e}); B {} / {nb:.4e}",
+        b.a_norm, b.b_norm
+    );
     ratio
 }
 

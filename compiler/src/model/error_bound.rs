@@ -182,11 +182,7 @@ pub fn bound(
         ))
     })?;
     let locals = |k: usize| -> Vec<&DMatrix<f64>> {
-        model
-            .rules
-            .iter()
-            .map(|r| [&r.a, &r.b, &r.d][k])
-            .collect()
+        model.rules.iter().map(|r| [&r.a, &r.b, &r.d][k]).collect()
     };
     let targets: Vec<_> = graph
         .shapes
@@ -317,12 +313,11 @@ fn finish(
         ));
     }
     if let Some(l) = live.iter().find(|l| l.mats.is_none()) {
-        let bx = l
-            .bx
-            .iter()
-            .map(|(lo, hi)| format!("[{lo:.4}, {hi:.4}]"))
-            .collect::<Vec<_>>()
-            .join(", ");
+        let bx =
+            l.bx.iter()
+                .map(|(lo, hi)| format!("[{lo:.4}, {hi:.4}]"))
+                .collect::<Vec<_>>()
+                .join(", ");
         return Err(fail(format!(
             "the model error is not bounded on the box: on the sub-box {bx} an expression divides by a range containing 0 (or leaves its domain), after {boxes} sub-boxes"
         ))

@@ -156,7 +156,8 @@ fn entry_bound(
     }
     let n = weights.combine(&diffs, noise)?;
     let shifted = exact.add_const(-c, noise)?;
-    let a = Affine::combine(&[(1.0, &n.mul(inv, noise)?), (-1.0, &shifted)], 0.0, noise)?.abs_bound();
+    let a =
+        Affine::combine(&[(1.0, &n.mul(inv, noise)?), (-1.0, &shifted)], 0.0, noise)?.abs_bound();
     let num = Affine::combine(&[(1.0, &n), (-1.0, &s.mul(&shifted, noise)?)], 0.0, noise)?;
     let b = num.abs_bound() / s_lo * (1.0 + 4.0 * f64::EPSILON);
     Ok(affine::add_up(a.min(b), rounded))

@@ -185,8 +185,20 @@ pub fn unary(f: Unary, x: &Affine, noise: &mut Noise) -> Form {
         Unary::Neg => Ok(x.neg()),
         Unary::Abs => abs(x, noise),
         Unary::Sign => {
-            let a = if lo > 0.0 { 1.0 } else if lo < 0.0 { -1.0 } else { 0.0 };
-            let b = if hi < 0.0 { -1.0 } else if hi > 0.0 { 1.0 } else { 0.0 };
+            let a = if lo > 0.0 {
+                1.0
+            } else if lo < 0.0 {
+                -1.0
+            } else {
+                0.0
+            };
+            let b = if hi < 0.0 {
+                -1.0
+            } else if hi > 0.0 {
+                1.0
+            } else {
+                0.0
+            };
             Affine::interval(a, b, noise)
         }
         Unary::Sqrt => {

@@ -61,6 +61,11 @@ pub fn enclose(b: &Builder, outputs: &[Id], inputs: &[Form], noise: &mut Noise) 
     }
     outputs
         .iter()
-        .map(|id| val.get(id.index()).cloned().flatten().unwrap_or(Err(Unbounded)))
+        .map(|id| {
+            val.get(id.index())
+                .cloned()
+                .flatten()
+                .unwrap_or(Err(Unbounded))
+        })
         .collect()
 }
