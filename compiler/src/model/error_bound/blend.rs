@@ -16,6 +16,9 @@ use crate::tape::{Builder, Id, Unary};
 use nalgebra::DMatrix;
 use tsf_lang::spec::SetShape;
 
+/// A target matrix: its shape and the rules' matrices.
+pub(super) type Target<'a> = ((usize, usize), Vec<&'a DMatrix<f64>>);
+
 /// What the error bound evaluates: the graph and the rules.
 pub(super) struct Problem<'a> {
     /// The graph of z(x) and the plant's matrices.
@@ -25,7 +28,7 @@ pub(super) struct Problem<'a> {
     /// Number of premise values.
     pub nz: usize,
     /// Per target (A, B, then D when bounded): shape and the rules' matrices.
-    pub targets: Vec<((usize, usize), Vec<&'a DMatrix<f64>>)>,
+    pub targets: Vec<Target<'a>>,
     /// Declared range of each premise value.
     pub ranges: Vec<(f64, f64)>,
     /// Per rule: its premise terms.

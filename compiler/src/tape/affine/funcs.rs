@@ -372,8 +372,3 @@ pub fn binary(f: Binary, x: &Affine, y: &Affine, noise: &mut Noise) -> Form {
         }
     }
 }
-
-#[cfg(test)]
-pub(super) fn sinc_parts(c: f64) -> ((f64, f64), (f64, f64)) {
-    (sinc_value(c), sinc_slope(c))
-}
