@@ -314,8 +314,9 @@ fn pow_const(x: &Affine, p: f64, noise: &mut Noise) -> Form {
     }
     if p.fract() == 0.0 && p.abs() <= 64.0 {
         // Binary powering.
+        // A negative power is a power of 1 / x (whose range stays away from 0).
         let mut k = p.abs() as u32;
-        let mut base = x.clone();
+        let mut base = if p < 0.0 { recip(x, noise)? } else { x.clone() };
         let mut acc: Option<Affine> = None;
         while k > 0 {
             if k & 1 == 1 {
@@ -329,8 +330,7 @@ fn pow_const(x: &Affine, p: f64, noise: &mut Noise) -> Form {
                 base = base.sqr(noise)?;
             }
         }
-        let v = acc.ok_or(Unbounded)?;
-        return if p < 0.0 { recip(&v, noise) } else { Ok(v) };
+        return acc.ok_or(Unbounded);
     }
     let l = unary(Unary::Ln, x, noise)?;
     unary(Unary::Exp, &l.scale(p, noise)?, noise)
