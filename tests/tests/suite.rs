@@ -9,6 +9,7 @@ mod common;
 mod compat;
 mod diagnostics;
 mod editors;
+mod error_bound;
 mod event_trigger;
 mod exprel;
 mod fmt;

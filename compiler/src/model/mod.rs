@@ -5,6 +5,7 @@
 
 mod consistency;
 mod coverage;
+pub mod error_bound;
 pub mod explain;
 mod finite;
 mod local;
