@@ -12,7 +12,8 @@
 //! the largest region that certifies in the message.
 
 use crate::driver::compile::{compile as compile_model, Compiled, Status};
-use crate::model::plant_error::{default_region, scaled, PlantError, StateBox};
+use crate::model::error_bound::{self, BoundLimits};
+use crate::model::plant_error::{default_region, nominal_slack, scaled, PlantError, StateBox};
 use crate::model::TsModel;
 use crate::report::plant::{not_covered, region_words, with_claim, without_claim, Claimed};
 use crate::report::{schema_id, Diagnosis, SpecInfo};
@@ -28,6 +29,9 @@ pub type ErrorBound<'a> = &'a dyn Fn(&TsModel, &StateBox) -> Result<PlantError, 
 /// R (the certified scale is then known to within 2^-8 of R).
 pub const SHRINK_STEPS: usize = 8;
 
+/// The note of a claim the nominal design carries ([`nominal_slack`]).
+const ABSORBED: &str = "the nominal design's decrease conditions absorb the model error (margin check: no robust re-design needed)";
+
 /// What the plant claim is asked for.
 #[derive(Default, Clone, Copy)]
 pub struct PlantRequest<'a> {
@@ -39,10 +43,34 @@ pub struct PlantRequest<'a> {
     pub region: Option<&'a StateBox>,
 }
 
-/// The bound `tsfc compile` uses: none yet (no claim is made of A(x), B(x)
-/// until a rigorous bound is wired here; never a bound from grid sampling).
+/// The bound `tsfc compile` uses: the rigorous affine-arithmetic bound of
+/// [`crate::model::error_bound::bound`] at its default work limits.
 pub fn production_bound() -> Option<ErrorBound<'static>> {
-    None
+    Some(&rigorous)
+}
+
+/// [`crate::model::error_bound::bound`] as an [`ErrorBound`]. A region that
+/// reaches states whose premise values leave their declared ranges (where the
+/// blend, hence the bound, is not defined) is no region for a claim.
+fn rigorous(model: &TsModel, region: &StateBox) -> Result<PlantError, Diagnostic> {
+    let b = error_bound::bound(model, &model.spec, region, &BoundLimits::default())?;
+    if b.outside_premise {
+        return Err(Diagnostic::error(
+            model.spec.controller.span,
+            format!(
+                "the region {} reaches states whose premise values leave their declared ranges",
+                region_words(model, region)
+            ),
+        ));
+    }
+    Ok(PlantError {
+        a: b.a_norm,
+        b: b.b_norm,
+        d: b.d_norm,
+        boxes: b.boxes,
+        converged: b.converged,
+        sampled_max: b.sampled_max,
+    })
 }
 
 /// Compiles `model` and makes the plant claim `request` asks for.
@@ -63,6 +91,15 @@ pub fn compile(
     // The request's region, else the spec's `plant region`, else the default.
     let explicit = request.region.or(model.spec.plant_region.as_ref());
     let r0 = explicit.cloned().unwrap_or_else(|| default_region(model));
+    let shrink_note = |s: f64| {
+        (s < 1.0).then(|| {
+            format!(
+                "the robust conditions fail on {}; the largest region that certifies is scale {s} of it ({SHRINK_STEPS} bisection steps)",
+                region_words(model, &r0)
+            )
+        })
+    };
+    let nominal_once = std::cell::OnceCell::new();
     // Err: the compile that failed (None when the bound itself failed) and why.
     let attempt = |s: f64| -> Result<Compiled, (Option<Compiled>, String)> {
         let region = scaled(&r0, s);
@@ -70,6 +107,16 @@ pub fn compile(
             Ok(pe) => pe,
             Err(d) => return Err((None, format!("no model-error bound: {}", d.message))),
         };
+        // The nominal design first: when its decrease conditions absorb the
+        // error (no saturation term), it ships unchanged; else a robust design.
+        if model.spec.saturation.is_none() {
+            let c = nominal_once.get_or_init(nominal);
+            if let Some(sec) = absorbed(model, c, &region, &pe, shrink_note(s)) {
+                let mut c = compile_model(model, info.clone(), settings, front);
+                c.report.plant = sec;
+                return Ok(c);
+            }
+        }
         let mut robust = model.clone();
         robust.plant_error = Some(pe.clone());
         let mut c = compile_model(&robust, info.clone(), settings, front);
@@ -82,12 +129,7 @@ pub fn compile(
                     p: &d.p,
                     alpha: c.report.objectives.decay_rate.unwrap_or(0.0),
                     saturation_level: model.spec.saturation.as_ref().map(|_| 1.0),
-                    note: (s < 1.0).then(|| {
-                        format!(
-                            "the robust conditions fail on {}; the largest region that certifies is scale {s} of it ({SHRINK_STEPS} bisection steps)",
-                            region_words(model, &r0)
-                        )
-                    }),
+                    note: shrink_note(s),
                 },
             ),
             _ => None,
@@ -176,4 +218,34 @@ pub fn compile(
             c
         }
     }
+}
+
+/// The claim the nominal design `c` makes when its decrease conditions absorb
+/// the error `pe` on `region` ([`nominal_slack`]; no saturation term).
+fn absorbed(
+    model: &TsModel,
+    c: &Compiled,
+    region: &StateBox,
+    pe: &PlantError,
+    shrunk: Option<String>,
+) -> Option<crate::report::plant::PlantSection> {
+    let (Status::Certified, Ok((d, _))) = (&c.status, &c.outcome) else {
+        return None;
+    };
+    let alpha = c.report.objectives.decay_rate.unwrap_or(0.0);
+    if !nominal_slack(&model.rules, &d.p, &d.gains, alpha, pe).is_some_and(|s| s > 0.0) {
+        return None;
+    }
+    let note = shrunk.map_or(ABSORBED.to_string(), |n| format!("{ABSORBED}; {n}"));
+    with_claim(
+        model,
+        &Claimed {
+            region,
+            bound: pe,
+            p: &d.p,
+            alpha,
+            saturation_level: None,
+            note: Some(note),
+        },
+    )
 }

@@ -156,13 +156,9 @@ pub fn bound(
 ) -> Result<ModelErrorBound, Diagnostic> {
     let fail = |msg: String| Diagnostic::error(spec.controller.span, msg);
     let n = spec.n();
-    if region.len() != n
-        || region
-            .iter()
-            .any(|(lo, hi)| !(lo.is_finite() && hi.is_finite() && lo <= hi))
-    {
+    if !well_formed(region, n) {
         return Err(fail(format!(
-            "the model-error bound needs a finite box of the {n} states (lo <= hi each)"
+            "the model-error bound needs a box of the {n} states (lo <= hi each)"
         )));
     }
     let (Some(a), Some(b)) = (&spec.a, &spec.b) else {
@@ -201,6 +197,11 @@ pub fn bound(
         .flat_map(|s| std::iter::repeat_n(s.range, s.dim))
         .collect();
     let deps = affine::depends_on(&graph.builder, &graph.outputs);
+    let region: &StateBox = &pinned(region, &deps).map_err(|k| {
+        fail(format!(
+            "the model-error bound needs finite bounds of state component {k}, which the premises or A(x), B(x) read"
+        ))
+    })?;
     let sampler = graph
         .builder
         .clone()
@@ -294,6 +295,30 @@ pub fn bound(
         sample,
         fail,
     )
+}
+
+/// `n` intervals, each lo <= hi (no NaN; infinite ends allowed).
+fn well_formed(region: &StateBox, n: usize) -> bool {
+    region.len() == n
+        && region
+            .iter()
+            .all(|(lo, hi)| lo.partial_cmp(hi).is_some_and(|o| o.is_le()))
+}
+
+/// `region` with every state no premise and no entry reads pinned at 0 (its
+/// value does not matter, so it may be unbounded); `Err(k)`: state k is read
+/// but unbounded.
+fn pinned(region: &StateBox, deps: &[bool]) -> Result<StateBox, usize> {
+    region
+        .iter()
+        .zip(deps)
+        .enumerate()
+        .map(|(k, (&(lo, hi), &read))| match read {
+            false => Ok((0.0, 0.0)),
+            true if lo.is_finite() && hi.is_finite() => Ok((lo, hi)),
+            true => Err(k),
+        })
+        .collect()
 }
 
 /// The result from the final sub-boxes.

@@ -92,6 +92,54 @@ pub fn extents(p_inv: &nalgebra::DMatrix<f64>, c: f64) -> Vec<f64> {
         .collect()
 }
 
+/// Slack of the nominal design against the model error, without a new
+/// design: with M_ij = He(P (A_i + B_i F_j)) + 2 alpha P and
+/// mu = min(min_i -lmax(M_ii), min_{i<j} -lmax((M_ij + M_ji) / 2)), every
+/// blend sum h_i h_j M_ij <= -mu I (the weights sum to 1), and the error adds
+/// at most 2 ||P|| (a + b max_j ||F_j||) to it (||dA|| <= a, ||dB|| <= b, the
+/// blended gain's norm at most the largest F_j's). The returned slack
+/// mu - 2 ||P|| (a + b max ||F_j||) - rounding is positive when the plant
+/// x' = A(x) x + B(x) u with these gains decreases V = x'Px at rate alpha
+/// wherever the error bound holds. `gains`: one per rule, or one common gain.
+pub fn nominal_slack(
+    rules: &[super::LocalModel],
+    p: &nalgebra::DMatrix<f64>,
+    gains: &[nalgebra::DMatrix<f64>],
+    alpha: f64,
+    error: &PlantError,
+) -> Option<f64> {
+    let r = rules.len();
+    let gain = |j: usize| gains.get(if gains.len() == 1 { 0 } else { j });
+    let m = |i: usize, j: usize| -> Option<nalgebra::DMatrix<f64>> {
+        let acl = &rules[i].a + &rules[i].b * gain(j)?;
+        let pa = p * acl;
+        Some(&pa + pa.transpose() + p * (2.0 * alpha))
+    };
+    let lmax = |s: nalgebra::DMatrix<f64>| s.symmetric_eigenvalues().max();
+    let mut mu = f64::INFINITY;
+    let mut scale = 0.0f64;
+    for i in 0..r {
+        for j in i..r {
+            let s = if i == j {
+                m(i, i)?
+            } else {
+                (m(i, j)? + m(j, i)?) * 0.5
+            };
+            scale = scale.max(s.norm());
+            mu = mu.min(-lmax(s));
+        }
+    }
+    let p_norm = p.clone().singular_values().max();
+    let f_norm = gains
+        .iter()
+        .map(|f| f.clone().singular_values().max())
+        .fold(0.0, f64::max);
+    // Rounding of the products and the eigenvalues, far above f64's.
+    let rounding = 1e-9 * (1.0 + scale);
+    let slack = mu - 2.0 * p_norm * (error.a + error.b * f_norm) - rounding;
+    slack.is_finite().then_some(slack)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
