@@ -9,7 +9,8 @@ pub type StateBox = Vec<(f64, f64)>;
 /// Upper bounds of the model error over a region: ||A(x) - A_h(x)|| <= a and
 /// ||B(x) - B_h(x)|| <= b (spectral norms) for every x in the region, with how
 /// the bound was found.
-#[derive(Debug, Clone, PartialEq)]
+/// (Serialized as the report's `plant.error_bound`.)
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct PlantError {
     /// Bound of the spectral norm of A(x) - A_h(x).
     pub a: f64,

@@ -10,43 +10,13 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 use tsf_lang::spec::{Lyapunov, Objective, Trigger};
 
-/// The model-error bound the claim rests on.
-#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
-pub struct ErrorBoundReport {
-    /// Bound of ||A(x) - A_h(x)|| (spectral norm) over the region.
-    pub a: f64,
-    /// Bound of ||B(x) - B_h(x)|| over the region.
-    pub b: f64,
-    /// Bound of ||D(x) - D_h(x)|| when the spec has disturbances.
-    pub d: Option<f64>,
-    /// Boxes the region was subdivided into.
-    pub boxes: usize,
-    /// Whether the subdivision converged (else it stopped at its work limit).
-    pub converged: bool,
-    /// The largest errors of A and B found by sampling (lower bounds).
-    pub sampled_max: (f64, f64),
-}
-
-impl From<&PlantError> for ErrorBoundReport {
-    fn from(e: &PlantError) -> Self {
-        ErrorBoundReport {
-            a: e.a,
-            b: e.b,
-            d: e.d,
-            boxes: e.boxes,
-            converged: e.converged,
-            sampled_max: e.sampled_max,
-        }
-    }
-}
-
 /// The `plant` section.
 #[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct PlantSection {
     /// The region R of the claim: per state `[lo, hi]`, null where unbounded.
     pub region: Vec<Option<(f64, f64)>>,
     /// The model-error bound over R (null: no rigorous bound available).
-    pub error_bound: Option<ErrorBoundReport>,
+    pub error_bound: Option<PlantError>,
     /// P of V = x' P x (null without a certified design).
     #[serde(rename = "P")]
     pub p: Option<Vec<Vec<f64>>>,
@@ -142,7 +112,7 @@ pub fn without_claim(
 ) -> PlantSection {
     PlantSection {
         region: region_json(region),
-        error_bound: bound.map(ErrorBoundReport::from),
+        error_bound: bound.cloned(),
         p: p.map(rows),
         level: None,
         extents: None,
@@ -205,7 +175,7 @@ pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
     );
     Some(PlantSection {
         region: region_json(c.region),
-        error_bound: Some(ErrorBoundReport::from(c.bound)),
+        error_bound: Some(c.bound.clone()),
         p: Some(rows(c.p)),
         level: level.is_finite().then_some(level),
         extents: level.is_finite().then(|| extents(&p_inv, level)),
