@@ -186,6 +186,14 @@ impl Browser {
         }
     }
 
+    /// Sends a command to the browser itself (not to the page).
+    fn browser_call(&mut self, method: &str, params: Value) -> Value {
+        let session = std::mem::take(&mut self.session);
+        let r = self.call(method, params);
+        self.session = session;
+        r
+    }
+
     /// Evaluates `expr` in the page (awaiting a promise) and returns its value.
     fn eval(&mut self, expr: &str) -> Value {
         let r = self.call(
@@ -349,6 +357,54 @@ fn same_c_up_to_rounding(a: &str, b: &str, spec: &str) {
     }
 }
 
+/// The code pane's Copy and Download buttons on the generated file `name`
+/// (certified just before): the clipboard and the downloaded file hold
+/// exactly the text the compiler returned for it.
+fn copy_and_download(b: &mut Browser, url: &str, name: &str, text: &str, dir: &Path) {
+    let downloads = dir.join("downloads");
+    std::fs::create_dir_all(&downloads).expect("downloads folder");
+    let origin = url.trim_end_matches('/');
+    b.browser_call(
+        "Browser.grantPermissions",
+        json!({ "origin": origin, "permissions": ["clipboardReadWrite", "clipboardSanitizedWrite"] }),
+    );
+    b.browser_call(
+        "Browser.setDownloadBehavior",
+        json!({ "behavior": "allow", "downloadPath": downloads.display().to_string() }),
+    );
+    // Headless pages are never focused; the clipboard needs focus.
+    b.call(
+        "Emulation.setFocusEmulationEnabled",
+        json!({ "enabled": true }),
+    );
+    let copied = b.eval(&format!(
+        "(async () => {{ const s = document.getElementById('files'); s.value = {name:?}; \
+         s.dispatchEvent(new Event('change')); document.getElementById('copy').click(); \
+         await new Promise(r => setTimeout(r, 200)); return await navigator.clipboard.readText(); }})()"
+    ));
+    assert_eq!(
+        copied.as_str(),
+        Some(text),
+        "Copy: the clipboard is not {name}"
+    );
+    b.eval("document.getElementById('download').click()");
+    let file = downloads.join(name);
+    let start = Instant::now();
+    while !file.exists() || std::fs::read(&file).map_or(0, |d| d.len()) < text.len() {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "Download: {} was not written",
+            file.display()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert_eq!(
+        std::fs::read_to_string(&file).expect("the download"),
+        text,
+        "Download: the file is not {name}"
+    );
+}
+
 /// Certifies the example `name` in the page; returns the page's answer.
 fn certify_in_page(b: &mut Browser, name: &str) -> Value {
     b.eval(&format!(
@@ -447,6 +503,13 @@ fn playground_certifies_in_chromium_like_the_native_compiler() {
         }
         if let Some(d) = &shots {
             b.screenshot(&d.join(format!("playground_{tag}.png")));
+        }
+        if tag == "zhang" {
+            let (name, text) = page_files
+                .iter()
+                .find(|f| f.0.ends_with(".c") && !f.0.starts_with("tsf_runtime"))
+                .expect("the controller's C file");
+            copy_and_download(&mut b, &url, name, text, &dir);
         }
     }
 
