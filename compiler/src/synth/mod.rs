@@ -26,6 +26,7 @@ pub mod markov;
 mod narrowed;
 pub mod objective;
 pub mod objectives;
+pub mod observer;
 pub mod pair_stability;
 pub mod plan;
 pub mod reduction;
@@ -126,6 +127,8 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
             let start = loops::Start { plan, goal };
             let law = loops::law_of(model).design(runner, &mut d, &start);
             d.loop_design = kept(runner, &d, law)?;
+            let observed = observer::observe(runner, &mut d);
+            kept(runner, &d, observed)?;
             if let Some(w) = gain_warning(model, &d) {
                 d.notes.push(w);
             }
