@@ -74,7 +74,7 @@ pub fn synthesize_logged(
         log: SolverLog::default(),
         accept_almost: false,
     };
-    let out = synthesize_with(&mut runner);
+    let out = synthesize_with(&mut runner).map_err(|e| observer::static_output::advise(model, e));
     let log = std::mem::take(&mut runner.log);
     (
         out.map(|mut d| {

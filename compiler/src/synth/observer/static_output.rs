@@ -149,3 +149,40 @@ pub fn finish(
     };
     Some((f, design))
 }
+
+/// The advice an infeasible static output-feedback design adds to its
+/// diagnosis (the condition is only sufficient).
+pub const ADVICE: &str = "static output feedback (u = sum_j h_j K_j y) is infeasible under the sufficient condition M C = C X of Crusius & Trofino (1999): measure more states (`measure ..`) or use `control observer_based;`, which estimates the unmeasured states";
+
+/// `e` with [`ADVICE`] for a `control static_output` spec whose design is infeasible.
+pub fn advise(model: &TsModel, e: crate::synth::SynthError) -> crate::synth::SynthError {
+    use crate::synth::SynthError;
+    if static_output_c(model).is_none() {
+        return e;
+    }
+    match e {
+        SynthError::Infeasible {
+            message,
+            mut achievable,
+        } => {
+            achievable.insert(0, ADVICE.into());
+            SynthError::Infeasible {
+                message,
+                achievable,
+            }
+        }
+        SynthError::Solver {
+            status,
+            message,
+            mut achievable,
+        } => {
+            achievable.insert(0, ADVICE.into());
+            SynthError::Solver {
+                status,
+                message,
+                achievable,
+            }
+        }
+        e => e,
+    }
+}
