@@ -42,7 +42,12 @@ fn decrease(p: &DMatrix<f64>, g: &DMatrix<f64>, alpha: f64) -> DMatrix<f64> {
 /// The report of a shipped spec, which must certify.
 fn certified(name: &str) -> Value {
     let (_, c) = common::compile_shipped(name);
-    assert_eq!(c.status, Status::Certified, "{name}: {:?}", c.report.diagnosis);
+    assert_eq!(
+        c.status,
+        Status::Certified,
+        "{name}: {:?}",
+        c.report.diagnosis
+    );
     common::schema::report_json(&c.report)
 }
 
@@ -135,10 +140,7 @@ fn observer_gains(r: &Value) -> Vec<DMatrix<f64>> {
 
 #[test]
 fn observer_designs_are_certified_and_their_augmented_loop_rederived() {
-    for (name, outputs) in [
-        ("pendulum_observer.tsf", 1),
-        ("amrr2019_gyroless.tsf", 3),
-    ] {
+    for (name, outputs) in [("pendulum_observer.tsf", 1), ("amrr2019_gyroless.tsf", 3)] {
         let r = certified(name);
         assert_eq!(r["control"], "observer_based");
         let o = &r["observer"];
@@ -147,7 +149,10 @@ fn observer_designs_are_certified_and_their_augmented_loop_rederived() {
         let l = observer_gains(&r);
         let (vertex, grid) = worst_augmented(&r, &l);
         assert!(vertex < 0.0, "{name}: augmented vertex conditions {vertex}");
-        assert!(grid < 0.0, "{name}: augmented loop on the simplex grid {grid}");
+        assert!(
+            grid < 0.0,
+            "{name}: augmented loop on the simplex grid {grid}"
+        );
         // The observer's own conditions with the report's P2 and decay.
         let (p2, alpha_o, c) = (
             mat(&o["P2"]),
@@ -236,7 +241,10 @@ fn static_output_feedback_certifies_and_its_loop_is_rederived() {
 fn static_output_feedback_is_refused_with_advice() {
     let text = std::fs::read_to_string(common::spec_path("pendulum_observer.tsf"))
         .expect("the pendulum spec")
-        .replace("control observer_based(decay = 3);", "control static_output;");
+        .replace(
+            "control observer_based(decay = 3);",
+            "control static_output;",
+        );
     let (_, c) = common::compile_text("pendulum_sof.tsf", &text);
     assert_eq!(c.status, Status::Infeasible);
     let d = c.report.diagnosis.expect("a diagnosis");
@@ -255,8 +263,10 @@ fn unmeasured_premises_are_refused_for_observer_based_control() {
         .replace("measure y = theta", "measure y = omega");
     let errors = common::errors_of("pendulum_rate.tsf", &text);
     assert!(
-        errors.iter().any(|e| e.message
-            == "premise `s` reads `theta`, which the measured outputs do not recover"),
+        errors
+            .iter()
+            .any(|e| e.message
+                == "premise `s` reads `theta`, which the measured outputs do not recover"),
         "{errors:#?}"
     );
 }

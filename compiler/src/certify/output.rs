@@ -8,7 +8,9 @@
 
 use super::{margins_of, LmiMargin};
 use crate::model::TsModel;
-use crate::synth::observer::{augmented, gains, ObserverDesign, OutputFeedback, StaticOutputDesign};
+use crate::synth::observer::{
+    augmented, gains, ObserverDesign, OutputFeedback, StaticOutputDesign,
+};
 use crate::synth::{Design, SynthError};
 use nalgebra::DMatrix;
 
@@ -59,7 +61,11 @@ fn static_output(design: &Design, s: &StaticOutputDesign) -> LmiMargin {
     let same = s.gains.len() == design.gains.len()
         && s.gains.iter().zip(&design.gains).all(|(k, f)| {
             let kc: DMatrix<f64> = k * &s.c;
-            kc.shape() == f.shape() && kc.iter().zip(f.iter()).all(|(a, b)| a.to_bits() == b.to_bits())
+            kc.shape() == f.shape()
+                && kc
+                    .iter()
+                    .zip(f.iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
         });
     LmiMargin {
         name: STATIC_OUTPUT_GAINS.into(),

@@ -49,7 +49,11 @@ pub fn undetectable(a: &DMatrix<f64>, c: &DMatrix<f64>) -> Option<Undetectable> 
         let mut pbh = DMatrix::<Complex<f64>>::zeros(n + p, n);
         for r in 0..n {
             for k in 0..n {
-                let diag = if r == k { *lambda } else { Complex::new(0.0, 0.0) };
+                let diag = if r == k {
+                    *lambda
+                } else {
+                    Complex::new(0.0, 0.0)
+                };
                 pbh[(r, k)] = diag - Complex::new(a[(r, k)], 0.0);
             }
         }

@@ -120,8 +120,15 @@ impl Checker<'_> {
                     "only `observer_based(decay = a)` takes an argument"
                 };
                 self.err(
-                    Diagnostic::error(a.name.span, format!("unknown argument `{}` of `control {}`", a.name.node, k.keyword()))
-                        .with_help(help),
+                    Diagnostic::error(
+                        a.name.span,
+                        format!(
+                            "unknown argument `{}` of `control {}`",
+                            a.name.node,
+                            k.keyword()
+                        ),
+                    )
+                    .with_help(help),
                 );
                 return;
             }
@@ -213,7 +220,9 @@ pub(super) fn recovered(c: &Mat, k: usize) -> bool {
 pub(super) fn rank(c: &Mat) -> usize {
     let sv = c.clone().svd(false, false).singular_values;
     let top = sv.iter().copied().fold(0.0, f64::max);
-    sv.iter().filter(|s| **s > ROW_SPACE_TOL * top.max(1.0)).count()
+    sv.iter()
+        .filter(|s| **s > ROW_SPACE_TOL * top.max(1.0))
+        .count()
 }
 
 #[cfg(test)]
@@ -221,7 +230,8 @@ mod tests {
     use crate::check::testing::*;
     use crate::spec::ControlKind;
 
-    const TWO: &str = "tsf 1; controller c; state x1, x2; input u; A = [0, 1; -1, 0]; B = [0; 1];\n\
+    const TWO: &str =
+        "tsf 1; controller c; state x1, x2; input u; A = [0, 1; -1, 0]; B = [0; 1];\n\
         premise x1 range -1 .. 1 { all = trap(-1, -1, 1, 1); }\n\
         rule R: x1 is all => A = [0, 1; -2, 0];\n";
 
@@ -232,7 +242,10 @@ mod tests {
         ));
         let m = spec.measure.expect("measured"); // ok: unit test
         assert_eq!(m.c.nrows(), 3);
-        assert_eq!(m.c.row(2).iter().copied().collect::<Vec<_>>(), vec![1.0, 1.0]);
+        assert_eq!(
+            m.c.row(2).iter().copied().collect::<Vec<_>>(),
+            vec![1.0, 1.0]
+        );
         assert_eq!(m.names, vec!["th", "v[0]", "v[1]"]);
         assert_eq!(m.noise, vec![Some(0.01), None, None]);
         assert_eq!(spec.control.kind, ControlKind::ObserverBased);

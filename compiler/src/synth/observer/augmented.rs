@@ -66,8 +66,7 @@ pub fn closed_loop(
     let mut g = DMatrix::zeros(2 * n, 2 * n);
     g.view_mut((0, 0), (n, n)).copy_from(&(&rule.a + &bf));
     g.view_mut((0, n), (n, n)).copy_from(&(-&bf));
-    g.view_mut((n, n), (n, n))
-        .copy_from(&(&rule.a - &l[i] * c));
+    g.view_mut((n, n), (n, n)).copy_from(&(&rule.a - &l[i] * c));
     g
 }
 

@@ -66,9 +66,7 @@ pub fn couple(
     equal_zero(
         problem,
         "static output M C = C X",
-        Expr::var(mv)
-            .right_mul(c)?
-            .sub(Expr::var(x).left_mul(c)?)?,
+        Expr::var(mv).right_mul(c)?.sub(Expr::var(x).left_mul(c)?)?,
     )?;
     let mut n = Vec::with_capacity(m.len());
     for (j, term) in m.iter().enumerate() {
