@@ -68,7 +68,7 @@ pub fn undetectable(a: &DMatrix<f64>, c: &DMatrix<f64>) -> Option<Undetectable> 
             .iter()
             .copied()
             .fold(f64::INFINITY, f64::min);
-        if !(sigma_min > RANK_TOL * scale) {
+        if sigma_min.is_nan() || sigma_min <= RANK_TOL * scale {
             return Some(Undetectable {
                 eigenvalue: *lambda,
                 sigma_min,
