@@ -16,6 +16,9 @@ pub const P2: &str = "P2_obs";
 /// kappa, the bound on ||N_i|| (synthesis only).
 pub const KAPPA: &str = "kappa_obs";
 
+/// The observer LMIs are solved with this many times the spec's margin eps.
+pub const OBSERVER_MARGIN_FACTOR: f64 = 10.0;
+
 /// N_i = P2 L_i of rule `i` (0-based).
 pub fn product(i: usize) -> String {
     format!("N{}_obs", i + 1)
@@ -105,7 +108,10 @@ pub fn solve(
 ) -> Result<SolvedObserver, SynthError> {
     let model = runner.model;
     let eps = runner.settings.eps;
-    let built = problem(model, c, alpha, eps, true)
+    // Solved with 10 times the margin: minimizing kappa drives the decay
+    // conditions to their margin, and the certificate rebuilds them with
+    // N_i = P2 L_i from the rounded L_i.
+    let built = problem(model, c, alpha, OBSERVER_MARGIN_FACTOR * eps, true)
         .map_err(|e| SynthError::Internal(format!("internal error: observer problem: {e}")))?;
     let sol = runner.solve(&built.problem, "observer problem")?;
     if sol.status != SolveStatus::Solved {
