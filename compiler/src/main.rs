@@ -338,7 +338,8 @@ fn compile(
         }
     };
     let mut files = vec![(report_path.clone(), json.into_bytes())];
-    if certified {
+    let withheld = pipeline::withheld(&run.model);
+    if certified && withheld.is_none() {
         match run.generate(&targets) {
             Ok(generated) => files.extend(
                 generated
@@ -366,6 +367,10 @@ fn compile(
     }
     if certified && default_report {
         remove_stale_failed_report(out, &run.model.spec.controller.node);
+    }
+    if let (true, Some(why)) = (certified, withheld) {
+        eprintln!("error: {}: {why}", run.name);
+        return ExitCode::from(exit::IO);
     }
     ExitCode::from(run.exit_code())
 }

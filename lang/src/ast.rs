@@ -351,6 +351,17 @@ pub enum ItemKind {
     Lyapunov(Ident, Vec<NamedArg>),
     /// `plant region x1 = lo .. hi, ..;`: the region of the plant claim.
     PlantRegion(Vec<(Ident, Expr, Expr)>),
+    /// `measure name = expr [noise <= e];`: a measured output y = C x.
+    Measure {
+        /// The output's name.
+        name: Ident,
+        /// Its expression (linear in the state).
+        value: Expr,
+        /// The noise bound `noise <= e`, if given.
+        noise: Option<Expr>,
+    },
+    /// `control kind[(args)];`: state feedback, observer-based or static output feedback.
+    Control(Ident, Vec<NamedArg>),
     /// `rules kind;`: rules the compiler builds (`rules sector;`).
     Rules(Ident),
     /// `trigger kind { settings }`

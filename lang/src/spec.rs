@@ -56,6 +56,54 @@ pub struct Output {
     pub span: Span,
 }
 
+/// What the controller reads and how it is built (`control ..;`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ControlKind {
+    /// `control state_feedback;` (the default): u = sum_j h_j F_j x.
+    #[default]
+    StateFeedback,
+    /// `control observer_based;`: a fuzzy observer estimates x from y = C x
+    /// and the PDC gains act on the estimate.
+    ObserverBased,
+    /// `control static_output;`: u = sum_j h_j K_j y.
+    StaticOutput,
+}
+
+impl ControlKind {
+    /// The keyword of the kind.
+    pub fn keyword(self) -> &'static str {
+        match self {
+            ControlKind::StateFeedback => "state_feedback",
+            ControlKind::ObserverBased => "observer_based",
+            ControlKind::StaticOutput => "static_output",
+        }
+    }
+}
+
+/// The checked `control ..;` item.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Control {
+    /// The kind.
+    pub kind: ControlKind,
+    /// `observer_based(decay = a)`: the observer's decay rate, if given.
+    pub observer_decay: Option<f64>,
+    /// Where the item is (empty when not written).
+    pub span: Span,
+}
+
+/// The measured outputs y = C x of every `measure` item, stacked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measured {
+    /// p x n.
+    pub c: Mat,
+    /// One name per row (`y`, or `y[0]`, `y[1]`, .. for a vector item).
+    pub names: Vec<String>,
+    /// Per row: the `noise <= bound` of its item, if given.
+    pub noise: Vec<Option<f64>>,
+    /// Where the first `measure` item is.
+    pub span: Span,
+}
+
 /// A model matrix `A`, `B` or `D`, constant or state-dependent.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelMatrix {
@@ -794,6 +842,10 @@ pub struct Spec {
     /// `plant region ..;`: the region the plant claim is asked for, per state
     /// `[lo, hi]` (infinite where not written); `None`: the default region.
     pub plant_region: Option<Vec<(f64, f64)>>,
+    /// The measured outputs (`measure ..;` items, stacked in source order), if any.
+    pub measure: Option<Measured>,
+    /// The controller kind (`control ..;`; default state feedback).
+    pub control: Control,
 }
 
 impl Spec {

@@ -60,9 +60,9 @@ const escapeHtml = (s) =>
   s.replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" })[c]);
 
 const KEYWORDS = new Set(("tsf controller const fn state input disturbance output signal premise rules rule " +
-  "objective relaxation lyapunov trigger emit precision simulate dynamics monte_carlo sweep columns modes mode adaptive plant").split(" "));
+  "objective relaxation lyapunov trigger emit precision simulate dynamics monte_carlo sweep columns modes mode adaptive plant measure control").split(" "));
 const WORDS = new Set(("saturate bound energy range sigma is and about at for in with step scale offset " +
-  "converged by estimate robust rate bounds init layer region").split(" "));
+  "converged by estimate robust rate bounds init layer region noise").split(" "));
 const TOKEN = /(\/\/[^\n]*|\/\*[\s\S]*?(?:\*\/|$))|([A-Za-z_][A-Za-z0-9_]*)(?=(\s*\()?)|((?:[0-9]+(?:\.[0-9]+)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)/g;
 
 /** The spec as highlighted HTML, diagnostics' spans underlined (UTF-16 offsets). */

@@ -218,8 +218,10 @@ fn every_kind_tsfc_writes_validates() {
 
 /// The report's top-level fields that may be absent (written only when they
 /// apply: `skip_serializing_if`); every other one is required.
-const OPTIONAL_REPORT_FIELDS: [&str; 6] = [
+const OPTIONAL_REPORT_FIELDS: [&str; 8] = [
     "membership_mismatch",
+    "observer",
+    "static_output",
     "fuzzy_lyapunov",
     "candidate",
     "signal_trigger",

@@ -4,6 +4,7 @@
 //! only if every strict LMI holds beyond its floating-point error bound.
 
 mod markov;
+mod output;
 pub mod stored;
 
 use crate::model::TsModel;
@@ -154,6 +155,7 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
     // the design's gains (the ones emitted), not a copy.
     lmis.extend(loop_margins(model, design, &design.gains, None)?);
     lmis.extend(fuzzy_region(design));
+    lmis.extend(output::margins(model, design)?);
     let mut cert = summarize(lmis);
     if cert.ok {
         let stored = stored::check(model, design)?;

@@ -144,8 +144,12 @@ impl Run {
     }
 
     /// The certified design's tables (what generated code and the simulator use).
+    /// An output-feedback design has none in this build ([`withheld`]).
     pub fn tables(&self) -> Result<Tables, Error> {
         let (design, cert) = self.certified()?;
+        if let Some(why) = withheld(&self.model) {
+            return Err(Error::usage(format!("{}: {why}", self.name)));
+        }
         tables::tables(&self.model, design, cert, &self.name, &self.sha256)
             .map_err(|e| Error::not_certified(format!("{}: {e}", self.name)))
     }
@@ -153,6 +157,9 @@ impl Run {
     /// The generated files of the certified design for `targets`.
     pub fn generate(&self, targets: &[Emit]) -> Result<Vec<GeneratedFile>, Error> {
         let (design, cert) = self.certified()?;
+        if let Some(why) = withheld(&self.model) {
+            return Err(Error::usage(format!("{}: {why}", self.name)));
+        }
         let failed = |e: &dyn std::fmt::Display| {
             Error::not_certified(format!("code generation failed: {e}"))
         };
@@ -167,5 +174,20 @@ impl Run {
             Status::Certified => 0,
             _ => 3,
         }
+    }
+}
+
+/// Why a certified design of `model` has no tables or code in this build:
+/// output-feedback controllers (`control observer_based`, `static_output`)
+/// are designed, certified and reported, but their generated code and
+/// simulation come with the observer runtime (exit 2, docs/limits.md).
+pub fn withheld(model: &TsModel) -> Option<String> {
+    use tsf_lang::spec::ControlKind;
+    match model.spec.control.kind {
+        ControlKind::StateFeedback => None,
+        k => Some(format!(
+            "code generation of observer controllers is not in this build (`control {}`: the design is certified and reported; no code or simulation is emitted)",
+            k.keyword()
+        )),
     }
 }

@@ -36,6 +36,8 @@ pub const KEYWORDS: &[&str] = &[
     "relaxation",
     "lyapunov",
     "plant",
+    "measure",
+    "control",
     "trigger",
     "emit",
     "precision",

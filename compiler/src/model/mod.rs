@@ -9,6 +9,7 @@ pub mod error_bound;
 pub mod explain;
 mod finite;
 mod local;
+pub mod observability;
 pub mod plant_error;
 mod premise;
 pub mod region;
@@ -80,6 +81,7 @@ impl TsModel {
 pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
     let errors_before = diags.iter().filter(|d| d.is_error()).count();
     let rules = local::local_models(&spec, diags);
+    observability::check(&spec, &rules, diags);
     let premises = premise::layout(&spec, diags);
     let terms = premise::rule_terms(&spec, &premises);
     let centers = premise::rule_centers(&spec, &premises, &terms);

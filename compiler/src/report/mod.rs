@@ -2,6 +2,7 @@
 
 pub mod markov;
 pub mod objectives;
+pub mod output;
 pub mod plant;
 
 use crate::certify::Certificate;
@@ -296,6 +297,18 @@ pub struct Report {
     /// with the quadratic one).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fuzzy_lyapunov: Option<FuzzyLyapunovReport>,
+    /// The controller kind (`state_feedback`, `observer_based`, `static_output`).
+    pub control: &'static str,
+    /// Every rule's local model (rule, A, B, D), in rule order.
+    pub local_models: Vec<output::LocalModelReport>,
+    /// The observer of an observer-based design (absent otherwise; present
+    /// only when certified).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observer: Option<output::ObserverReport>,
+    /// The gains K_j of a static output-feedback design (absent otherwise;
+    /// present only when certified).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub static_output: Option<output::StaticOutputReport>,
     /// Margin eps of strict LMIs.
     pub lmi_margin_eps: Option<f64>,
     /// Achieved objective values.
@@ -408,7 +421,15 @@ pub fn report(
     let certified = status == "certified";
     let problem = Problem::of(log);
     let (modes, transition_rates) = markov::sections(model, design, cert.as_ref(), certified);
+    let (observer, static_output) = output::sections(
+        model,
+        design.filter(|_| certified).and_then(|d| d.output.as_ref()),
+    );
     Report {
+        control: model.spec.control.kind.keyword(),
+        local_models: output::local_models(model),
+        observer,
+        static_output,
         schema: schema_id(if certified { "report" } else { "failed-report" }),
         modes,
         transition_rates,

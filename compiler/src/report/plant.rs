@@ -65,6 +65,12 @@ pub fn not_covered(model: &TsModel) -> Option<String> {
     if spec.modes.is_some() {
         return Some("Markov-switching modes".into());
     }
+    if spec.control.kind != tsf_lang::spec::ControlKind::StateFeedback {
+        return Some(format!(
+            "an output-feedback controller (`control {}`: the robust conditions cover state feedback only)",
+            spec.control.kind.keyword()
+        ));
+    }
     if let Some(t) = &spec.trigger {
         if !matches!(t.node, Trigger::Continuous) {
             return Some("a sampled or event-triggered loop (the robust conditions cover the continuous loop only)".into());

@@ -154,6 +154,9 @@ pub struct Design {
     /// The fuzzy Lyapunov function of a spec with `lyapunov fuzzy(..)` (then
     /// `x` is the Finsler slack G and `p` is P_1).
     pub fuzzy: Option<super::lyapunov::FuzzyDesign>,
+    /// The output-feedback part (`control observer_based` or
+    /// `static_output`); `None` for state feedback.
+    pub output: Option<super::observer::OutputFeedback>,
 }
 
 impl Design {

@@ -26,6 +26,7 @@ pub mod markov;
 mod narrowed;
 pub mod objective;
 pub mod objectives;
+pub mod observer;
 pub mod pair_stability;
 pub mod plan;
 pub mod reduction;
@@ -73,7 +74,7 @@ pub fn synthesize_logged(
         log: SolverLog::default(),
         accept_almost: false,
     };
-    let out = synthesize_with(&mut runner);
+    let out = synthesize_with(&mut runner).map_err(|e| observer::static_output::advise(model, e));
     let log = std::mem::take(&mut runner.log);
     (
         out.map(|mut d| {
@@ -126,6 +127,8 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
             let start = loops::Start { plan, goal };
             let law = loops::law_of(model).design(runner, &mut d, &start);
             d.loop_design = kept(runner, &d, law)?;
+            let observed = observer::observe(runner, &mut d);
+            kept(runner, &d, observed)?;
             if let Some(w) = gain_warning(model, &d) {
                 d.notes.push(w);
             }

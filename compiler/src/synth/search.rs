@@ -56,7 +56,9 @@ impl Runner<'_> {
         let relaxation = self.model.spec.relaxation.node;
         self.check_floor()?;
         let t0 = Instant::now();
-        let built = build(self.model, plan, relaxation, self.settings.eps, true)?;
+        let mut built = build(self.model, plan, relaxation, self.settings.eps, true)?;
+        let coupling = super::observer::static_output::coupled(self.model, &mut built)
+            .map_err(super::BuildError::Lmi)?;
         self.log.build_time += t0.elapsed();
         let sol = self.solve(&built.problem, "gain problem")?;
         let approximate = sol.status == SolveStatus::AlmostSolved && self.accept_almost;
@@ -111,11 +113,23 @@ impl Runner<'_> {
                 (chol.inverse(), built.gains(values_of, &chol)?, None)
             }
         };
-        let values = built
+        let mut values = built
             .problem
             .vars()
             .map(|(name, v)| values_of(v).map(|m| (name.to_string(), m)))
             .collect::<Result<Vec<_>, _>>()?;
+        let (gains, output) = match &coupling {
+            None => (gains, None),
+            Some(cp) => {
+                let value = |v| iterate.value(v).ok().cloned();
+                let finished =
+                    super::observer::static_output::finish(self.model, cp, &x, value, &mut values);
+                let Some((f, sof)) = finished else {
+                    return Ok(Attempt::Trouble(SolveStatus::NumericalError));
+                };
+                (f, Some(super::observer::OutputFeedback::StaticOutput(sof)))
+            }
+        };
         let mut achieved = Achieved::default();
         for o in plan.objectives() {
             o.achieved(&values, &mut achieved);
@@ -137,6 +151,7 @@ impl Runner<'_> {
             verdicts: Vec::new(),
             modes: None,
             fuzzy,
+            output,
         })))
     }
 

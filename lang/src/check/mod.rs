@@ -20,6 +20,7 @@ mod finite_time;
 mod gains;
 mod generatable;
 mod lyapunov;
+mod measure;
 mod model;
 mod modes;
 mod monte_carlo;
@@ -58,6 +59,7 @@ enum Kind {
     Output,
     Premise,
     Named,
+    Measured,
 }
 
 impl Kind {
@@ -71,6 +73,7 @@ impl Kind {
             Kind::Output => "output",
             Kind::Premise => "premise",
             Kind::Named => "signal",
+            Kind::Measured => "measured output",
         }
     }
 
@@ -177,6 +180,10 @@ struct Draft<'a> {
     simulate_seen: Option<Span>,
     /// `plant region ..;` and where it is written.
     plant_region: Option<Spanned<Vec<(f64, f64)>>>,
+    /// The stacked `measure` items.
+    measure: Option<Measured>,
+    /// `control ..;`.
+    control: Option<Control>,
 }
 
 /// Checks a parsed file. Returns the spec when there is no error, and all diagnostics.
@@ -353,8 +360,11 @@ impl<'a> Checker<'a> {
             sector,
             adaptive,
             plant_region: draft.plant_region.map(|r| r.node),
+            measure: draft.measure,
+            control: draft.control.unwrap_or_default(),
         };
         self.f32_storable(&spec, saturate_span);
+        self.output_feedback_fits(&spec);
         Some(spec)
     }
 
@@ -373,6 +383,10 @@ impl<'a> Checker<'a> {
             ItemKind::Relaxation(name, args) => self.relaxation_item(it, name, args, draft),
             ItemKind::Lyapunov(name, args) => self.lyapunov_item(it, name, args, draft),
             ItemKind::PlantRegion(bounds) => self.plant_region_item(it, bounds, dims.n, draft),
+            ItemKind::Measure { name, value, noise } => {
+                self.measure_item(name, value, noise.as_ref(), dims, draft)
+            }
+            ItemKind::Control(kind, args) => self.control_item(it, kind, args, draft),
             ItemKind::Trigger(kind, settings) => {
                 self.trigger_item(it, kind, settings, dims.n, draft)
             }

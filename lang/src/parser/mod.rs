@@ -164,6 +164,7 @@ fn rule_name(r: &Rule) -> Option<&'static str> {
         Rule::kw_range | Rule::premise_range => "`range`",
         Rule::kw_sigma | Rule::premise_sigma => "`sigma`",
         Rule::kw_step => "`step`",
+        Rule::measure_noise | Rule::kw_noise => "`noise <= bound`",
         Rule::named_arg => "`name = value`",
         Rule::consequent => "a consequent (`at(...)` or `A = ...`)",
         Rule::antecedent => "a premise",
@@ -386,6 +387,22 @@ impl Cx {
                 })
                 .collect::<PResult<_>>()?,
             ),
+            Rule::measure_decl => {
+                let name = self.ident(next(&mut it, span)?);
+                let value = self.expr(next(&mut it, span)?)?;
+                let noise = match it.next() {
+                    Some(n) => {
+                        let mut parts = n.into_inner().filter(|q| q.as_rule() != Rule::kw_noise);
+                        Some(self.expr(next(&mut parts, span)?)?)
+                    }
+                    None => None,
+                };
+                ItemKind::Measure { name, value, noise }
+            }
+            Rule::control_decl => {
+                let name = self.ident(next(&mut it, span)?);
+                ItemKind::Control(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)
+            }
             Rule::lyapunov_decl => {
                 let name = self.ident(next(&mut it, span)?);
                 ItemKind::Lyapunov(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)

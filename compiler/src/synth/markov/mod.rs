@@ -383,6 +383,7 @@ fn design_of(
         loop_design: Default::default(),
         verdicts: Vec::new(),
         fuzzy: None,
+        output: None,
         modes: Some(solved.modes),
     }
 }

@@ -13,6 +13,7 @@
 //! | `lyapunov fuzzy(..)` | [`lyapunov`] |
 //! | `adaptive { .. }` | [`adaptive`] |
 //! | code targets (`emit c` and the controller name) | [`targets`] |
+//! | output feedback (`control observer_based`, `control static_output`) | [`output_feedback`] |
 //!
 //! Premises that must be linear in the state for `region` need the model
 //! stage (`compiler/src/model/region.rs`, reported during `tsfc check`).
@@ -24,6 +25,7 @@ mod discrete;
 mod finite_time;
 mod lyapunov;
 mod modes;
+mod output_feedback;
 mod saturation;
 mod targets;
 mod trigger;

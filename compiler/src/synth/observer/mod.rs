@@ -1,0 +1,150 @@
+//! Output feedback (`control observer_based;`, `control static_output;`):
+//! the plain data of the solved design that tables, code generation and the
+//! simulator read, and the designs themselves.
+//!
+//! - Observer-based PDC with measured premises (Tanaka, Ikeda & Wang 1998,
+//!   "Fuzzy regulators and fuzzy observers: relaxed stability conditions and
+//!   LMI-based designs"; Tanaka & Wang 2001, ch. 5), two steps: the
+//!   controller gains F_j by the core design (the spec's objectives and
+//!   relaxation), then the observer gains L_i = P2^-1 N_i from
+//!   He(P2 A_i - N_i C) + 2 alpha_o P2 < 0 ([`gains`]); the loop is then
+//!   certified on the augmented state (x, e), e = x - x_hat, by an analysis
+//!   SDP in P_aug = diag(P1, Pe) under the spec's relaxation and decay rate
+//!   ([`augmented`]).
+//! - Static output feedback u = sum_j h_j K_j y (Crusius & Trofino 1999,
+//!   "Sufficient LMI conditions for output feedback control problems"):
+//!   M C = C X and M_j = N_j C added to the core problem, K_j = N_j M^-1
+//!   ([`static_output`]); the core's conditions then hold for F_j = K_j C.
+
+pub mod augmented;
+pub mod gains;
+pub mod static_output;
+
+use nalgebra::DMatrix;
+pub use tsf_lang::spec::ControlKind;
+
+/// Where the premises the controller and observer blend with come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum PremiseSource {
+    /// Functions of the measured outputs y: the memberships are the plant's.
+    Measured,
+    /// Functions of the estimate x_hat (not certified in this build; the
+    /// checker refuses them).
+    Estimated,
+}
+
+/// The fuzzy observer of an observer-based design:
+/// x_hat' = sum_i h_i (A_i x_hat + B_i u + L_i (y - C x_hat)), u = sum_j h_j F_j x_hat.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObserverDesign {
+    /// The measured outputs y = C x (p x n).
+    pub c: DMatrix<f64>,
+    /// One name per row of C.
+    pub output_names: Vec<String>,
+    /// L_i (n x p), one per rule, continuous time.
+    pub gains: Vec<DMatrix<f64>>,
+    /// Where the premises come from.
+    pub premise_source: PremiseSource,
+    /// With measured premises: R = C^+ (n x p), whose x_rec = R y equals x in
+    /// every state component (and every linear map) the premises read, so
+    /// that z(x_rec) = z(x).
+    pub premise_from_y: Option<DMatrix<f64>>,
+    /// The observer's decay rate alpha_o imposed on the error dynamics.
+    pub decay: f64,
+    /// P2 of the observer LMIs (N_i = P2 L_i).
+    pub p2: DMatrix<f64>,
+    /// The augmented loop's certificate data.
+    pub augmented: augmented::AugmentedDesign,
+}
+
+/// A static output-feedback design: u = sum_j h_j K_j y.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StaticOutputDesign {
+    /// The measured outputs y = C x (p x n).
+    pub c: DMatrix<f64>,
+    /// One name per row of C.
+    pub output_names: Vec<String>,
+    /// K_j (m x p), one per rule.
+    pub gains: Vec<DMatrix<f64>>,
+    /// With measured premises: R = C^+ (as [`ObserverDesign::premise_from_y`]).
+    pub premise_from_y: Option<DMatrix<f64>>,
+}
+
+/// The output-feedback part of a design.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OutputFeedback {
+    /// An observer-based controller.
+    Observer(ObserverDesign),
+    /// A static output-feedback controller.
+    StaticOutput(StaticOutputDesign),
+}
+
+impl OutputFeedback {
+    /// The controller kind.
+    pub fn kind(&self) -> ControlKind {
+        match self {
+            OutputFeedback::Observer(_) => ControlKind::ObserverBased,
+            OutputFeedback::StaticOutput(_) => ControlKind::StaticOutput,
+        }
+    }
+}
+
+/// The Moore-Penrose pseudo-inverse of C (n x p), the premises' state
+/// reconstruction from y; `None` if the SVD fails.
+pub fn premise_from_y(c: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    c.clone().pseudo_inverse(1e-12 * c.norm().max(1.0)).ok()
+}
+
+/// The observer's default decay rate: three times the controller's (the
+/// estimate must settle faster than the loop it feeds), at least
+/// [`MIN_OBSERVER_DECAY`].
+pub fn default_observer_decay(controller: f64) -> f64 {
+    (3.0 * controller).max(MIN_OBSERVER_DECAY)
+}
+
+/// The smallest default observer decay rate (1/s), used when the
+/// controller's is 0 (plain stability).
+pub const MIN_OBSERVER_DECAY: f64 = 0.1;
+
+/// The observer step of a `control observer_based` spec, after the core
+/// design `d` (its gains F_j): the observer gains at the observer's decay
+/// rate, then the augmented loop's certificate at the controller's decay
+/// rate (0 for plain stability). Any other kind is left as it is.
+pub fn observe(
+    runner: &mut crate::synth::Runner<'_>,
+    d: &mut crate::synth::Design,
+) -> Result<(), crate::synth::SynthError> {
+    let model = runner.model;
+    if model.spec.control.kind != ControlKind::ObserverBased {
+        return Ok(());
+    }
+    let Some(measured) = &model.spec.measure else {
+        return Err(crate::synth::SynthError::Unsupported(
+            "`control observer_based` needs a `measure` item".into(),
+        ));
+    };
+    let alpha_c = d.plan.decay().map_or(0.0, |dec| dec.alpha);
+    let alpha_o = model
+        .spec
+        .control
+        .observer_decay
+        .unwrap_or_else(|| default_observer_decay(alpha_c));
+    let observer = gains::solve(runner, &measured.c, alpha_o)?;
+    let aug = augmented::solve(runner, &d.gains, &observer.gains, &measured.c, alpha_c)?;
+    d.notes.push(format!(
+        "observer-based: observer gains L_i designed at decay rate {alpha_o}{}; the augmented loop (x, e) is certified at decay rate {alpha_c} with V = x'P1 x + e'Pe e",
+        if model.spec.control.observer_decay.is_some() { "" } else { " (default: 3 times the controller's, at least 0.1)" }
+    ));
+    d.output = Some(OutputFeedback::Observer(ObserverDesign {
+        c: measured.c.clone(),
+        output_names: measured.names.clone(),
+        gains: observer.gains,
+        premise_source: PremiseSource::Measured,
+        premise_from_y: premise_from_y(&measured.c),
+        decay: alpha_o,
+        p2: observer.p2,
+        augmented: aug,
+    }));
+    Ok(())
+}

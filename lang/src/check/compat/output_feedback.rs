@@ -1,0 +1,190 @@
+//! What output feedback (`control observer_based;`, `control static_output;`)
+//! needs and cannot be combined with in this build: a `measure` item;
+//! premises on measured states (every state component a premise reads lies
+//! in the row space of C); for `static_output` a C of full row rank; for
+//! `observer_based` the objectives the augmented loop's certificate covers
+//! (stability, decay rate). Neither is combined with a trigger, modes, an
+//! adaptive block, a fuzzy Lyapunov function, given gains or a plant region.
+
+use crate::ast::ItemKind;
+use crate::check::measure::{rank, recovered, state_reads};
+use crate::check::Checker;
+use crate::diag::Diagnostic;
+use crate::span::Span;
+use crate::spec::{ControlKind, Lyapunov, ObjectiveKind, Signal, Spec, Trigger};
+
+impl Checker<'_> {
+    /// Refuses the output-feedback combinations this build cannot certify.
+    pub(in crate::check) fn output_feedback_fits(&mut self, spec: &Spec) {
+        let kind = spec.control.kind;
+        if kind == ControlKind::StateFeedback {
+            return;
+        }
+        let at = spec.control.span;
+        let word = kind.keyword();
+        let Some(measured) = &spec.measure else {
+            self.err(
+                Diagnostic::error(at, format!("`control {word}` needs measured outputs"))
+                    .with_label("no `measure` item")
+                    .with_help("declare what the controller reads, e.g. `measure y = [1, 0] * x;` (y = C x)"),
+            );
+            return;
+        };
+        let c = &measured.c;
+        if kind == ControlKind::StaticOutput && rank(c) < c.nrows() {
+            self.err(
+                Diagnostic::error(measured.span, format!("`control static_output` needs C of full row rank, but the {} measured rows have rank {}", c.nrows(), rank(c)))
+                    .with_label("these measurements repeat one another")
+                    .with_help("remove the redundant `measure` rows (the design inverts M with M C = C X)"),
+            );
+        }
+        self.premises_measured(spec, c);
+        self.output_feedback_alone(spec, at, word);
+        if kind == ControlKind::ObserverBased {
+            for o in &spec.objectives {
+                let k = o.node.kind();
+                if !matches!(k, ObjectiveKind::Stability | ObjectiveKind::DecayRate) {
+                    self.err(
+                        Diagnostic::error(o.span, format!("`objective {}` is not covered for `control observer_based`", k.keyword()))
+                            .with_secondary(at, "the observer-based controller is declared here")
+                            .with_help("the augmented loop (x, e) is certified for stability and a decay rate in this build (docs/limits.md); use `control static_output;` or state feedback for the other objectives"),
+                    );
+                }
+            }
+        }
+    }
+
+    /// Every state component a premise reads must be recovered from y.
+    fn premises_measured(&mut self, spec: &Spec, c: &crate::eval::Mat) {
+        let n = spec.n();
+        let names = Signal::names_of(&spec.states);
+        let word = spec.control.kind.keyword();
+        for p in &spec.premises {
+            let reads = state_reads(&p.expr, &spec.states, n);
+            let missing: Vec<&str> = (0..n)
+                .filter(|&k| reads[k] && !recovered(c, k))
+                .map(|k| names.get(k).map_or("?", String::as_str))
+                .collect();
+            if missing.is_empty() {
+                continue;
+            }
+            let list = missing
+                .iter()
+                .map(|m| format!("`{m}`"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            self.err(
+                Diagnostic::error(p.span, format!("premise `{}` reads {list}, which the measured outputs do not recover", p.name))
+                    .with_label(format!("`control {word}` needs measured premises"))
+                    .with_secondary(spec.control.span, "the output-feedback controller is declared here")
+                    .with_help(format!("measure {list} (`measure y = ..;`) or write the premise on measured states; premises of the estimate would need a bound on the membership mismatch h(x) - h(x_hat), which this build does not certify")),
+            );
+        }
+    }
+
+    /// The items output feedback is not combined with.
+    fn output_feedback_alone(&mut self, spec: &Spec, at: Span, word: &str) {
+        let refuse = |this: &mut Self, span: Span, what: &str, help: &str| {
+            this.err(
+                Diagnostic::error(span, format!("{what} cannot be used with `control {word}`"))
+                    .with_secondary(at, "the output-feedback controller is declared here")
+                    .with_help(help.to_string()),
+            );
+        };
+        if let Some(t) = &spec.trigger {
+            if !matches!(t.node, Trigger::Continuous) {
+                refuse(self, t.span, "a sampling or triggering law", "the output-feedback certificate covers the continuous loop in this build; remove the `trigger` item");
+            }
+        }
+        if matches!(spec.lyapunov.node, Lyapunov::Fuzzy { .. }) {
+            refuse(
+                self,
+                spec.lyapunov.span,
+                "a fuzzy Lyapunov function",
+                "use the quadratic Lyapunov function (remove the `lyapunov` item)",
+            );
+        }
+        if let Some(r) = spec.rules.iter().find(|r| r.gain.is_some()) {
+            refuse(
+                self,
+                r.span,
+                "a given state-feedback gain",
+                "the output-feedback gains are synthesized: remove `F = ...`",
+            );
+        }
+        for it in &self.file.items {
+            let what = match &it.kind {
+                ItemKind::Modes(_) => "a `modes` block",
+                ItemKind::Adaptive(_) => "an `adaptive` block",
+                ItemKind::PlantRegion(_) => "a `plant region`",
+                _ => continue,
+            };
+            refuse(
+                self,
+                it.span,
+                what,
+                "output feedback covers the nominal single-mode PDC loop in this build (docs/limits.md)",
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::check::testing::*;
+
+    const PENDULUM: &str = "tsf 1; controller c; state th, om; input u;\n\
+        A(x) = [0, 1; 10 * sinc(th), 0]; B = [0; 1];\n\
+        premise s = sinc(th) range 0.6 .. 1 { near = tri(0.6, 1, 1); far = tri(0.6, 0.6, 1); }\n\
+        rule R1: s is near => at(th = 0, om = 0);\n\
+        rule R2: s is far => at(th = 1.4, om = 0);\n\
+        objective decay_rate >= 0.5;\n";
+
+    #[test]
+    fn measured_premises_pass_and_unmeasured_ones_are_refused() {
+        let spec = valid(&format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\n"
+        ));
+        assert_eq!(spec.measure.map(|m| m.c.nrows()), Some(1));
+        let (m, at) = only_error_of(&format!(
+            "{PENDULUM}measure y = om;\ncontrol observer_based;\n"
+        ));
+        assert_eq!(
+            m,
+            "premise `s` reads `th`, which the measured outputs do not recover"
+        );
+        assert_eq!(at, "s");
+    }
+
+    #[test]
+    fn output_feedback_needs_a_measure_and_full_rank_for_static_output() {
+        let (m, at) = only_error_of(&format!("{PENDULUM}control static_output;\n"));
+        assert_eq!(m, "`control static_output` needs measured outputs");
+        assert_eq!(at, "control static_output;");
+        let (m, _) = only_error_of(&format!(
+            "{PENDULUM}measure y = [th; 2 * th];\ncontrol static_output;\n"
+        ));
+        assert!(m.contains("full row rank"), "{m}");
+    }
+
+    #[test]
+    fn observer_based_refuses_uncovered_objectives_and_triggers() {
+        let src = format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\nobjective input_norm(u) <= 5 for x0 = [0.1, 0];\n"
+        );
+        let (m, at) = only_error_of(&src);
+        assert_eq!(
+            m,
+            "`objective input_norm` is not covered for `control observer_based`"
+        );
+        assert!(at.starts_with("objective input_norm"), "{at}");
+        let src = format!(
+            "{PENDULUM}measure y = th;\ncontrol static_output;\ntrigger periodic {{ every = 0.01; }}\n"
+        );
+        let (m, _) = only_error_of(&src);
+        assert_eq!(
+            m,
+            "a sampling or triggering law cannot be used with `control static_output`"
+        );
+    }
+}
