@@ -32,6 +32,7 @@ mod model_consistency;
 mod monte_carlo;
 mod newcomer;
 mod objectives;
+mod observer_code;
 mod plant_claim;
 mod playground;
 mod plots;
