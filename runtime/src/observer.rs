@@ -149,14 +149,12 @@ impl<
     #[inline]
     pub fn update(&self, h: &[T; R], xhat: &[T; N], u: &[T; M], y: &[T; Q]) -> [T; N] {
         let mut e = [T::ZERO; N];
-        for (i, &hi) in h.iter().enumerate() {
-            if !(hi > T::ZERO) {
+        let blocks = self.phi.iter().zip(&self.gu).zip(&self.gy);
+        for (&hi, ((phi, gu), gy)) in h.iter().zip(blocks) {
+            // Rules that do not fire (h_i not > 0, NaN included) are skipped.
+            if hi.partial_cmp(&T::ZERO) != Some(core::cmp::Ordering::Greater) {
                 continue;
             }
-            let (Some(phi), Some(gu), Some(gy)) = (self.phi.get(i), self.gu.get(i), self.gy.get(i))
-            else {
-                continue;
-            };
             for (((er, pr), ur), yr) in e.iter_mut().zip(phi).zip(gu).zip(gy) {
                 let a = dot(pr, xhat);
                 let b = dot(ur, u);

@@ -155,7 +155,10 @@ fn observer_tables_refuse_what_they_cannot_build() {
     let (model, _) = design();
     let e = period_of(&model.spec).expect_err("no periodic trigger");
     assert_eq!(e, TablesError::ObserverPeriod);
-    assert!(e.to_string().contains("trigger periodic { every = T; }"), "{e}");
+    assert!(
+        e.to_string().contains("trigger periodic { every = T; }"),
+        "{e}"
+    );
     let text = std::fs::read_to_string(common::spec_path("inverted_pendulum.tsf")).expect("spec");
     let periodic = text.replace(
         "objective stability;",
@@ -217,7 +220,9 @@ fn outputs(count: usize) -> Vec<f64> {
 }
 
 fn work_dir(tag: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("observer_code").join(tag);
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("observer_code")
+        .join(tag);
     std::fs::create_dir_all(&d).expect("temp dir");
     d
 }
@@ -279,7 +284,14 @@ fn run_c(t: &Tables, cases: &[(f64, f64)]) -> Vec<String> {
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
     let exe = dir.join("driver");
     let built = Command::new(&cc)
-        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2"])
+        .args([
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-pedantic",
+            "-O2",
+        ])
         .arg("-ffp-contract=off")
         .arg(format!("-I{}", dir.display()))
         .arg(dir.join("driver.c"))
@@ -289,7 +301,11 @@ fn run_c(t: &Tables, cases: &[(f64, f64)]) -> Vec<String> {
         .arg("-lm")
         .output()
         .expect("run the C compiler");
-    assert!(built.status.success(), "{}", String::from_utf8_lossy(&built.stderr));
+    assert!(
+        built.status.success(),
+        "{}",
+        String::from_utf8_lossy(&built.stderr)
+    );
     let mut input = String::new();
     for (y, z) in cases {
         let _ = writeln!(input, "{:x} {:x}", y.to_bits(), z.to_bits());
@@ -337,7 +353,10 @@ fn rust_and_c_runtime_observers_agree_bit_for_bit() {
         cases.push((y, z));
         want.push((s.u[0], xhat, s.flags.0));
     }
-    assert!(faults >= 10 && resets >= 1, "fault paths exercised: {faults} faults, {resets} resets");
+    assert!(
+        faults >= 10 && resets >= 1,
+        "fault paths exercised: {faults} faults, {resets} resets"
+    );
     let lines = run_c(t, &cases);
     assert_eq!(lines.len(), cases.len());
     let mut worst: f64 = 0.0;
@@ -385,7 +404,13 @@ fn generated_c_observer_matches_the_runtime_bit_for_bit() {
     let cases: Vec<(f64, f64)> = ys.iter().map(|&y| (y, 0.0)).collect();
     for &y in &ys {
         let s = obs.step(&mut xhat, &[y]);
-        want.push(format!("{} {} {} {}", hex(s.u[0]), hex(xhat[0]), hex(xhat[1]), s.flags.0));
+        want.push(format!(
+            "{} {} {} {}",
+            hex(s.u[0]),
+            hex(xhat[0]),
+            hex(xhat[1]),
+            s.flags.0
+        ));
     }
     let lines = run_c(&t, &cases);
     assert_eq!(lines.len(), want.len());
@@ -410,7 +435,10 @@ fn generated_observer_code_is_snapshotted() {
             .clone()
     };
     let rust = get("inverted_pendulum.rs");
-    assert!(rust.contains("pub fn step(s: &mut State, y: &[f64; Q]) -> [f64; M]"), "{rust}");
+    assert!(
+        rust.contains("pub fn step(s: &mut State, y: &[f64; Q]) -> [f64; M]"),
+        "{rust}"
+    );
     assert!(rust.contains("pub const INIT: State"));
     syn::parse_file(&rust).expect("generated Rust parses");
     let h = get("inverted_pendulum.h");
@@ -448,8 +476,8 @@ fn pendulum(x: [f64; 2], u: f64) -> [f64; 2] {
 #[test]
 fn closed_loop_from_a_wrong_estimate_converges_and_agrees() {
     let (_, t) = design();
-    let mut prepared = tsfc::driver::prepare(&common::spec_path("inverted_pendulum.tsf"))
-        .expect("prepared");
+    let mut prepared =
+        tsfc::driver::prepare(&common::spec_path("inverted_pendulum.tsf")).expect("prepared");
     prepared.tables.observer = t.observer.clone();
     let xhat0 = vec![0.0, 1.0];
     let mut opts = tsfc::sim::Options::default();
@@ -463,7 +491,10 @@ fn closed_loop_from_a_wrong_estimate_converges_and_agrees() {
     let est = m.estimation.as_ref().expect("estimation metrics");
     assert!(m.converged, "{:?}", m.failures());
     assert!(est.initial_error_norm > 1.0, "{}", est.initial_error_norm);
-    assert!(est.final_error_norm < 1e-3 * est.initial_error_norm, "{est:?}");
+    assert!(
+        est.final_error_norm < 1e-3 * est.initial_error_norm,
+        "{est:?}"
+    );
     let settle = est.time_to_1pct_s.expect("error within 1 %");
     assert!(settle > 0.1 && settle < 2.0, "{settle}");
     assert_eq!(samples.len(), 501, "0 .. 5 s every 10 ms");
@@ -481,7 +512,9 @@ fn closed_loop_from_a_wrong_estimate_converges_and_agrees() {
         assert!((tt - k as f64 * T).abs() < 1e-12);
         let y = [x[0]];
         let v = obs.premise_state(&xhat, &y);
-        let u = obs.step_with_premises(&mut xhat, &y, &[exprs[0].eval(&v)]).u[0];
+        let u = obs
+            .step_with_premises(&mut xhat, &y, &[exprs[0].eval(&v)])
+            .u[0];
         worst = worst
             .max((xs[0] - x[0]).abs())
             .max((xs[1] - x[1]).abs())
@@ -500,7 +533,10 @@ fn closed_loop_from_a_wrong_estimate_converges_and_agrees() {
     assert!(worst < 1e-8, "simulator vs independent loop: {worst:e}");
     // The estimate plot is drawn.
     let svgs = tsfc::sim::plot::svgs(&outcome).expect("plots");
-    let est_svg = svgs.iter().find(|(n, _)| n.ends_with(".estimate.svg")).expect("estimate plot");
+    let est_svg = svgs
+        .iter()
+        .find(|(n, _)| n.ends_with(".estimate.svg"))
+        .expect("estimate plot");
     assert!(est_svg.1.contains("omega estimate"), "legend");
     println!(
         "observer closed loop: ||e|| {:.3} -> {:.2e}, within 1 % from t = {settle} s; simulator vs independent RK4 {worst:.1e}",

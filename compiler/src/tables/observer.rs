@@ -2,8 +2,8 @@
 //! output map C, and every rule's fuzzy observer discretized exactly at the
 //! controller's period.
 //!
-//! The continuous observer of rule i is `xhat' = (A_i - L_i C) xhat + B_i u
-//! + L_i y`. With u and y held over one period T (zero-order hold, the
+//! The continuous observer of rule i is
+//! `xhat' = (A_i - L_i C) xhat + B_i u + L_i y`. With u and y held over one period T (zero-order hold, the
 //! memberships frozen at the sample), its exact discretization is
 //!
 //!   Phi_i = expm(Ao_i T),  [Gu_i Gy_i] = int_0^T expm(Ao_i s) ds [B_i L_i],
