@@ -176,18 +176,7 @@ pub fn run(
     let plan = plan(prepared, opts, plant.dim())?;
     let period = period(o, &plan, opts)?;
     let n = tables.n;
-    let xhat0 = opts.observer.xhat0.clone().unwrap_or_else(|| vec![0.0; n]);
-    if xhat0.len() != n || xhat0.iter().any(|v| !v.is_finite()) {
-        return Err(SimError::usage(format!(
-            "xhat0 must have {n} finite components (got {:?})",
-            xhat0
-        )));
-    }
-    if !opts.observer.noise.valid() {
-        return Err(SimError::usage(
-            "the measurement noise level must be a finite number >= 0",
-        ));
-    }
+    let xhat0 = initial_estimate(&opts.observer, n)?;
     let terms = factored_terms(tables);
     let law = observer_law(tables, o, &terms)?;
     let mut signals = Signals::new(truth, &prepared.source, opts.evaluator);
@@ -221,33 +210,7 @@ pub fn run(
         names.extend(hat_names);
         super::csv::header(*out, &names, &trace.input_names, false).map_err(write_err)?;
     }
-    let mut lp = Loop {
-        law: law.as_ref(),
-        o,
-        premises: match &tables.premise {
-            PremiseCode::Exprs(_) => Some(Premises::new(tables, opts.evaluator)),
-            PremiseCode::Linear(_) => None,
-        },
-        exprs: match &tables.premise {
-            PremiseCode::Exprs(e) => Some(e.as_slice()),
-            PremiseCode::Linear(_) => None,
-        },
-        rng: SplitMix64::new(plan.seed ^ 0x6f62_7365_7276_6572),
-        noise: opts.observer.noise,
-        xhat: xhat0.clone(),
-        y: vec![0.0; o.q],
-        v: vec![0.0; n],
-        z: vec![0.0; tables.p],
-        u: vec![0.0; tables.m],
-        err: ErrorTally {
-            initial: None,
-            peak: 0.0,
-            last: f64::NAN,
-            within: None,
-            resets: 0,
-        },
-        saturated: 0,
-    };
+    let mut lp = Loop::new(law.as_ref(), tables, o, opts, plan.seed, &xhat0);
     let mut tally = Tally::new(n, tables.m, &plan.x0, opts.convergence_rel_tol);
     let region = Region::new(&prepared.model, tables);
     let mut progress = Progress::new(opts.progress, plan.t0, plan.t1);
@@ -318,14 +281,7 @@ pub fn run(
         p: &prepared.p,
     };
     let (mut metrics, trace) = tally.finish(&facts, &last, std::mem::take(&mut trace));
-    metrics.integrator = match &stepper {
-        Stepper::Rk4(s) => format!("rk4, fixed step <= {} s", s.h),
-        Stepper::Dopri5(s) => format!(
-            "dopri5, rtol = {rtol:e}, atol = {atol:e}, h_max = {} s, {} accepted / {} rejected steps",
-            plan.h, s.accepted, s.rejected
-        ),
-    };
-    metrics.rhs_evaluations = stepper.evals();
+    describe(&mut metrics, &stepper, &plan, opts, (dim, n));
     metrics.trigger = format!(
         "observer-based controller every T = {period} s (y = C x{} sampled, command held)",
         if lp.noise == Noise::None {
@@ -334,30 +290,7 @@ pub fn run(
             " + noise"
         }
     );
-    metrics.seed = plan.seed;
-    metrics.plant = if dim > n {
-        format!(
-            "the spec's dynamics block ({dim} states, {} not seen by the controller)",
-            dim - n
-        )
-    } else {
-        "the spec's truth plant".into()
-    };
-    metrics.estimation = Some(EstimationMetrics {
-        period_s: period,
-        outputs: o.q,
-        premises_from: match o.premise_from {
-            PremiseFrom::Output => "output".into(),
-            PremiseFrom::Estimate => "estimate".into(),
-        },
-        noise: lp.noise.describe(),
-        xhat0,
-        initial_error_norm: lp.err.initial.unwrap_or(f64::NAN),
-        peak_error_norm: lp.err.peak,
-        final_error_norm: lp.err.last,
-        time_to_1pct_s: lp.err.within,
-        estimate_resets: lp.err.resets,
-    });
+    metrics.estimation = Some(lp.estimation(period, xhat0));
     metrics.wall_time_s = started.elapsed().as_secs_f64();
     let spec = &prepared.model.spec;
     Ok(Outcome {
@@ -371,6 +304,51 @@ pub fn run(
         u_max: tables.u_max.clone(),
         n,
     })
+}
+
+/// The initial estimate of the scenario (default 0), checked, and the noise checked.
+fn initial_estimate(sc: &ObserverScenario, n: usize) -> Result<Vec<f64>, SimError> {
+    let xhat0 = sc.xhat0.clone().unwrap_or_else(|| vec![0.0; n]);
+    if xhat0.len() != n || xhat0.iter().any(|v| !v.is_finite()) {
+        return Err(SimError::usage(format!(
+            "xhat0 must have {n} finite components (got {xhat0:?})"
+        )));
+    }
+    if !sc.noise.valid() {
+        return Err(SimError::usage(
+            "the measurement noise level must be a finite number >= 0",
+        ));
+    }
+    Ok(xhat0)
+}
+
+/// The descriptive fields of the metrics: integrator, trigger, seed, plant
+/// (`dims`: the plant's and the controller's state counts).
+fn describe(
+    metrics: &mut super::metrics::Metrics,
+    stepper: &Stepper,
+    plan: &Plan,
+    opts: &Options,
+    (dim, n): (usize, usize),
+) {
+    let (rtol, atol) = opts.tolerances;
+    metrics.integrator = match stepper {
+        Stepper::Rk4(s) => format!("rk4, fixed step <= {} s", s.h),
+        Stepper::Dopri5(s) => format!(
+            "dopri5, rtol = {rtol:e}, atol = {atol:e}, h_max = {} s, {} accepted / {} rejected steps",
+            plan.h, s.accepted, s.rejected
+        ),
+    };
+    metrics.rhs_evaluations = stepper.evals();
+    metrics.seed = plan.seed;
+    metrics.plant = if dim > n {
+        format!(
+            "the spec's dynamics block ({dim} states, {} not seen by the controller)",
+            dim - n
+        )
+    } else {
+        "the spec's truth plant".into()
+    };
 }
 
 /// ||x - xhat||.
@@ -398,7 +376,66 @@ struct Loop<'a> {
     saturated: u64,
 }
 
-impl Loop<'_> {
+impl<'a> Loop<'a> {
+    /// The controller's side of the loop of `tables` with the observer `o`
+    /// (run by `law`), starting from the estimate `xhat0`.
+    fn new(
+        law: &'a dyn ObserverLaw,
+        tables: &'a crate::tables::Tables,
+        o: &'a ObserverTables,
+        opts: &Options,
+        seed: u64,
+        xhat0: &[f64],
+    ) -> Self {
+        let n = tables.n;
+        Loop {
+            law,
+            o,
+            premises: match &tables.premise {
+                PremiseCode::Exprs(_) => Some(Premises::new(tables, opts.evaluator)),
+                PremiseCode::Linear(_) => None,
+            },
+            exprs: match &tables.premise {
+                PremiseCode::Exprs(e) => Some(e.as_slice()),
+                PremiseCode::Linear(_) => None,
+            },
+            rng: SplitMix64::new(seed ^ 0x6f62_7365_7276_6572),
+            noise: opts.observer.noise,
+            xhat: xhat0.to_vec(),
+            y: vec![0.0; o.q],
+            v: vec![0.0; n],
+            z: vec![0.0; tables.p],
+            u: vec![0.0; tables.m],
+            err: ErrorTally {
+                initial: None,
+                peak: 0.0,
+                last: f64::NAN,
+                within: None,
+                resets: 0,
+            },
+            saturated: 0,
+        }
+    }
+
+    /// The estimation section of the metrics.
+    fn estimation(&self, period: f64, xhat0: Vec<f64>) -> EstimationMetrics {
+        EstimationMetrics {
+            period_s: period,
+            outputs: self.o.q,
+            premises_from: match self.o.premise_from {
+                PremiseFrom::Output => "output".into(),
+                PremiseFrom::Estimate => "estimate".into(),
+            },
+            noise: self.noise.describe(),
+            xhat0,
+            initial_error_norm: self.err.initial.unwrap_or(f64::NAN),
+            peak_error_norm: self.err.peak,
+            final_error_norm: self.err.last,
+            time_to_1pct_s: self.err.within,
+            estimate_resets: self.err.resets,
+        }
+    }
+
     /// One sample: y = C x + noise, the runtime's step (new held command,
     /// estimate advanced). Returns whether no rule fired and the estimate
     /// the command was computed from.
