@@ -765,6 +765,98 @@ uint8_t TSF_FN(tsf_step_with_premises)(const TSF_FN(tsf_controller) *c, const TS
     return flags;
 }
 
+/* ------------------------------------------------------------- observer */
+
+void TSF_FN(tsf_observer_premise_state)(const TSF_FN(tsf_observer) *o, const TSF_R *xhat,
+                                        const TSF_R *y, TSF_R *v) {
+    const int n = o->ctl->n;
+    int k;
+    for (k = 0; k < n; k++) {
+        v[k] = o->output_map != NULL ? TSF_FN(tsf_dot)(&o->output_map[k * o->q], y, o->q)
+                                     : xhat[k];
+    }
+}
+
+/* next = sum_i h_i ((Phi_i xhat + Gu_i u) + Gy_i y), rules whose h_i is not
+   > 0 skipped, accumulated from 0 rule by rule. */
+static void TSF_FN(tsf_observer_update)(const TSF_FN(tsf_observer) *o, const TSF_R *h,
+                                        const TSF_R *xhat, const TSF_R *u, const TSF_R *y,
+                                        TSF_R *next) {
+    const int n = o->ctl->n, m = o->ctl->m, q = o->q;
+    int i, k;
+    for (k = 0; k < n; k++) {
+        next[k] = TSF_C(0);
+    }
+    for (i = 0; i < o->ctl->r; i++) {
+        if (!(h[i] > TSF_C(0))) {
+            continue;
+        }
+        for (k = 0; k < n; k++) {
+            const TSF_R a = TSF_FN(tsf_dot)(&o->phi[(i * n + k) * n], xhat, n);
+            const TSF_R b = TSF_FN(tsf_dot)(&o->gu[(i * n + k) * m], u, m);
+            const TSF_R c = TSF_FN(tsf_dot)(&o->gy[(i * n + k) * q], y, q);
+            const TSF_R ab = a + b;
+            const TSF_R v = ab + c;
+            const TSF_R t = h[i] * v;
+            next[k] = next[k] + t;
+        }
+    }
+}
+
+uint8_t TSF_FN(tsf_observer_step)(const TSF_FN(tsf_observer) *o, TSF_R *xhat, const TSF_R *y,
+                                  const TSF_R *z, TSF_R *deg, TSF_R *h, TSF_R *u, TSF_R *next) {
+    const TSF_FN(tsf_controller) *c = o->ctl;
+    uint8_t flags = 0;
+    int estimate_ok = 1, i;
+    for (i = 0; i < c->n; i++) {
+        if (!isfinite(xhat[i])) {
+            estimate_ok = 0;
+        }
+    }
+    for (i = 0; i < o->q; i++) {
+        if (!isfinite(y[i])) {
+            flags |= TSF_FLAG_STATE_NONFINITE;
+        }
+    }
+    if (!estimate_ok) {
+        flags |= TSF_FLAG_STATE_NONFINITE;
+    }
+    for (i = 0; i < c->p; i++) {
+        if (!isfinite(z[i])) {
+            flags |= TSF_FLAG_PREMISE_NONFINITE;
+        }
+    }
+    if ((flags & (TSF_FLAG_STATE_NONFINITE | TSF_FLAG_PREMISE_NONFINITE)) != 0u) {
+        if (!estimate_ok) {
+            for (i = 0; i < c->n; i++) {
+                xhat[i] = TSF_C(0);
+            }
+            flags |= TSF_FLAG_ESTIMATE_RESET;
+        }
+        for (i = 0; i < c->r; i++) {
+            h[i] = TSF_C(0);
+        }
+        for (i = 0; i < c->m; i++) {
+            u[i] = TSF_C(0);
+        }
+        return flags;
+    }
+    flags = TSF_FN(tsf_step_with_premises)(c, xhat, z, deg, h, u);
+    TSF_FN(tsf_observer_update)(o, h, xhat, u, y, next);
+    for (i = 0; i < c->n; i++) {
+        if (!isfinite(next[i])) {
+            estimate_ok = 0;
+        }
+    }
+    for (i = 0; i < c->n; i++) {
+        xhat[i] = estimate_ok ? next[i] : TSF_C(0);
+    }
+    if (!estimate_ok) {
+        flags |= TSF_FLAG_ESTIMATE_RESET;
+    }
+    return flags;
+}
+
 /* -------------------------------------------------------------- triggers */
 
 int TSF_FN(tsf_relative_decide)(const TSF_R *weight, TSF_R nu, TSF_R *last, int *has_last,

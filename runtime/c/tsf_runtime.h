@@ -42,6 +42,7 @@ extern "C" {
 #define TSF_FLAG_COMMAND_NONFINITE 8u
 #define TSF_FLAG_SATURATED 16u
 #define TSF_FLAG_MODE_OUT_OF_RANGE 32u
+#define TSF_FLAG_ESTIMATE_RESET 64u
 
 /* TSF_REAL_FN(double, tsf_dot) is tsf_dot, TSF_REAL_FN(float, tsf_dot) is
    tsf_dotf; the type may be a macro expanding to double or float. */
@@ -173,6 +174,48 @@ uint8_t tsf_step_with_premises(const tsf_controller *c, const double *x, const d
                                double *deg, double *h, double *u);
 uint8_t tsf_step_with_premisesf(const tsf_controllerf *c, const float *x, const float *z,
                                 float *deg, float *h, float *u);
+
+/* Observer-based controller (tsf_runtime::Observer): the controller c on
+   the estimate xhat and the exactly discretized fuzzy observer of every
+   rule; matrices row-major. */
+typedef struct tsf_observer {
+    const tsf_controller *ctl; /* premises, rules, gains F_j, saturation */
+    int q;                     /* measured outputs */
+    const double *output_map;  /* n x q: premises read v = S y; NULL: v = xhat */
+    const double *phi;         /* r blocks of n x n: expm((A_i - L_i C) T) */
+    const double *gu;          /* r blocks of n x m: int_0^T expm(..) ds B_i */
+    const double *gy;          /* r blocks of n x q: int_0^T expm(..) ds L_i */
+} tsf_observer;
+
+/* tsf_observer of a float controller. */
+typedef struct tsf_observerf {
+    const tsf_controllerf *ctl;
+    int q;
+    const float *output_map;
+    const float *phi;
+    const float *gu;
+    const float *gy;
+} tsf_observerf;
+
+/* The vector v (ctl->n values) the premises are computed from: S y when
+   output_map is set (each component tsf_dot), else xhat. */
+void tsf_observer_premise_state(const tsf_observer *o, const double *xhat, const double *y,
+                                double *v);
+void tsf_observer_premise_statef(const tsf_observerf *o, const float *xhat, const float *y,
+                                 float *v);
+
+/* One step of tsf_runtime::Observer::step_with_premises: with premises z
+   (ctl->p values, from tsf_observer_premise_state), writes h (ctl->r) and
+   u_k (ctl->m) as tsf_step_with_premises on the estimate xhat (ctl->n), then
+   advances xhat to sum_i h_i ((Phi_i xhat + Gu_i u) + Gy_i y); deg (ctl->d)
+   and next (ctl->n) are scratch. A NaN or infinite y or xhat
+   (TSF_FLAG_STATE_NONFINITE) or z (TSF_FLAG_PREMISE_NONFINITE) gives u = 0,
+   h = 0 and keeps the estimate; a non-finite estimate, before or after the
+   update, is reset to 0 (TSF_FLAG_ESTIMATE_RESET). */
+uint8_t tsf_observer_step(const tsf_observer *o, double *xhat, const double *y, const double *z,
+                          double *deg, double *h, double *u, double *next);
+uint8_t tsf_observer_stepf(const tsf_observerf *o, float *xhat, const float *y, const float *z,
+                           float *deg, float *h, float *u, float *next);
 
 /* Model-reference adaptive T-S law (tsf_runtime::adaptive; Wang, Gao & He
    2013, several inputs), double only. With s = C x, p = P (s - s_m):

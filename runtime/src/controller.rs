@@ -109,6 +109,9 @@ impl Flags {
     /// The mode index given to a [`ModalController`](crate::ModalController)
     /// was not one of its modes: mode 0's gains were used.
     pub const MODE_OUT_OF_RANGE: Flags = Flags(32);
+    /// An [`Observer`](crate::Observer)'s estimate was NaN or infinite, or
+    /// its update overflowed: the estimate was reset to 0.
+    pub const ESTIMATE_RESET: Flags = Flags(64);
 
     /// `true` if every bit of `other` is set in `self`.
     pub const fn contains(self, other: Flags) -> bool {

@@ -13,6 +13,9 @@
 //!   evaluated once (what generated code runs);
 //! - [`ModalController`]: one gain set per Markov-switching mode, the active
 //!   mode an input of every step (out of range: mode 0 and a flag);
+//! - [`Observer`]: the observer-based controller (output feedback): the
+//!   controller's step on the estimate, then the exactly discretized fuzzy
+//!   observer's update, the estimate caller-owned;
 //! - [`trigger`]: periodic, static relative, adaptive (Xu & Huang 2020) and
 //!   mixed (Amrr et al. 2019) transmission triggers;
 //! - [`adaptive`]: the model-reference adaptive law (Wang et al. 2013) with
@@ -42,6 +45,7 @@ pub mod factored;
 pub mod math;
 pub mod membership;
 pub mod modal;
+pub mod observer;
 mod real;
 pub mod trigger;
 
@@ -55,5 +59,6 @@ pub use controller::{
 pub use factored::{factored_weights, term_degrees, FactoredController};
 pub use membership::{about_degree, Membership};
 pub use modal::{select_mode, ModalController};
+pub use observer::Observer;
 pub use real::Real;
 pub use trigger::{AdaptiveTrigger, MixedTrigger, PeriodicTrigger, RelativeTrigger, SignalTrigger};

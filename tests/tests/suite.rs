@@ -33,6 +33,7 @@ mod monte_carlo;
 mod newcomer;
 mod objectives;
 mod observer;
+mod observer_code;
 mod plant_claim;
 mod playground;
 mod plots;

@@ -24,6 +24,12 @@ pub enum CodegenError {
     AdaptivePrecision,
     /// The adaptive design was refused (`adaptive-refused`): no code.
     AdaptiveRefused,
+    /// `emit c(style = straight)` for an observer-based design: its C step
+    /// is table-driven only.
+    ObserverStraight,
+    /// An observer-based design with a feature its generated step does not
+    /// cover (what).
+    ObserverUnsupported(&'static str),
     /// The generated text of a language does not parse (a generator bug).
     Unparsable {
         /// The language, e.g. `Rust`.
@@ -53,6 +59,13 @@ impl fmt::Display for CodegenError {
             ),
             CodegenError::AdaptiveRefused => f.write_str(
                 "the adaptive design was refused (`adaptive-refused`): no code is generated",
+            ),
+            CodegenError::ObserverStraight => f.write_str(
+                "the observer-based controller's C step is table-driven only: write `emit c(style = table);` or `emit c;` (docs/limits.md)",
+            ),
+            CodegenError::ObserverUnsupported(what) => write!(
+                f,
+                "the observer-based controller is not generated with {what} (docs/limits.md)"
             ),
             CodegenError::Unparsable { language, reason } => write!(
                 f,

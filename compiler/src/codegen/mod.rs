@@ -61,6 +61,20 @@ pub trait Backend: Sync {
     }
 }
 
+/// An observer-based design's features the generated observer step covers:
+/// no Markov modes, no sensor module (its loop is periodic).
+pub(crate) fn observer_supported(t: &Tables) -> Result<(), CodegenError> {
+    if t.modes.is_some() {
+        return Err(CodegenError::ObserverUnsupported("Markov-switching modes"));
+    }
+    if t.sensor.is_some() {
+        return Err(CodegenError::ObserverUnsupported(
+            "an event trigger (the observer runs at a fixed period)",
+        ));
+    }
+    Ok(())
+}
+
 /// Every backend; [`generate`] picks them by [`Backend::target`].
 pub const BACKENDS: &[&dyn Backend] = &[&rust::RustBackend, &c::CBackend];
 

@@ -212,6 +212,7 @@ pub fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepare
         c_style: spec.c_style,
         sensor: crate::tables::Sensor::None,
         modes,
+        observer: None,
     };
     let region = match &r.region_of_attraction {
         Some(roa) => Some(matrix(&roa.u, n, n, "region of attraction U")?),

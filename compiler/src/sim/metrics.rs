@@ -32,6 +32,9 @@ pub struct Trace {
     pub modes: Vec<(f64, usize)>,
     /// Mode names (indices of `modes`).
     pub mode_names: Vec<String>,
+    /// An observer-based design: the column of `x` where the estimate xhat
+    /// starts (after the plant's states); `None` without an observer.
+    pub estimate: Option<usize>,
 }
 
 /// Figures of merit of one run (written as `<controller>.metrics.json`).
@@ -135,6 +138,9 @@ pub struct Metrics {
     /// The Markov mode process and per-mode figures (specs with `modes`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub modes: Option<super::modes::ModeMetrics>,
+    /// The estimation error of an observer-based design.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimation: Option<super::observer::EstimationMetrics>,
     /// Wall-clock time of the run (not part of any deterministic output).
     #[serde(skip)]
     pub wall_time_s: f64,
@@ -598,6 +604,7 @@ impl Tally {
             seed: 0,
             plant: String::new(),
             modes: None,
+            estimation: None,
             wall_time_s: 0.0,
         };
         (metrics, trace)

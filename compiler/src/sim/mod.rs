@@ -28,6 +28,7 @@ pub mod integrator;
 pub mod limits;
 pub mod metrics;
 pub mod modes;
+pub mod observer;
 pub mod plant;
 pub mod plot;
 pub mod premise;
@@ -91,6 +92,9 @@ pub struct Options {
     pub progress: bool,
     /// How expressions are evaluated.
     pub evaluator: Evaluator,
+    /// The initial estimate and the measurement noise of an observer-based
+    /// design (ignored otherwise).
+    pub observer: observer::ObserverScenario,
 }
 
 impl Default for Options {
@@ -105,6 +109,7 @@ impl Default for Options {
             convergence_rel_tol: 0.05,
             progress: false,
             evaluator: Evaluator::Compiled,
+            observer: observer::ObserverScenario::default(),
         }
     }
 }

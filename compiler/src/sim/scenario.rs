@@ -298,6 +298,9 @@ pub fn run_truth(
     mut csv: Option<&mut dyn Write>,
     mut observer: Option<Observer<'_>>,
 ) -> Result<Outcome, SimError> {
+    if prepared.tables.observer.is_some() {
+        return super::observer::run(prepared, truth, opts, csv, observer);
+    }
     let started = Instant::now();
     let tables = &prepared.tables;
     let plant = Plant::new(truth, &prepared.source, opts.evaluator)?;

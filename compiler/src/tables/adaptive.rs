@@ -67,6 +67,7 @@ pub fn adaptive_tables(
         c_style: spec.c_style,
         sensor: crate::tables::Sensor::None,
         modes: None,
+        observer: None,
     };
     let mut design = design.clone();
     for table in [

@@ -45,6 +45,14 @@ pub enum TablesError {
     /// An adaptive spec without a `simulate` step: the update laws have no
     /// controller period.
     AdaptivePeriod,
+    /// An observer-based design without a periodic trigger: the observer
+    /// runs at the controller's period, which the spec does not give (or
+    /// which is not a positive number).
+    ObserverPeriod,
+    /// The observer's data have inconsistent shapes (what is wrong).
+    ObserverShape(String),
+    /// The discretized observer has a NaN or infinite entry.
+    ObserverNonFinite,
     /// With `precision f32`, a stored number is beyond the f32 range.
     F32Range {
         /// Which table entry.
@@ -83,6 +91,13 @@ impl fmt::Display for TablesError {
             }
             TablesError::AdaptivePeriod => f.write_str(
                 "the adaptive law is integrated at the controller period, the `simulate` block's step: add `simulate { time = t0 .. t1 step h; ... }`",
+            ),
+            TablesError::ObserverPeriod => f.write_str(
+                "the observer runs inside the controller at its period, which the spec does not give: add `trigger periodic { every = T; }` (T in seconds, positive)",
+            ),
+            TablesError::ObserverShape(what) => write!(f, "observer: {what}"),
+            TablesError::ObserverNonFinite => f.write_str(
+                "observer: the discretized observer has a NaN or infinite entry (the period is too long for the observer's dynamics)",
             ),
             TablesError::F32Range { what, value } => write!(
                 f,

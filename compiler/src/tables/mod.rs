@@ -8,6 +8,7 @@ mod adaptive;
 mod error;
 mod f32_range;
 mod factored;
+pub mod observer;
 mod sensor;
 mod signal;
 pub mod sym;
@@ -15,6 +16,7 @@ pub mod sym;
 pub use adaptive::{adaptive_tables, AdaptiveTables};
 pub use error::TablesError;
 pub use factored::FactoredTerms;
+pub use observer::{ObserverTables, PremiseFrom};
 pub use sensor::{SensorLaw, SensorTables};
 pub use signal::SignalSensorTables;
 
@@ -105,6 +107,10 @@ pub struct Tables {
     /// `None` without modes and for fault-blind (mode-independent) gains,
     /// which are `gains` in every mode.
     pub modes: Option<ModeTables>,
+    /// The observer of an observer-based design (output feedback): the
+    /// generated step takes the measured output y and a caller-owned state
+    /// holding the estimate. `None`: state feedback.
+    pub observer: Option<ObserverTables>,
 }
 
 /// The sensor-side module of a networked loop: one variant per loop law
@@ -299,6 +305,7 @@ pub fn tables(
             (None, None) => Sensor::None,
         },
         modes: mode_tables(model, design),
+        observer: None,
     })
 }
 

@@ -40,6 +40,7 @@ use tsf_lang::spec::Emit;
 
 mod adaptive;
 mod header;
+mod observer;
 pub mod runtime;
 mod sensor;
 mod signal_sensor;
@@ -65,6 +66,18 @@ impl Backend for CBackend {
 
     fn controller(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
         check_name(&t.name)?;
+        if t.observer.is_some() {
+            super::observer_supported(t)?;
+            if t.c_style == tsf_lang::spec::CStyle::Straight {
+                return Err(CodegenError::ObserverStraight);
+            }
+            let g = Gen::new(t);
+            let files = CFiles {
+                header: g.observer_header(),
+                source: g.observer_source(),
+            };
+            return Ok(files.named(c_file_names(t)));
+        }
         Ok(emit_c(t).named(c_file_names(t)))
     }
 

@@ -69,7 +69,7 @@ impl Gen<'_> {
     }
 
     /// Premise map, centres, gains and saturation levels.
-    fn gain_tables(&self) -> String {
+    pub(super) fn gain_tables(&self) -> String {
         let t = self.t;
         let (p, u) = (&self.p, &self.u);
         let real = format!("{u}REAL");

@@ -7,11 +7,13 @@
 //! the sensor-side module of an aperiodic event trigger.
 
 mod adaptive;
+mod observer;
 mod sensor;
 mod signal_sensor;
 mod tokens;
 
 pub use adaptive::emit_rust_adaptive;
+pub use observer::emit_rust_observer;
 pub use sensor::emit_rust_sensor;
 pub use signal_sensor::emit_rust_signal_sensor;
 
@@ -35,9 +37,13 @@ impl Backend for RustBackend {
     }
 
     fn controller(&self, t: &Tables) -> Result<Vec<GeneratedFile>, CodegenError> {
+        let text = match t.observer {
+            Some(_) => emit_rust_observer(t)?,
+            None => emit_rust(t)?,
+        };
         Ok(vec![GeneratedFile {
             name: format!("{}.rs", t.name),
-            text: emit_rust(t)?,
+            text,
         }])
     }
 

@@ -14,7 +14,9 @@
 //!   inter-event time (time since the previous transmission) at each
 //!   transmission; the trigger law in the caption;
 //! - `modes` (specs with `modes`): the Markov mode r(t) as a staircase, the
-//!   time share of each mode in the caption.
+//!   time share of each mode in the caption;
+//! - `estimate` (observer-based designs): each state and its estimate, one
+//!   panel per state component, the estimation error in the caption.
 //!
 //! A run that diverges or goes non-finite still gives readable figures: the
 //! y-range comes from the finite values and is clipped when they run away
@@ -283,6 +285,44 @@ fn modes(o: &Outcome) -> Option<Figure> {
     })
 }
 
+/// An observer-based design: each state against its estimate, one panel per
+/// state component, the estimation figures in the caption.
+fn estimate(o: &Outcome) -> Option<Figure> {
+    let tr = &o.trace;
+    let at = tr.estimate?;
+    let est = o.metrics.estimation.as_ref()?;
+    let panels = (0..o.n)
+        .map(|i| {
+            let name = tr.state_names.get(i).map_or("?", String::as_str);
+            let x = column(o, |k| tr.x[k].get(i).copied().unwrap_or(f64::NAN));
+            let xhat = column(o, |k| tr.x[k].get(at + i).copied().unwrap_or(f64::NAN));
+            let marks = vec![
+                Mark::labelled(name, colour(0), Shape::Line(x)),
+                Mark::labelled(format!("{name} estimate"), colour(1), Shape::Line(xhat)),
+            ];
+            panel(o, name, marks)
+        })
+        .collect();
+    let mut caption = caption(o);
+    caption.push(format!(
+        "estimate every {} s from {} outputs (noise: {}); ||x - xhat||: start {}, peak {}, final {}, within 1 % of its start {}",
+        num(est.period_s),
+        est.outputs,
+        est.noise,
+        num(est.initial_error_norm),
+        num(est.peak_error_norm),
+        num(est.final_error_norm),
+        est.time_to_1pct_s
+            .map_or("never".into(), |t| format!("from t = {} s", num(t)))
+    ));
+    Some(Figure {
+        title: title(o, "states and their estimates"),
+        caption,
+        x_label: "time [s]".into(),
+        panels,
+    })
+}
+
 /// The figures of a run and their tags (`states`, `inputs`, `events`, `modes`).
 pub(crate) fn figures(o: &Outcome) -> Vec<(Figure, &'static str)> {
     let mut figures = vec![
@@ -292,6 +332,9 @@ pub(crate) fn figures(o: &Outcome) -> Vec<(Figure, &'static str)> {
     ];
     if let Some(f) = modes(o) {
         figures.push((f, "modes"));
+    }
+    if let Some(f) = estimate(o) {
+        figures.push((f, "estimate"));
     }
     figures
 }
