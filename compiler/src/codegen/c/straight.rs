@@ -101,7 +101,17 @@ impl Gen<'_> {
             _ => false,
         });
         s.push_str("/* The runtime's operations on this controller, written out: tsf_clamp01,\n   tsf_edge_ratio and tsf_nearest_rule of tsf_runtime.c. */\n\n");
-        if !t.factored.terms.is_empty() {
+        // Trapezoid degrees need no clamp (see `degree`): clamp01 serves the other sets.
+        let uses_clamp = t.factored.terms.iter().any(|term| {
+            !matches!(
+                term,
+                TermSpec::Is {
+                    set: SetShape::Tri(..) | SetShape::Trap(..),
+                    ..
+                }
+            )
+        });
+        if uses_clamp {
             let _ = write!(
                 s,
                 r#"/* Maps into [0, 1]; NaN -> 0. */
@@ -512,7 +522,15 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                         );
                     }
                 }
-                let _ = writeln!(b, "            deg{k} = {p}clamp01(v);\n        }}");
+                if matches!(set, SetShape::Tri(..) | SetShape::Trap(..)) {
+                    // The runtime's clamp is an identity here: within a <= z < b,
+                    // 0 <= fl(z - a) <= fl(b - a) (rounding is monotone), so the
+                    // ratio is in [0, 1], +0 at z = a; likewise on the falling
+                    // edge; the other branches give 0 and 1.
+                    let _ = writeln!(b, "            deg{k} = v;\n        }}");
+                } else {
+                    let _ = writeln!(b, "            deg{k} = {p}clamp01(v);\n        }}");
+                }
             }
             TermSpec::About {
                 first,
