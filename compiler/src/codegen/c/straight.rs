@@ -266,8 +266,12 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
         }
         // Fault checks: v - v is +0 for a finite v and NaN otherwise, so the
         // sum of these differences is 0 exactly when every value is finite
-        // (the runtime's isfinite tests, fewer branches).
-        b.push_str("    /* A NaN or infinite state or premise (v - v is 0 only for a finite v): u = 0, h = 0. */\n");
+        // (the runtime's isfinite tests, fewer branches). In front, one test
+        // of all values at once: their sum is finite when every value is (or
+        // overflows, rarely), and NaN or infinite when one is not, so
+        // `all - all` is 0 only when the one-by-one tests would find nothing.
+        let mut checks = String::new();
+        let mut all = Vec::new();
         for (vec, len, flag) in [("x", n, "STATE_NONFINITE"), ("z", t.p, "PREMISE_NONFINITE")] {
             if len == 0 {
                 continue;
@@ -275,9 +279,22 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
             let terms: Vec<String> = (0..len)
                 .map(|i| format!("({vec}[{i}] - {vec}[{i}])"))
                 .collect();
-            let _ = writeln!(b, "    if ({} != {u}C(0)) {{", terms.join(" + "));
-            set_flag(&mut b, "        ", flag);
-            b.push_str("    }\n");
+            all.extend((0..len).map(|i| format!("{vec}[{i}]")));
+            let _ = writeln!(checks, "        if ({} != {u}C(0)) {{", terms.join(" + "));
+            set_flag(&mut checks, "            ", flag);
+            checks.push_str("        }
+");
+        }
+        if !all.is_empty() {
+            let _ = writeln!(
+                b,
+                "    /* A NaN or infinite state or premise: u = 0, h = 0. The sum of every value is\n       finite when they all are (v - v is 0 only for a finite v); otherwise, or when the\n       sum overflows, they are tested one by one. */\n    {{\n        const {real} all = {};\n        if (all - all != {u}C(0)) {{",
+                all.join(" + ")
+            );
+            for line in checks.lines() {
+                let _ = writeln!(b, "    {line}");
+            }
+            b.push_str("        }\n    }\n");
         }
         if t.p == 0 {
             b.push_str("    (void)z;\n");
@@ -411,43 +428,60 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                 b.push_str("            (void)g;\n            (void)x;\n");
             }
             b.push_str("            /* Saturation: |u_s| <= max(u_max_s, 0); NaN -> 0, +-inf -> +-level. */\n");
-            if t.u_max.iter().all(|v| *v == f64::INFINITY) {
-                let _ = writeln!(
-                    b,
-                    "            (void){p}u_max; /* every channel unlimited */"
-                );
-            }
+            let unlimited = t.u_max.iter().all(|v| *v == f64::INFINITY);
+            let mut sat = String::new();
             for s in 0..m {
                 if t.u_max.get(s).is_some_and(|v| *v == f64::INFINITY) {
                     // An unlimited channel (level +inf in either real type):
                     // the runtime's tests leave a finite v and zero the rest.
                     let _ = writeln!(
-                        b,
+                        sat,
                         "            if (isfinite(u{s}) == 0) {{ /* unlimited channel */"
                     );
-                    set_flag(b, "                ", "COMMAND_NONFINITE");
-                    let _ = writeln!(b, "                u[{s}] = {u}C(0);\n            }} else {{\n                u[{s}] = u{s};\n            }}");
+                    set_flag(&mut sat, "                ", "COMMAND_NONFINITE");
+                    let _ = writeln!(sat, "                u[{s}] = {u}C(0);\n            }} else {{\n                u[{s}] = u{s};\n            }}");
                     continue;
                 }
                 let _ = writeln!(
-                    b,
+                    sat,
                     "            {{\n                const {real} b = {p}u_max[{s}] >= {u}C(0) ? {p}u_max[{s}] : {u}C(0);\n                {real} v = u{s};\n                if (isfinite(v) == 0) {{"
                 );
-                set_flag(b, "                    ", "COMMAND_NONFINITE");
+                set_flag(&mut sat, "                    ", "COMMAND_NONFINITE");
                 let _ = writeln!(
-                    b,
+                    sat,
                     "                    if ((isnan(v) != 0) || (isfinite(b) == 0)) {{\n                        v = {u}C(0);\n                    }}\n                }}\n                if (v > b) {{"
                 );
-                set_flag(b, "                    ", "SATURATED");
+                set_flag(&mut sat, "                    ", "SATURATED");
                 let _ = writeln!(
-                    b,
+                    sat,
                     "                    u[{s}] = b;\n                }} else if (v < -b) {{"
                 );
-                set_flag(b, "                    ", "SATURATED");
+                set_flag(&mut sat, "                    ", "SATURATED");
                 let _ = writeln!(
-                    b,
+                    sat,
                     "                    u[{s}] = -b;\n                }} else {{\n                    u[{s}] = v;\n                }}\n            }}"
                 );
+            }
+            if unlimited {
+                // Every channel unlimited: the runtime keeps each finite value,
+                // so one test of their sum (finite when all are, or overflowing
+                // rarely) comes first, the channel-by-channel tests after it.
+                let us: Vec<String> = (0..m).map(|s| format!("u{s}")).collect();
+                let _ = writeln!(
+                    b,
+                    "            (void){p}u_max; /* every channel unlimited */\n            {{\n                const {real} all = {};\n                if (all - all == {u}C(0)) {{",
+                    us.join(" + ")
+                );
+                for s in 0..m {
+                    let _ = writeln!(b, "                    u[{s}] = u{s};");
+                }
+                b.push_str("                } else {\n");
+                for line in sat.lines() {
+                    let _ = writeln!(b, "        {line}");
+                }
+                b.push_str("                }\n            }\n");
+            } else {
+                b.push_str(&sat);
             }
             b.push_str("        }\n");
         } else {
@@ -501,7 +535,9 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                             (true, true) => format!("}} else {{\n                {one}\n            }}"),
                             (true, false) => format!("}} else if (zv <= {cc}) {{\n                {one}\n            }} else {{\n                {falling}\n            }}"),
                             (false, true) => format!("}} else if (zv >= {bb}) {{\n                {one}\n            }} else {{\n                {rising}\n            }}"),
-                            (false, false) => format!("}} else if ((zv >= {bb}) && (zv <= {cc})) {{\n                {one}\n            }} else if (zv < {bb}) {{\n                {rising}\n            }} else {{\n                {falling}\n            }}"),
+                            // Within [a, d] (z is not NaN here) the runtime's
+                            // plateau test, then z < b, is z < b, then z > c.
+                            (false, false) => format!("}} else if (zv < {bb}) {{\n                {rising}\n            }} else if (zv > {cc}) {{\n                {falling}\n            }} else {{\n                {one}\n            }}"),
                         };
                         let _ = writeln!(b, "            {tail}");
                     }
