@@ -288,7 +288,9 @@ static float tsf_f32_from_bits(uint32_t b) {
 /* 2^k for -126 <= k <= 127 (k clamped). */
 static float tsf_pow2f(int k) {
     const int c = k < -126 ? -126 : (k > 127 ? 127 : k);
-    return tsf_f32_from_bits((uint32_t)(c + 127) << 23);
+    const int biased = c + 127;
+    const uint32_t field = (uint32_t)biased;
+    return tsf_f32_from_bits(field << 23);
 }
 
 /* e^v: NaN -> NaN, v > 88.72283 -> inf, v <= -103.972084 -> 0,
@@ -310,7 +312,8 @@ float tsf_expf(float x) {
     {
         const float half = x < 0.0f ? -0.5f : 0.5f;
         const float xl = x * 1.442695f;
-        const int k = (int)(xl + half);
+        const float kr = xl + half;
+        const int k = (int)kr;
         const float kf = (float)k;
         const float kh = kf * 0.69314575f;
         const float hi = x - kh;
@@ -429,7 +432,8 @@ float tsf_atanf(float x) {
         r = a + tsf_atanf_tail(a);
     } else if (a <= 2.4375f) {
         const float a16 = a * 16.0f;
-        const int j = (int)(a16 + 0.5f);
+        const float jr = a16 + 0.5f;
+        const int j = (int)jr;
         const float c = (float)j * 0.0625f;
         const float num = a - c;
         const float ac = a * c;
@@ -442,7 +446,8 @@ float tsf_atanf(float x) {
         r = hi + lt;
     } else {
         const float q16 = 16.0f / a;
-        const int j = (int)(q16 + 0.5f);
+        const float jr = q16 + 0.5f;
+        const int j = (int)jr;
         const float c = (float)j * 0.0625f;
         const float ac = a * c;
         const float num = 1.0f - ac;
@@ -469,10 +474,12 @@ static uint64_t tsf_two_over_pi_word(int k) {
 /* 64 bits of 2/pi from 0-based bit position pos (negative: leading zeros). */
 static uint64_t tsf_two_over_pi_bits(int pos) {
     if (pos < 0) {
-        return pos <= -64 ? 0u : tsf_two_over_pi_word(0) >> (unsigned)(-pos);
+        const int neg = -pos;
+        return neg >= 64 ? 0u : tsf_two_over_pi_word(0) >> (unsigned)neg;
     } else {
         const int k = pos / 64;
-        const unsigned sh = (unsigned)(pos % 64);
+        const int rem = pos % 64;
+        const unsigned sh = (unsigned)rem;
         if (sh == 0u) {
             return tsf_two_over_pi_word(k);
         }
@@ -486,14 +493,17 @@ static uint64_t tsf_two_over_pi_bits(int pos) {
    in Q31, one rounding). Returns n, writes y. */
 static int tsf_rem_pio2f(float x, float *y) {
     const uint32_t bits = tsf_f32_bits(x);
-    const int e = (int)((bits >> 23) & 0xffu) - 150;
-    const uint64_t m = (uint64_t)((bits & 0x007fffffu) | 0x00800000u);
+    const uint32_t ebits = (bits >> 23) & 0xffu;
+    const int e = (int)ebits - 150;
+    const uint32_t mbits = (bits & 0x007fffffu) | 0x00800000u;
+    const uint64_t m = (uint64_t)mbits;
     const uint64_t hi64 = tsf_two_over_pi_bits(e - 2);
     const uint64_t lo32 = tsf_two_over_pi_bits(e + 62) >> 32;
     const uint64_t p2 = m * lo32;
     const uint64_t p1 = m * (hi64 & 0xffffffffu) + (p2 >> 32);
     const uint64_t p0 = m * (hi64 >> 32) + (p1 >> 32);
-    int n = (int)((p0 >> 30) & 3u);
+    const uint64_t quadrant = (p0 >> 30) & 3u;
+    int n = (int)quadrant;
     const uint64_t frac = ((p0 & 0x3fffffffu) << 34) | ((p1 & 0xffffffffu) << 2) |
                           ((p2 & 0xffffffffu) >> 30);
     uint64_t mag = frac;

@@ -48,7 +48,7 @@ lflags=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -Os --specs=n
 # libgcc's soft-double helpers and conversions, libm's double functions and kernels.
 double_routines() {
     arm-none-eabi-nm "$1" | awk '{ print $NF }' |
-        grep -E '^(__aeabi_(d[a-z0-9]+|f2d|[ui]?l?2d)|__[a-z]+df[0-9]|__ieee754_[a-z0-9_]*[^f]|__kernel_[a-z0-9_]*[^f]|(exp|expm1|log|log1p|sqrt|atan|atan2|sin|cos|tan|fabs|floor|ceil|pow|hypot|fmod|scalbn|ldexp|frexp|modf|asin|acos|sinh|cosh|tanh))$' |
+        { grep -E '^(__aeabi_(d[a-z0-9]+|f2d|[ui]?l?2d)|__[a-z]+df[0-9]|__ieee754_[a-z0-9_]*[^f]|__kernel_[a-z0-9_]*[^f]|(exp|expm1|log|log1p|sqrt|atan|atan2|sin|cos|tan|fabs|floor|ceil|pow|hypot|fmod|scalbn|ldexp|frexp|modf|asin|acos|sinh|cosh|tanh))$' || true; } |
         sort -u | paste -sd, - | sed 's/^$/none/'
 }
 
