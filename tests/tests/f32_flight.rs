@@ -181,7 +181,7 @@ fn f32_builds_link_no_double_routine_on_cortex_m4f() {
     for name in [
         "zhang2013_multiobjective",
         "inverted_pendulum",
-        "amrr2019_flexible_mixed_trigger",
+        "amrr2019_tsfc_design",
         "xu2020_event_triggered",
     ] {
         let doubles = double_routines(name, &dir);

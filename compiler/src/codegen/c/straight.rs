@@ -89,65 +89,7 @@ impl Gen<'_> {
         let real = format!("{u}REAL");
         let pd = self.pd;
         let mut s = String::new();
-        let uses_trap = t.factored.terms.iter().any(|term| match term {
-            TermSpec::Is {
-                set: SetShape::Tri(a, b, c),
-                ..
-            } => a != b || b != c,
-            TermSpec::Is {
-                set: SetShape::Trap(a, b, c, d),
-                ..
-            } => a != b || c != d,
-            _ => false,
-        });
-        s.push_str("/* The runtime's operations on this controller, written out: tsf_clamp01,\n   tsf_edge_ratio and tsf_nearest_rule of tsf_runtime.c. */\n\n");
-        // Trapezoid degrees need no clamp (see `degree`): clamp01 serves the other sets.
-        let uses_clamp = t.factored.terms.iter().any(|term| {
-            !matches!(
-                term,
-                TermSpec::Is {
-                    set: SetShape::Tri(..) | SetShape::Trap(..),
-                    ..
-                }
-            )
-        });
-        if uses_clamp {
-            let _ = write!(
-                s,
-                r#"/* Maps into [0, 1]; NaN -> 0. */
-static {real} {p}clamp01({real} v) {{
-    if (v >= {u}C(1)) {{
-        return {u}C(1);
-    }}
-    if (v > {u}C(0)) {{
-        return v;
-    }}
-    return {u}C(0);
-}}
-
-"#
-            );
-        }
-        if uses_trap {
-            let _ = write!(
-                s,
-                r#"/* (p - q)/(r - s); if r - s overflows, every operand is halved first. */
-static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
-    const {real} den = r - s;
-    if (isfinite(den) != 0) {{
-        return (p - q) / den;
-    }} else {{
-        const {real} ph = p * {u}C(0.5);
-        const {real} qh = q * {u}C(0.5);
-        const {real} rh = r * {u}C(0.5);
-        const {real} sh = s * {u}C(0.5);
-        return (ph - qh) / (rh - sh);
-    }}
-}}
-
-"#
-            );
-        }
+        s.push_str(&self.straight_helpers());
         let inner = if t.p == 0 {
             "    (void)z;\n    (void)scale;\n".to_string()
         } else {
@@ -238,6 +180,76 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
         s
     }
 
+    /// The runtime's `tsf_clamp01` (for the sets whose degree needs it) and
+    /// `tsf_edge_ratio` (for trapezoids with a sloped edge), as this
+    /// controller uses them.
+    fn straight_helpers(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let t = self.t;
+        let real = format!("{u}REAL");
+        let mut s = String::new();
+        let uses_trap = t.factored.terms.iter().any(|term| match term {
+            TermSpec::Is {
+                set: SetShape::Tri(a, b, c),
+                ..
+            } => a != b || b != c,
+            TermSpec::Is {
+                set: SetShape::Trap(a, b, c, d),
+                ..
+            } => a != b || c != d,
+            _ => false,
+        });
+        s.push_str("/* The runtime's operations on this controller, written out: tsf_clamp01,\n   tsf_edge_ratio and tsf_nearest_rule of tsf_runtime.c. */\n\n");
+        // Trapezoid degrees need no clamp (see `degree`): clamp01 serves the other sets.
+        let uses_clamp = t.factored.terms.iter().any(|term| {
+            !matches!(
+                term,
+                TermSpec::Is {
+                    set: SetShape::Tri(..) | SetShape::Trap(..),
+                    ..
+                }
+            )
+        });
+        if uses_clamp {
+            let _ = write!(
+                s,
+                r#"/* Maps into [0, 1]; NaN -> 0. */
+static {real} {p}clamp01({real} v) {{
+    if (v >= {u}C(1)) {{
+        return {u}C(1);
+    }}
+    if (v > {u}C(0)) {{
+        return v;
+    }}
+    return {u}C(0);
+}}
+
+"#
+            );
+        }
+        if uses_trap {
+            let _ = write!(
+                s,
+                r#"/* (p - q)/(r - s); if r - s overflows, every operand is halved first. */
+static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
+    const {real} den = r - s;
+    if (isfinite(den) != 0) {{
+        return (p - q) / den;
+    }} else {{
+        const {real} ph = p * {u}C(0.5);
+        const {real} qh = q * {u}C(0.5);
+        const {real} rh = r * {u}C(0.5);
+        const {real} sh = s * {u}C(0.5);
+        return (ph - qh) / (rh - sh);
+    }}
+}}
+
+"#
+            );
+        }
+        s
+    }
+
     /// `<name>_step_with_premises` written out, then `<name>_step`.
     fn straight_step(&self) -> String {
         let (p, u) = (&self.p, &self.u);
@@ -282,8 +294,10 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
             all.extend((0..len).map(|i| format!("{vec}[{i}]")));
             let _ = writeln!(checks, "        if ({} != {u}C(0)) {{", terms.join(" + "));
             set_flag(&mut checks, "            ", flag);
-            checks.push_str("        }
-");
+            checks.push_str(
+                "        }
+",
+            );
         }
         if !all.is_empty() {
             let _ = writeln!(
@@ -558,12 +572,19 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                         );
                     }
                 }
-                if matches!(set, SetShape::Tri(..) | SetShape::Trap(..)) {
-                    // The runtime's clamp is an identity here: within a <= z < b,
-                    // 0 <= fl(z - a) <= fl(b - a) (rounding is monotone), so the
-                    // ratio is in [0, 1], +0 at z = a; likewise on the falling
-                    // edge; the other branches give 0 and 1.
-                    let _ = writeln!(b, "            deg{k} = v;\n        }}");
+                if let Some(signed_zero) = trap_signed_zero(*set) {
+                    // The runtime's clamp is an identity here but for the sign of
+                    // zero: within a <= z < b, 0 <= fl(z - a) <= fl(b - a) (rounding
+                    // is monotone), so the ratio is in [0, 1]; likewise on the
+                    // falling edge; the other branches give +0 and 1. The ratio is
+                    // -0 only for z = -0 on an edge from a = +0 (or to d = -0),
+                    // where the clamp gives +0: then `v + 0` does the same.
+                    let fix = if signed_zero {
+                        format!(" + {u}C(0)")
+                    } else {
+                        String::new()
+                    };
+                    let _ = writeln!(b, "            deg{k} = v{fix};\n        }}");
                 } else {
                     let _ = writeln!(b, "            deg{k} = {p}clamp01(v);\n        }}");
                 }
@@ -593,4 +614,21 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
             }
         }
     }
+}
+
+/// For a trapezoid (or triangle) set: whether its degree can come out as -0
+/// from a sloped edge (`Some`), or `None` for other sets. `z - a` is -0 only
+/// for `z = -0`, `a = +0`; `d - z` only for `d = -0`, `z = +0` (round to
+/// nearest); a vertical edge has no ratio. Judged on the f32 rounding of the
+/// corners, which is +-0 whenever the f64 value is (the C may be built with
+/// either real type).
+fn trap_signed_zero(set: SetShape) -> Option<bool> {
+    let (a, b, c, d) = match set {
+        SetShape::Tri(a, b, c) => (a, b, b, c),
+        SetShape::Trap(a, b, c, d) => (a, b, c, d),
+        SetShape::Gauss(..) | SetShape::Sigmoid(..) => return None,
+    };
+    let zero =
+        |v: f64, positive: bool| (v as f32) == 0.0 && (v as f32).is_sign_positive() == positive;
+    Some((a != b && zero(a, true)) || (c != d && zero(d, false)))
 }
