@@ -250,12 +250,55 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
         s
     }
 
+    /// The step's test for a NaN or infinite state or premise: one test of
+    /// the sum of all values, the runtime's one-by-one tests behind it.
+    fn straight_fault_check(&self) -> String {
+        let u = &self.u;
+        let t = self.t;
+        let real = format!("{u}REAL");
+        let n = t.n;
+        let mut b = String::new();
+        let set_flag = |b: &mut String, ind: &str, flag: &str| {
+            let _ = writeln!(b, "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});");
+        };
+        // Fault checks: one test of all values at once: their sum is finite
+        // when every value is (or overflows, rarely), and NaN or infinite
+        // when one is not (v - v is +0 only for a finite v), so `all - all`
+        // is 0 only when the runtime's one-by-one isfinite tests would find
+        // nothing. Those tests follow on the rare path, as loops (small code).
+        let mut all = Vec::new();
+        let mut checks = String::new();
+        for (vec, len, dim, flag) in [
+            ("x", n, format!("{u}N"), "STATE_NONFINITE"),
+            ("z", t.p, format!("{u}P"), "PREMISE_NONFINITE"),
+        ] {
+            if len == 0 {
+                continue;
+            }
+            all.extend((0..len).map(|i| format!("{vec}[{i}]")));
+            let _ = writeln!(
+                checks,
+                "            for (i = 0; i < {dim}; i++) {{\n                if (isfinite({vec}[i]) == 0) {{"
+            );
+            set_flag(&mut checks, "                    ", flag);
+            checks.push_str("                }\n            }\n");
+        }
+        if !all.is_empty() {
+            let _ = writeln!(
+                b,
+                "    /* A NaN or infinite state or premise: u = 0, h = 0. The sum of every value is\n       finite when they all are (v - v is 0 only for a finite v); otherwise, or when the\n       sum overflows, they are tested one by one. */\n    {{\n        const {real} all = {};\n        if (all - all != {u}C(0)) {{\n            int i;\n{checks}        }}\n    }}",
+                all.join(" + ")
+            );
+        }
+        b
+    }
+
     /// `<name>_step_with_premises` written out, then `<name>_step`.
     fn straight_step(&self) -> String {
         let (p, u) = (&self.p, &self.u);
         let t = self.t;
         let real = format!("{u}REAL");
-        let (n, m, r) = (t.n, t.m, t.r);
+        let (m, r) = (t.m, t.r);
         let mut b = String::new();
         let set_flag = |b: &mut String, ind: &str, flag: &str| {
             let _ = writeln!(b, "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});");
@@ -276,40 +319,7 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
                 let _ = writeln!(b, "    const {real} *g = {p}gains;");
             }
         }
-        // Fault checks: v - v is +0 for a finite v and NaN otherwise, so the
-        // sum of these differences is 0 exactly when every value is finite
-        // (the runtime's isfinite tests, fewer branches). In front, one test
-        // of all values at once: their sum is finite when every value is (or
-        // overflows, rarely), and NaN or infinite when one is not, so
-        // `all - all` is 0 only when the one-by-one tests would find nothing.
-        let mut checks = String::new();
-        let mut all = Vec::new();
-        for (vec, len, flag) in [("x", n, "STATE_NONFINITE"), ("z", t.p, "PREMISE_NONFINITE")] {
-            if len == 0 {
-                continue;
-            }
-            let terms: Vec<String> = (0..len)
-                .map(|i| format!("({vec}[{i}] - {vec}[{i}])"))
-                .collect();
-            all.extend((0..len).map(|i| format!("{vec}[{i}]")));
-            let _ = writeln!(checks, "        if ({} != {u}C(0)) {{", terms.join(" + "));
-            set_flag(&mut checks, "            ", flag);
-            checks.push_str(
-                "        }
-",
-            );
-        }
-        if !all.is_empty() {
-            let _ = writeln!(
-                b,
-                "    /* A NaN or infinite state or premise: u = 0, h = 0. The sum of every value is\n       finite when they all are (v - v is 0 only for a finite v); otherwise, or when the\n       sum overflows, they are tested one by one. */\n    {{\n        const {real} all = {};\n        if (all - all != {u}C(0)) {{",
-                all.join(" + ")
-            );
-            for line in checks.lines() {
-                let _ = writeln!(b, "    {line}");
-            }
-            b.push_str("        }\n    }\n");
-        }
+        b.push_str(&self.straight_fault_check());
         if t.p == 0 {
             b.push_str("    (void)z;\n");
         }
