@@ -1,7 +1,8 @@
 /* Instruction-count driver for a generated C controller step (see
  * bench/step/step_count.sh): 1000 steps of the Zhang & Zeng controller
  * at states near the paper's x(0), as tests/flight_example/examples/step_count.rs
- * does for the generated Rust. */
+ * does for the generated Rust. The state and command have the controller's
+ * real type (double, or float for a `precision f32` build). */
 #include <stdio.h>
 
 #include "zhang_multiobjective.h"
@@ -11,8 +12,8 @@ static volatile double sink;
 
 int main(void) {
     zhang_multiobjective_t s;
-    double x[6] = {0.08, -0.05, 0.1, 0.12, 0.06, -0.08};
-    double u[3];
+    ZHANG_MULTIOBJECTIVE_REAL x[6] = {0.08, -0.05, 0.1, 0.12, 0.06, -0.08};
+    ZHANG_MULTIOBJECTIVE_REAL u[3];
     double acc = 0.0;
     int k;
     zhang_multiobjective_init(&s);

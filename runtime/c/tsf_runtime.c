@@ -13,6 +13,7 @@
 #include "tsf_runtime.h"
 
 #include <math.h>
+#include <string.h>
 
 /* ------------------------------------------------- binary64 arc tangent */
 
@@ -223,6 +224,427 @@ static double tsf_exprel_f64(double v) {
     return (exp(v) - 1.0) / v;
 }
 
+/* ------------------------------------------- elementary functions, double */
+
+/* libm's functions (the Rust runtime's math::exp etc. differ by a few ulp;
+   sqrt and fabs not at all), the runtime's atan and exprel. */
+double tsf_exp(double v) {
+    return exp(v);
+}
+
+double tsf_sqrt(double v) {
+    return sqrt(v);
+}
+
+double tsf_sin(double v) {
+    return sin(v);
+}
+
+double tsf_cos(double v) {
+    return cos(v);
+}
+
+double tsf_fabs(double v) {
+    return fabs(v);
+}
+
+/* sin(v)/v with the runtime's small-argument branch (|v| < 2^-13:
+   1 - v*v/6, truncation error < 2^-59). */
+double tsf_sinc(double v) {
+    if (fabs(v) < 0x1p-13) {
+        const double d2 = v * v;
+        return 1.0 - d2 / 6.0;
+    }
+    return sin(v) / v;
+}
+
+double tsf_exprel(double v) {
+    return tsf_exprel_f64(v);
+}
+
+double tsf_atan(double v) {
+    return tsf_atan_f64(v);
+}
+
+/* ------------------------------------------- elementary functions, float */
+
+/* tsf-runtime's math::expf, sqrtf, atanf, sinf, cosf, sincf and exprelf
+   (runtime/src/math/single.rs), operation by operation in binary32: no
+   double operation, so a single-precision FPU runs them without a
+   double-precision routine. Bit patterns through memcpy. */
+
+static uint32_t tsf_f32_bits(float v) {
+    uint32_t b;
+    (void)memcpy(&b, &v, sizeof b);
+    return b;
+}
+
+static float tsf_f32_from_bits(uint32_t b) {
+    float v;
+    (void)memcpy(&v, &b, sizeof v);
+    return v;
+}
+
+/* 2^k for -126 <= k <= 127 (k clamped). */
+static float tsf_pow2f(int k) {
+    const int c = k < -126 ? -126 : (k > 127 ? 127 : k);
+    const int biased = c + 127;
+    const uint32_t field = (uint32_t)biased;
+    return tsf_f32_from_bits(field << 23);
+}
+
+/* e^v: NaN -> NaN, v > 88.72283 -> inf, v <= -103.972084 -> 0,
+   |v| < 2^-14 -> 1 + v; k = trunc(v/ln2 +- 1/2), r = (v - k LN2_HI) - k LN2_LO,
+   c = r - s (P1 + s P2), y = 1 - ((lo - r c/(2 - c)) - hi), times 2^k. */
+float tsf_expf(float x) {
+    if (isnan(x) != 0) {
+        return x;
+    }
+    if (x > 88.72283f) {
+        return HUGE_VALF;
+    }
+    if (x <= -103.972084f) {
+        return 0.0f;
+    }
+    if (fabsf(x) < 0x1p-14f) {
+        return 1.0f + x;
+    }
+    {
+        const float half = x < 0.0f ? -0.5f : 0.5f;
+        const float xl = x * 1.442695f;
+        const float kr = xl + half;
+        const int k = (int)kr;
+        const float kf = (float)k;
+        const float kh = kf * 0.69314575f;
+        const float hi = x - kh;
+        const float lo = kf * 1.4286068e-6f;
+        const float r = hi - lo;
+        const float s = r * r;
+        const float sp2 = s * -0.0027667333f;
+        const float p = 0.16666625f + sp2;
+        const float sp = s * p;
+        const float c = r - sp;
+        const float rc = r * c;
+        const float q = rc / (2.0f - c);
+        const float y = 1.0f - ((lo - q) - hi);
+        if (k > 127) {
+            const float y2 = y * 2.0f;
+            return y2 * tsf_pow2f(k - 1);
+        }
+        if (k < -125) {
+            const float ys = y * tsf_pow2f(k + 100);
+            return ys * tsf_pow2f(-100);
+        }
+        return y * tsf_pow2f(k);
+    }
+}
+
+/* Correctly rounded: C's sqrtf (IEEE), the runtime's integer sqrtf. */
+float tsf_sqrtf(float v) {
+    return sqrtf(v);
+}
+
+float tsf_fabsf(float v) {
+    return fabsf(v);
+}
+
+/* math::ATANF_J16: atan(j/16) in binary32, high and low. */
+static const float tsf_atanf_j16[40][2] = {
+    {0.0f, 0e0f},
+    {0.06241881f, -1.0272779e-9f},
+    {0.124354996f, -1.2403822e-9f},
+    {0.18534794f, 5.4976326e-9f},
+    {0.24497867f, -3.1786778e-9f},
+    {0.30288488f, -8.353086e-9f},
+    {0.35877067f, 1.7639499e-9f},
+    {0.41241044f, 3.5366268e-9f},
+    {0.4636476f, 5.0121587e-9f},
+    {0.5123895f, -2.075692e-8f},
+    {0.5585993f, 2.2111598e-8f},
+    {0.60228735f, -5.9501493e-9f},
+    {0.6435011f, 5.8689373e-9f},
+    {0.68231654f, 1.3202995e-8f},
+    {0.71883f, 1.01883355e-8f},
+    {0.7531513f, -1.660708e-8f},
+    {0.7853982f, -2.1855694e-8f},
+    {0.81569195f, -2.4620789e-8f},
+    {0.844154f, -1.41691165e-8f},
+    {0.87090343f, 2.470642e-8f},
+    {0.8960554f, -1.5800207e-8f},
+    {0.9197196f, 2.8514785e-8f},
+    {0.94200003f, 8.908211e-9f},
+    {0.96299434f, -6.400973e-9f},
+    {0.98279375f, -2.5131424e-8f},
+    {1.0014831f, 5.2922932e-8f},
+    {1.0191413f, 2.785247e-8f},
+    {1.0358412f, 2.6431042e-8f},
+    {1.0516502f, 4.603684e-8f},
+    {1.0666304f, 1.851388e-9f},
+    {1.080839f, -3.7354035e-8f},
+    {1.0943289f, 2.7011131e-8f},
+    {1.1071488f, -4.872355e-8f},
+    {1.1193433f, -4.5549893e-8f},
+    {1.1309538f, -4.4778165e-8f},
+    {1.1420183f, -1.882739e-8f},
+    {1.152572f, -3.8573823e-8f},
+    {1.1626472f, -2.4274646e-8f},
+    {1.1722739f, 6.8456396e-9f},
+    {1.1814796f, 3.1711938e-8f}
+};
+
+/* math::ATANF_COMP_J16: pi/2 - atan(j/16), high and low. */
+static const float tsf_atanf_comp_j16[8][2] = {
+    {1.5707964f, -4.371139e-8f},
+    {1.5083776f, -3.523353e-8f},
+    {1.4464413f, 3.948538e-8f},
+    {1.3854483f, 4.0197946e-8f},
+    {1.3258177f, -4.053271e-8f},
+    {1.2679114f, 2.4246342e-8f},
+    {1.2120256f, 1.4129305e-8f},
+    {1.1583859f, 1.2356628e-8f}
+};
+
+/* atan(t) - t for |t| <= 1/8: t (s Q(s)), Q = -1/3, 1/5, -1/7, 1/9. */
+static float tsf_atanf_tail(float t) {
+    const float s = t * t;
+    const float q4 = s * 0.11111111f;
+    const float q3 = s * (-0.14285715f + q4);
+    const float q2 = s * (0.2f + q3);
+    const float q = -0.33333334f + q2;
+    const float sq = s * q;
+    return t * sq;
+}
+
+/* math::atanf: math::atan's algorithm in binary32. */
+float tsf_atanf(float x) {
+    float a;
+    float r;
+    if (isnan(x) != 0) {
+        return x;
+    }
+    a = fabsf(x);
+    if (a < 0x1p-12f) {
+        return x;
+    }
+    if (a > 0x1p26f) {
+        r = tsf_atanf_comp_j16[0][0] + tsf_atanf_comp_j16[0][1];
+    } else if (a < 0.125f) {
+        r = a + tsf_atanf_tail(a);
+    } else if (a <= 2.4375f) {
+        const float a16 = a * 16.0f;
+        const float jr = a16 + 0.5f;
+        const int j = (int)jr;
+        const float c = (float)j * 0.0625f;
+        const float num = a - c;
+        const float ac = a * c;
+        const float den = 1.0f + ac;
+        const float t = num / den;
+        const float tt = t + tsf_atanf_tail(t);
+        const float hi = (j >= 0 && j < 40) ? tsf_atanf_j16[j][0] : 0.0f;
+        const float lo = (j >= 0 && j < 40) ? tsf_atanf_j16[j][1] : 0.0f;
+        const float lt = lo + tt;
+        r = hi + lt;
+    } else {
+        const float q16 = 16.0f / a;
+        const float jr = q16 + 0.5f;
+        const int j = (int)jr;
+        const float c = (float)j * 0.0625f;
+        const float ac = a * c;
+        const float num = 1.0f - ac;
+        const float den = a + c;
+        const float t = num / den;
+        const float tt = t + tsf_atanf_tail(t);
+        const float hi = (j >= 0 && j < 8) ? tsf_atanf_comp_j16[j][0] : 0.0f;
+        const float lo = (j >= 0 && j < 8) ? tsf_atanf_comp_j16[j][1] : 0.0f;
+        const float lt = lo - tt;
+        r = hi + lt;
+    }
+    return signbit(x) ? -r : r;
+}
+
+/* 2/pi, 256 bits, most significant first (math::TWO_OVER_PI's first words). */
+static const uint64_t tsf_two_over_pi[4] = {
+    0xA2F9836E4E441529ull, 0xFC2757D1F534DDC0ull, 0xDB6295993C439041ull, 0xFE5163ABDEBBC561ull
+};
+
+static uint64_t tsf_two_over_pi_word(int k) {
+    return (k >= 0 && k < 4) ? tsf_two_over_pi[k] : 0u;
+}
+
+/* 64 bits of 2/pi from 0-based bit position pos (negative: leading zeros). */
+static uint64_t tsf_two_over_pi_bits(int pos) {
+    if (pos < 0) {
+        const int neg = -pos;
+        return neg >= 64 ? 0u : tsf_two_over_pi_word(0) >> (unsigned)neg;
+    } else {
+        const int k = pos / 64;
+        const int rem = pos % 64;
+        const unsigned sh = (unsigned)rem;
+        if (sh == 0u) {
+            return tsf_two_over_pi_word(k);
+        }
+        return (tsf_two_over_pi_word(k) << sh) | (tsf_two_over_pi_word(k + 1) >> (64u - sh));
+    }
+}
+
+/* math::rem_pio2f: x = n pi/2 + y for finite |x| > pi/4, with integers
+   (96 bits of 2/pi from bit e - 2, quadrant and 64 fraction bits of m W,
+   rounded to the nearest quadrant; y from the top 32 bits of |f| times pi/2
+   in Q31, one rounding). Returns n, writes y. */
+static int tsf_rem_pio2f(float x, float *y) {
+    const uint32_t bits = tsf_f32_bits(x);
+    const uint32_t ebits = (bits >> 23) & 0xffu;
+    const int e = (int)ebits - 150;
+    const uint32_t mbits = (bits & 0x007fffffu) | 0x00800000u;
+    const uint64_t m = (uint64_t)mbits;
+    const uint64_t hi64 = tsf_two_over_pi_bits(e - 2);
+    const uint64_t lo32 = tsf_two_over_pi_bits(e + 62) >> 32;
+    const uint64_t p2 = m * lo32;
+    const uint64_t p1 = m * (hi64 & 0xffffffffu) + (p2 >> 32);
+    const uint64_t p0 = m * (hi64 >> 32) + (p1 >> 32);
+    const uint64_t quadrant = (p0 >> 30) & 3u;
+    int n = (int)quadrant;
+    const uint64_t frac = ((p0 & 0x3fffffffu) << 34) | ((p1 & 0xffffffffu) << 2) |
+                          ((p2 & 0xffffffffu) >> 30);
+    uint64_t mag = frac;
+    int neg = 0;
+    float v = 0.0f;
+    if ((frac >> 63) != 0u) {
+        n = n + 1;
+        mag = (~frac) + 1u;
+        neg = 1;
+    }
+    if (mag != 0u) {
+        int lz = 0;
+        uint64_t norm = mag;
+        while ((norm >> 63) == 0u) {
+            norm = norm << 1;
+            lz = lz + 1;
+        }
+        {
+            const uint64_t prod = (norm >> 32) * 0xc90fdaa2u;
+            v = (float)prod * tsf_pow2f(-63 - lz);
+        }
+    }
+    if (neg != 0) {
+        v = -v;
+    }
+    if (x < 0.0f) {
+        *y = -v;
+        return -n;
+    }
+    *y = v;
+    return n;
+}
+
+/* sin(y), |y| <= ~pi/4: y + (y z)(S1 + z(S2 + z(S3 + z S4))), z = y y. */
+static float tsf_kernel_sinf(float y) {
+    const float z = y * y;
+    const float p4 = z * 2.7557318e-6f;
+    const float p3 = z * (-1.984127e-4f + p4);
+    const float p2 = z * (8.3333335e-3f + p3);
+    const float p = -0.16666667f + p2;
+    const float yz = y * z;
+    const float t = yz * p;
+    return y + t;
+}
+
+/* cos(y), |y| <= ~pi/4: 1 - (z/2 - (z z)(C1 + z(C2 + z(C3 + z C4)))). */
+static float tsf_kernel_cosf(float y) {
+    const float z = y * y;
+    const float c4 = z * -2.7557318e-7f;
+    const float c3 = z * (2.4801587e-5f + c4);
+    const float c2 = z * (-0.0013888889f + c3);
+    const float c = 0.041666668f + c2;
+    const float zz = z * z;
+    const float q = zz * c;
+    const float hz = 0.5f * z;
+    return 1.0f - (hz - q);
+}
+
+float tsf_sinf(float x) {
+    float y;
+    int n;
+    if (isfinite(x) == 0) {
+        return NAN;
+    }
+    if (fabsf(x) < 0x1p-12f) {
+        return x;
+    }
+    if (fabsf(x) <= 0.7853981f) {
+        return tsf_kernel_sinf(x);
+    }
+    n = tsf_rem_pio2f(x, &y);
+    switch ((unsigned)n & 3u) {
+    case 0u:
+        return tsf_kernel_sinf(y);
+    case 1u:
+        return tsf_kernel_cosf(y);
+    case 2u:
+        return -tsf_kernel_sinf(y);
+    default:
+        return -tsf_kernel_cosf(y);
+    }
+}
+
+float tsf_cosf(float x) {
+    float y;
+    int n;
+    if (isfinite(x) == 0) {
+        return NAN;
+    }
+    if (fabsf(x) < 0x1p-12f) {
+        return 1.0f;
+    }
+    if (fabsf(x) <= 0.7853981f) {
+        return tsf_kernel_cosf(x);
+    }
+    n = tsf_rem_pio2f(x, &y);
+    switch ((unsigned)n & 3u) {
+    case 0u:
+        return tsf_kernel_cosf(y);
+    case 1u:
+        return -tsf_kernel_sinf(y);
+    case 2u:
+        return -tsf_kernel_cosf(y);
+    default:
+        return tsf_kernel_sinf(y);
+    }
+}
+
+/* sin(v)/v: |v| < 2^-6 (math::SINCF_SMALL): 1 - v*v/6. */
+float tsf_sincf(float v) {
+    if (fabsf(v) < 0x1p-6f) {
+        const float d2 = v * v;
+        return 1.0f - d2 / 6.0f;
+    }
+    return tsf_sinf(v) / v;
+}
+
+/* math::EXPRELF_COEFFS: 1/(k+1)!, k = 0..8, in binary32. */
+static const float tsf_exprelf_c[9] = {
+    1.0f, 0.5f, 0.16666667f, 0.041666668f, 8.3333335e-3f, 0.0013888889f, 1.984127e-4f,
+    2.4801587e-5f, 2.7557318e-6f
+};
+
+/* (e^v - 1)/v: |v| < 0.5 the degree-8 series by Horner from c_8; +inf -> +inf;
+   otherwise (tsf_expf(v) - 1)/v. */
+float tsf_exprelf(float v) {
+    if (fabsf(v) < 0.5f) {
+        float p = tsf_exprelf_c[8];
+        int k;
+        for (k = 7; k >= 0; k--) {
+            const float t = p * v;
+            p = t + tsf_exprelf_c[k];
+        }
+        return p;
+    }
+    if (v == HUGE_VALF) {
+        return v;
+    }
+    return (tsf_expf(v) - 1.0f) / v;
+}
+
 /* ------------------------------------------------- the two instantiations */
 
 #define TSF_RUNTIME_INSTANCE
@@ -422,51 +844,6 @@ int tsf_mrac_step(const tsf_mrac_law *law, double *a_hat, double *b_hat, double 
 
 /* A constant of the real type. */
 #define TSF_C(v) ((TSF_R)(v))
-
-/* -------------------------------------------------- elementary functions */
-
-/* libm's f evaluated in double, rounded once to the real type. */
-TSF_R TSF_FN(tsf_exp)(TSF_R v) {
-    return TSF_C(exp((double)v));
-}
-
-TSF_R TSF_FN(tsf_sqrt)(TSF_R v) {
-    return TSF_C(sqrt((double)v));
-}
-
-TSF_R TSF_FN(tsf_sin)(TSF_R v) {
-    return TSF_C(sin((double)v));
-}
-
-TSF_R TSF_FN(tsf_cos)(TSF_R v) {
-    return TSF_C(cos((double)v));
-}
-
-TSF_R TSF_FN(tsf_fabs)(TSF_R v) {
-    return TSF_C(fabs((double)v));
-}
-
-/* sin(v)/v with the runtime's small-argument branch (|v| < 2^-13:
-   1 - v*v/6, truncation error < 2^-59), evaluated in double. */
-TSF_R TSF_FN(tsf_sinc)(TSF_R v) {
-    const double d = (double)v;
-    if (fabs(d) < 0x1p-13) {
-        const double d2 = d * d;
-        return TSF_C(1.0 - d2 / 6.0);
-    }
-    return TSF_C(sin(d) / d);
-}
-
-/* (e^v - 1)/v, 1 at 0: tsf_exprel_f64 in double, rounded once to the real
-   type (as math::exprelf). */
-TSF_R TSF_FN(tsf_exprel)(TSF_R v) {
-    return TSF_C(tsf_exprel_f64((double)v));
-}
-
-/* The runtime's atan in binary64, rounded once to the real type (as atanf). */
-TSF_R TSF_FN(tsf_atan)(TSF_R v) {
-    return TSF_C(tsf_atan_f64((double)v));
-}
 
 /* ------------------------------------------------------ vector algebra */
 

@@ -15,10 +15,12 @@
  * double and tsf_<f>f on float (types likewise: tsf_term and tsf_termf).
  * Generated code picks its instance with TSF_REAL_FN(<its real type>, name).
  *
- * Elementary functions: tsf_atan is tsf-runtime's math::atan, bit for bit;
- * exp, sqrt, sin, cos and fabs are libm's, evaluated in double and rounded
- * once to the real type (as tsf-runtime's f32 functions); libm and the Rust
- * runtime differ by a few ulp per call, sqrt and fabs not at all. Products
+ * Elementary functions: in double, tsf_atan is tsf-runtime's math::atan, bit
+ * for bit; exp, sqrt, sin, cos and fabs are libm's (libm and the Rust runtime
+ * differ by a few ulp per call, sqrt and fabs not at all). In float, every
+ * tsf_<f>f is tsf-runtime's binary32 math::<f>f bit for bit, evaluated in
+ * float arithmetic only (sqrtf and fabsf are C's, correctly rounded), so a
+ * float build links no double-precision routine. Products
  * are separate statements, so contraction within an expression cannot fuse
  * them; for bit-exact runtime order also avoid contraction across statements
  * (GCC outside ISO modes: -ffp-contract=off).

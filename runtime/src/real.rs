@@ -6,7 +6,7 @@ use core::ops::{Add, AddAssign, Div, Mul, Neg, Sub};
 /// [`crate::math`].
 ///
 /// All runtime algorithms are generic over `Real`; the `f32` elementary
-/// functions evaluate the `f64` ones and round once (see [`crate::math`]).
+/// functions are evaluated in binary32 arithmetic only (see [`crate::math`]).
 pub trait Real:
     Copy
     + PartialOrd

@@ -7,7 +7,12 @@
 #    (-fcallgraph-info=su; every frame static, no recursion: callgraph.py checks both);
 #  - runs cppcheck's MISRA C:2012 addon on the generated files and lists the deviations by
 #    rule; every rule that occurs must have a written rationale in misra-rationale.md;
-#  - enforces the budgets below (exit 1 when one is exceeded or a deviation has no rationale);
+#  - links every f32 build from the controller's and sensor's entry points (--gc-sections,
+#    newlib's libm) and lists the double-precision routines the image holds (`arm-none-eabi-nm`:
+#    libgcc's __aeabi_d* / conversions to or from double, libm's double functions): an f32
+#    build must hold none (docs/precision.md);
+#  - enforces the budgets below (exit 1 when one is exceeded, an f32 image links a double
+#    routine, or a deviation has no rationale);
 #  - a spec whose certificate tsfc refuses once rounded to f32 (exit 3, "refused in stored
 #    precision f32") gets a row saying so and no f32 build: tsfc emits no code it cannot certify.
 # Needs: a built `tsfc` (release), gcc-arm-none-eabi and cppcheck (Debian packages).
@@ -36,6 +41,30 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cflags=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -Os -std=c99
         -ffunction-sections -fdata-sections -fcallgraph-info=su -Wall -Wextra -Werror -c)
+lflags=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -Os --specs=nosys.specs
+        -nostartfiles -Wl,--gc-sections)
+
+# The double-precision routines of linked image $1, comma-separated ("none" when there is none):
+# libgcc's soft-double helpers and conversions, libm's double functions and kernels.
+double_routines() {
+    arm-none-eabi-nm "$1" | awk '{ print $NF }' |
+        { grep -E '^(__aeabi_(d[a-z0-9]+|f2d|[ui]?l?2d)|__[a-z]+df[0-9]|__ieee754_[a-z0-9_]*[^f]|__kernel_[a-z0-9_]*[^f]|(exp|expm1|log|log1p|sqrt|atan|atan2|sin|cos|tan|fabs|floor|ceil|pow|hypot|fmod|scalbn|ldexp|frexp|modf|asin|acos|sinh|cosh|tanh))$' || true; } |
+        sort -u | paste -sd, - | sed 's/^$/none/'
+}
+
+# Links the objects of build directory $1 into $1/image.elf, kept from the entry points (the
+# external functions of the controller and sensor objects), unused sections dropped.
+link_image() {
+    local objs=() syms=() uflags=()
+    for o in "$1"/*.o; do
+        objs+=("$o")
+    done
+    mapfile -t syms < <(arm-none-eabi-nm -g --defined-only $(ls "$1"/*.o | grep -v '/tsf_runtime\.o$') | awk '$2 == "T" { print $3 }')
+    for sym in "${syms[@]}"; do
+        uflags+=("-Wl,-u,$sym")
+    done
+    arm-none-eabi-gcc "${lflags[@]}" "${uflags[@]}" -Wl,-e,"${syms[0]}" "${objs[@]}" -lm -o "$1/image.elf"
+}
 
 # Sum of the sizes of the sections whose names start with $2 in object $1 (SysV format).
 section_sum() {
@@ -67,7 +96,7 @@ for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
             # An honest finding, not a tool failure: the design's certificate does not survive
             # rounding to f32, so tsfc emits no f32 code for it (the f64 build is audited).
             why=$(grep -o 'certificate refused in stored precision f32: .*' "$dir/compile.log" | head -1 | tr '|' '/')
-            rows+=("| $name | f32 | - | - | - | - | - | - | no f32 code: $why | - | - |")
+            rows+=("| $name | f32 | - | - | - | - | - | - | no f32 code: $why | - | - | - |")
             continue
         fi
         if [ "$code" != 0 ]; then
@@ -97,7 +126,16 @@ for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
             [ -n "$rule" ] || continue
             misra_count[$rule]=$(( ${misra_count[$rule]:-0} + count ))
         done < <(grep -o 'misra-c2012-[0-9.]*' "$dir/misra.txt" | sed 's/misra-c2012-//' | sort | uniq -c)
-        rows+=("| $name | $precision | $text | $reach_text | $rodata | $data | $bss | $stack | ${path//>/ > } | ${library//,/, } | ${rules:-none} |")
+        doubles=-
+        if [ "$precision" = f32 ]; then
+            link_image "$dir"
+            doubles=$(double_routines "$dir/image.elf")
+            if [ "$doubles" != none ]; then
+                echo "audit: $name (f32): the linked image holds double-precision routines: $doubles" >&2
+                status=1
+            fi
+        fi
+        rows+=("| $name | $precision | $text | $reach_text | $rodata | $data | $bss | $stack | ${path//>/ > } | ${library//,/, } | ${doubles//,/, } | ${rules:-none} |")
         if [ "$stack" -gt "${STACK_BUDGET[$precision]}" ]; then
             echo "audit: $name ($precision): worst stack path $stack B over the budget ${STACK_BUDGET[$precision]} B" >&2
             status=1
@@ -108,13 +146,13 @@ for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
         fi
     done
     if [ "$precisions" = f64 ]; then
-        rows+=("| $name | f32 | - | - | - | - | - | - | no f32 code: the adaptive law is generated in f64 only | - | - |")
+        rows+=("| $name | f32 | - | - | - | - | - | - | no f32 code: the adaptive law is generated in f64 only | - | - | - |")
     fi
 done
 
 {
-    echo "| spec | precision | .text B (all) | .text B (reached) | .rodata B | .data B | .bss B | worst stack B | worst path | library calls | MISRA C:2012 deviations (rule x count) |"
-    echo "|---|---|---:|---:|---:|---:|---:|---:|---|---|---|"
+    echo "| spec | precision | .text B (all) | .text B (reached) | .rodata B | .data B | .bss B | worst stack B | worst path | library calls | double routines linked (f32) | MISRA C:2012 deviations (rule x count) |"
+    echo "|---|---|---:|---:|---:|---:|---:|---:|---|---|---|---|"
     printf '%s\n' "${rows[@]}"
     echo
     echo "Budgets: worst stack ${STACK_BUDGET[f32]} B (f32) / ${STACK_BUDGET[f64]} B (f64) for every spec; Zhang's reachable .text ${TEXT_BUDGET_ZHANG[f32]} B (f32) / ${TEXT_BUDGET_ZHANG[f64]} B (f64)."

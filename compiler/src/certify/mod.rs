@@ -3,6 +3,7 @@
 //! eigenvalue computed with a dense symmetric eigen-solver. Gains are emitted
 //! only if every strict LMI holds beyond its floating-point error bound.
 
+pub mod degree_rounding;
 mod markov;
 mod output;
 pub mod stored;

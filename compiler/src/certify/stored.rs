@@ -1,8 +1,8 @@
 //! The certificate of the design as stored: every LMI of the certificate
 //! (continuous problem and sampled/event-triggered loops) re-checked with
 //! the quantities generated code stores, rounded exactly as it stores them,
-//! and a bound on the arithmetic of membership normalization and blending in
-//! that precision (docs/precision.md).
+//! and a bound on the arithmetic of membership evaluation, normalization and
+//! blending in that precision (docs/precision.md).
 //!
 //! Stored quantities: the gains F_j, the saturation levels, and for a sensor
 //! module the trigger weight Upsilon, the threshold ceiling nu and the
@@ -13,6 +13,7 @@
 //! nearest). Lyapunov matrices, multipliers and sector gains are proof
 //! artefacts, not stored: they keep their solved values.
 
+use super::degree_rounding::{gamma, normalized_weight_error, weight_relative_error};
 use super::{loop_margins, margins_of, summarize, Values};
 use crate::model::TsModel;
 use crate::synth::solved::Solved;
@@ -21,13 +22,18 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 use tsf_lang::spec::Precision;
 
-/// The bound on membership normalization and blending in the stored
-/// precision, and the margin it asks of the continuous loop's LMIs.
+/// The bound on membership evaluation, normalization and blending in the
+/// stored precision, and the margin it asks of the continuous loop's LMIs.
 #[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct MembershipBound {
     /// Unit roundoff u of the precision (2^-24 or 2^-53).
     pub unit_roundoff: f64,
-    /// Bound on sum_j |h~_j - h_j| of the normalized weights (gamma_R).
+    /// Bound on the relative error of every computed rule weight (membership
+    /// degrees evaluated in this precision over the premise ranges, and the
+    /// product t-norm).
+    pub degree_error: f64,
+    /// Bound on sum_j |h~_j - h_j| of the normalized weights:
+    /// 2 e / (1 - e) + gamma_R with e = `degree_error`.
     pub weight_error: f64,
     /// Bound eps_h on the blended gain's error relative to max_j ||F_j||_F,
     /// normalization and blend arithmetic together.
@@ -84,13 +90,6 @@ pub fn unit_roundoff(precision: Precision) -> f64 {
     }
 }
 
-/// gamma_k = k u / (1 - k u) (Higham, "Accuracy and Stability of Numerical
-/// Algorithms", 2002, section 3.1).
-fn gamma(k: usize, u: f64) -> f64 {
-    let ku = k as f64 * u;
-    ku / (1.0 - ku)
-}
-
 /// Whether a constraint carries the closed-loop matrix (not a positivity
 /// constraint `... > 0` on one variable).
 fn closed_loop(name: &str) -> bool {
@@ -107,7 +106,8 @@ pub(super) fn membership_bound(
 ) -> MembershipBound {
     let (n, r) = (model.n, model.r());
     let u = unit_roundoff(precision);
-    let weight_error = gamma(r, u);
+    let degree_error = weight_relative_error(model, precision);
+    let weight_error = normalized_weight_error(degree_error) + gamma(r, u);
     let relative_gain_error = weight_error + gamma(n + r + 1, u) * (1.0 + weight_error);
     let f_max = gains.iter().map(|f| f.norm()).fold(0.0, f64::max);
     let b_max = model
@@ -119,6 +119,7 @@ pub(super) fn membership_bound(
     let required_margin = 2.0 * r as f64 * b_max * gain_error * spectral_norm(x);
     MembershipBound {
         unit_roundoff: u,
+        degree_error,
         weight_error,
         relative_gain_error,
         gain_error,

@@ -1,7 +1,8 @@
 //! Elementary functions for `no_std` without libm: [`exp`], [`sqrt`], [`atan`]
 //! (and [`atan2`]), [`sin`], [`cos`] (and [`sinc`]), [`exprel`], each for
 //! `f64`, with `f32` variants ([`expf`], [`sqrtf`], [`atanf`], [`sinf`],
-//! [`cosf`], [`sincf`], [`exprelf`]) that evaluate the `f64` function and round once.
+//! [`cosf`], [`sincf`], [`exprelf`]) evaluated in binary32 only (no double
+//! operation: what a single-precision FPU runs; see `single.rs`).
 //!
 //! The algorithms are described step by step so that the C generator can emit
 //! the same arithmetic (every operation below is one IEEE-754 binary64
@@ -20,7 +21,7 @@
 //! | `sin`, `cos` | <= 1 ulp | every finite argument (Cody-Waite below `2^20 pi/2`, Payne-Hanek above); NaN/inf -> NaN |
 //! | `sinc` | <= 2 ulp | `sin(v)/v`; `1 - v^2/6` for `|v| < 2^-13` |
 //! | `exprel` | <= 2 ulp | `(exp(v) - 1)/v`; its Taylor polynomial (degree 14) for `|v| < 0.5` |
-//! | `f32` variants | < 1 ulp (f32) | one extra rounding of a < 1 ulp f64 value |
+//! | `f32` variants | `sqrtf` 0 ulp; `expf`, `atanf` <= 1; `sinf`, `cosf` <= 2; `sincf`, `exprelf` <= 3 (f32 ulp) | binary32 arithmetic only (`single.rs`) |
 //!
 //! C's `<math.h>` `exp`/`atan` are usually within 1 ulp of the true value as
 //! well, so a C mirror that calls libm instead of this arithmetic can differ
@@ -734,32 +735,11 @@ fn fabs(x: f64) -> f64 {
     f64::from_bits(x.to_bits() & !(1u64 << 63))
 }
 
-macro_rules! f32_via_f64 {
-    ($(#[$doc:meta] $name:ident => $f:ident;)*) => {$(
-        #[$doc]
-        #[inline]
-        pub fn $name(x: f32) -> f32 {
-            $f(x as f64) as f32
-        }
-    )*};
-}
-
-f32_via_f64! {
-    /// `e^x` for `f32`: `exp(x as f64) as f32` (< 1 ulp, rarely off by double rounding).
-    expf => exp;
-    /// Square root for `f32`: `sqrt(x as f64) as f32` (correctly rounded: 53 >= 2*24+2 bits).
-    sqrtf => sqrt;
-    /// Arc tangent for `f32`: `atan(x as f64) as f32` (< 1 ulp).
-    atanf => atan;
-    /// Sine for `f32`: `sin(x as f64) as f32` (< 1 ulp).
-    sinf => sin;
-    /// Cosine for `f32`: `cos(x as f64) as f32` (< 1 ulp).
-    cosf => cos;
-    /// `sin(x)/x` for `f32`: `sinc(x as f64) as f32`.
-    sincf => sinc;
-    /// `(e^x - 1)/x` for `f32`: `exprel(x as f64) as f32`.
-    exprelf => exprel;
-}
+mod single;
+pub use single::{
+    atanf, cosf, expf, exprelf, sincf, sinf, sqrtf, ATANF_COMP_J16, ATANF_J16, ATANF_Q,
+    EXPRELF_COEFFS, F32_ELEMENTARY_ULP, SINCF_SMALL,
+};
 
 #[cfg(test)]
 mod tests;

@@ -265,31 +265,94 @@ fn next_down(v: f64) -> f64 {
     f64::from_bits(v.to_bits() - 1)
 }
 
-#[test]
-fn f32_variants_vs_std() {
-    let r = rng(6);
-    let ulps32 = |a: f32, b: f32| {
-        ulps(a as f64, b as f64).min(if a.to_bits().abs_diff(b.to_bits()) <= 1 {
-            1
-        } else {
-            u64::MAX
-        })
-    };
-    let (mut we, mut ws, mut wa, mut wt) = (0u64, 0u64, 0u64, 0u64);
-    for _ in 0..1_000_000 {
-        let x = r.uniform(-104.0, 89.0) as f32;
-        we = we.max(ulps32(expf(x), x.exp()));
-        let y = f32::from_bits((r.next() >> 33) as u32);
-        if y.is_finite() {
-            ws = ws.max(ulps32(sqrtf(y), y.sqrt()));
-            wa = wa.max(ulps32(atanf(y), y.atan()));
-            wa = wa.max(ulps32(atanf(-y), (-y).atan()));
-            wt = wt.max(ulps32(sinf(y), y.sin()));
-            wt = wt.max(ulps32(cosf(-y), (-y).cos()));
+/// Largest error, in ulp of the binary32 grid at the reference, of `f`
+/// against `reference` (the binary64 function, < 1 ulp of binary64) over the
+/// f32 in `[lo, hi]`, every `stride`-th bit pattern; NaN must match NaN.
+fn f32_worst(f: fn(f32) -> f32, reference: fn(f64) -> f64, lo: f32, hi: f32, stride: u32) -> f64 {
+    let mut worst = 0.0f64;
+    let mut check = |x: f32| {
+        let (got, want) = (f(x), reference(f64::from(x)));
+        if want.is_nan() {
+            assert!(got.is_nan(), "{x:e}: {got:e} for NaN");
+            return;
         }
+        let r = want as f32;
+        let ulp = if r == 0.0 || !r.is_finite() {
+            f64::from(f32::from_bits(1))
+        } else {
+            let e = ((r.to_bits() >> 23) & 0xff) as i32;
+            f64::powi(2.0, e.max(1) - 150)
+        };
+        let err = if got == r {
+            0.0
+        } else {
+            (f64::from(got) - want).abs() / ulp
+        };
+        assert!(
+            err.is_finite() || got == r,
+            "{x:e}: {got:e} against {want:e}"
+        );
+        worst = worst.max(err);
+    };
+    for v in [lo, hi] {
+        check(v);
     }
-    println!("f32: exp {we}, sqrt {ws}, atan {wa}, sin/cos {wt} ulp");
-    assert!(we <= 1 && ws == 0 && wa <= 1 && wt <= 1);
+    // Walk the bit patterns of [lo, hi] (split at zero).
+    let walk = |a: f32, b: f32, check: &mut dyn FnMut(f32)| {
+        let (ua, ub) = (a.to_bits(), b.to_bits());
+        let mut u = ua.min(ub);
+        while u <= ua.max(ub) {
+            check(f32::from_bits(u));
+            u = match u.checked_add(stride) {
+                Some(v) => v,
+                None => break,
+            };
+        }
+    };
+    if lo < 0.0 && hi > 0.0 {
+        walk(-0.0, lo, &mut check);
+        walk(0.0, hi, &mut check);
+    } else {
+        walk(lo, hi, &mut check);
+    }
+    worst
+}
+
+/// The binary32 functions against the binary64 ones over dense samples of
+/// their ranges (stride 97 over the bit patterns: ~2e7 arguments each for
+/// the wide ranges; `TSF_F32_STRIDE=1` walks every f32, the measurement
+/// behind the bounds of `single.rs`).
+#[test]
+fn f32_functions_vs_f64() {
+    let stride = std::env::var("TSF_F32_STRIDE")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(97u32);
+    let big = 1.0e30f32;
+    let e = f32_worst(expf, exp, -87.3, 88.7, stride);
+    let s = f32_worst(sqrtf, sqrt, 0.0, f32::MAX, stride);
+    let a = f32_worst(atanf, atan, -f32::MAX, f32::MAX, stride);
+    let si = f32_worst(sinf, sin, -big, big, stride);
+    let co = f32_worst(cosf, cos, -big, big, stride);
+    let sc = f32_worst(sincf, sinc, -1.0e4, 1.0e4, stride);
+    let er = f32_worst(exprelf, exprel, -80.0, 80.0, stride);
+    println!("f32 worst ulp (stride {stride}): exp {e:.3}, sqrt {s:.3}, atan {a:.3}, sin {si:.3}, cos {co:.3}, sinc {sc:.3}, exprel {er:.3}");
+    assert!(s <= 0.5, "sqrtf is correctly rounded");
+    assert!(
+        e <= F32_ELEMENTARY_ULP / 2.0,
+        "expf within half the certificate's bound"
+    );
+    assert!(a <= 1.0 && si <= 2.0 && co <= 2.0 && sc <= 3.0 && er <= 3.0);
+    // Special values.
+    assert!(expf(f32::NAN).is_nan() && sinf(f32::INFINITY).is_nan() && cosf(f32::NAN).is_nan());
+    assert_eq!(expf(f32::INFINITY), f32::INFINITY);
+    assert_eq!(expf(f32::NEG_INFINITY), 0.0);
+    assert_eq!(expf(89.0), f32::INFINITY);
+    assert_eq!(sqrtf(-1.0).is_nan(), true);
+    assert_eq!(sqrtf(f32::from_bits(1)), f32::from_bits(1).sqrt());
+    assert_eq!(atanf(f32::INFINITY), core::f32::consts::FRAC_PI_2);
+    assert_eq!(atanf(-0.0).to_bits(), (-0.0f32).to_bits());
+    assert_eq!(sincf(0.0), 1.0);
 }
 
 /// A double-double `(hi, lo)`, `hi + lo` exact to ~2^-106 relative.

@@ -89,55 +89,7 @@ impl Gen<'_> {
         let real = format!("{u}REAL");
         let pd = self.pd;
         let mut s = String::new();
-        let uses_trap = t.factored.terms.iter().any(|term| match term {
-            TermSpec::Is {
-                set: SetShape::Tri(a, b, c),
-                ..
-            } => a != b || b != c,
-            TermSpec::Is {
-                set: SetShape::Trap(a, b, c, d),
-                ..
-            } => a != b || c != d,
-            _ => false,
-        });
-        s.push_str("/* The runtime's operations on this controller, written out: tsf_clamp01,\n   tsf_edge_ratio and tsf_nearest_rule of tsf_runtime.c. */\n\n");
-        if !t.factored.terms.is_empty() {
-            let _ = write!(
-                s,
-                r#"/* Maps into [0, 1]; NaN -> 0. */
-static {real} {p}clamp01({real} v) {{
-    if (v >= {u}C(1)) {{
-        return {u}C(1);
-    }}
-    if (v > {u}C(0)) {{
-        return v;
-    }}
-    return {u}C(0);
-}}
-
-"#
-            );
-        }
-        if uses_trap {
-            let _ = write!(
-                s,
-                r#"/* (p - q)/(r - s); if r - s overflows, every operand is halved first. */
-static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
-    const {real} den = r - s;
-    if (isfinite(den) != 0) {{
-        return (p - q) / den;
-    }} else {{
-        const {real} ph = p * {u}C(0.5);
-        const {real} qh = q * {u}C(0.5);
-        const {real} rh = r * {u}C(0.5);
-        const {real} sh = s * {u}C(0.5);
-        return (ph - qh) / (rh - sh);
-    }}
-}}
-
-"#
-            );
-        }
+        s.push_str(&self.straight_helpers());
         let inner = if t.p == 0 {
             "    (void)z;\n    (void)scale;\n".to_string()
         } else {
@@ -228,12 +180,125 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
         s
     }
 
+    /// The runtime's `tsf_clamp01` (for the sets whose degree needs it) and
+    /// `tsf_edge_ratio` (for trapezoids with a sloped edge), as this
+    /// controller uses them.
+    fn straight_helpers(&self) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let t = self.t;
+        let real = format!("{u}REAL");
+        let mut s = String::new();
+        let uses_trap = t.factored.terms.iter().any(|term| match term {
+            TermSpec::Is {
+                set: SetShape::Tri(a, b, c),
+                ..
+            } => a != b || b != c,
+            TermSpec::Is {
+                set: SetShape::Trap(a, b, c, d),
+                ..
+            } => a != b || c != d,
+            _ => false,
+        });
+        s.push_str("/* The runtime's operations on this controller, written out: tsf_clamp01,\n   tsf_edge_ratio and tsf_nearest_rule of tsf_runtime.c. */\n\n");
+        // Trapezoid degrees need no clamp (see `degree`): clamp01 serves the other sets.
+        let uses_clamp = t.factored.terms.iter().any(|term| {
+            !matches!(
+                term,
+                TermSpec::Is {
+                    set: SetShape::Tri(..) | SetShape::Trap(..),
+                    ..
+                }
+            )
+        });
+        if uses_clamp {
+            let _ = write!(
+                s,
+                r#"/* Maps into [0, 1]; NaN -> 0. */
+static {real} {p}clamp01({real} v) {{
+    if (v >= {u}C(1)) {{
+        return {u}C(1);
+    }}
+    if (v > {u}C(0)) {{
+        return v;
+    }}
+    return {u}C(0);
+}}
+
+"#
+            );
+        }
+        if uses_trap {
+            let _ = write!(
+                s,
+                r#"/* (p - q)/(r - s); if r - s overflows, every operand is halved first. */
+static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
+    const {real} den = r - s;
+    if (isfinite(den) != 0) {{
+        return (p - q) / den;
+    }} else {{
+        const {real} ph = p * {u}C(0.5);
+        const {real} qh = q * {u}C(0.5);
+        const {real} rh = r * {u}C(0.5);
+        const {real} sh = s * {u}C(0.5);
+        return (ph - qh) / (rh - sh);
+    }}
+}}
+
+"#
+            );
+        }
+        s
+    }
+
+    /// The step's test for a NaN or infinite state or premise: one test of
+    /// the sum of all values, the runtime's one-by-one tests behind it.
+    fn straight_fault_check(&self) -> String {
+        let u = &self.u;
+        let t = self.t;
+        let real = format!("{u}REAL");
+        let n = t.n;
+        let mut b = String::new();
+        let set_flag = |b: &mut String, ind: &str, flag: &str| {
+            let _ = writeln!(b, "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});");
+        };
+        // Fault checks: one test of all values at once: their sum is finite
+        // when every value is (or overflows, rarely), and NaN or infinite
+        // when one is not (v - v is +0 only for a finite v), so `all - all`
+        // is 0 only when the runtime's one-by-one isfinite tests would find
+        // nothing. Those tests follow on the rare path, as loops (small code).
+        let mut all = Vec::new();
+        let mut checks = String::new();
+        for (vec, len, dim, flag) in [
+            ("x", n, format!("{u}N"), "STATE_NONFINITE"),
+            ("z", t.p, format!("{u}P"), "PREMISE_NONFINITE"),
+        ] {
+            if len == 0 {
+                continue;
+            }
+            all.extend((0..len).map(|i| format!("{vec}[{i}]")));
+            let _ = writeln!(
+                checks,
+                "            for (i = 0; i < {dim}; i++) {{\n                if (isfinite({vec}[i]) == 0) {{"
+            );
+            set_flag(&mut checks, "                    ", flag);
+            checks.push_str("                }\n            }\n");
+        }
+        if !all.is_empty() {
+            let _ = writeln!(
+                b,
+                "    /* A NaN or infinite state or premise: u = 0, h = 0. The sum of every value is\n       finite when they all are (v - v is 0 only for a finite v); otherwise, or when the\n       sum overflows, they are tested one by one. */\n    {{\n        const {real} all = {};\n        if (all - all != {u}C(0)) {{\n            int i;\n{checks}        }}\n    }}",
+                all.join(" + ")
+            );
+        }
+        b
+    }
+
     /// `<name>_step_with_premises` written out, then `<name>_step`.
     fn straight_step(&self) -> String {
         let (p, u) = (&self.p, &self.u);
         let t = self.t;
         let real = format!("{u}REAL");
-        let (n, m, r) = (t.n, t.m, t.r);
+        let (m, r) = (t.m, t.r);
         let mut b = String::new();
         let set_flag = |b: &mut String, ind: &str, flag: &str| {
             let _ = writeln!(b, "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});");
@@ -254,21 +319,7 @@ static inline {real} {p}row_dot(const {real} row[{u}N], const {real} x[{u}N]) {{
                 let _ = writeln!(b, "    const {real} *g = {p}gains;");
             }
         }
-        // Fault checks: v - v is +0 for a finite v and NaN otherwise, so the
-        // sum of these differences is 0 exactly when every value is finite
-        // (the runtime's isfinite tests, fewer branches).
-        b.push_str("    /* A NaN or infinite state or premise (v - v is 0 only for a finite v): u = 0, h = 0. */\n");
-        for (vec, len, flag) in [("x", n, "STATE_NONFINITE"), ("z", t.p, "PREMISE_NONFINITE")] {
-            if len == 0 {
-                continue;
-            }
-            let terms: Vec<String> = (0..len)
-                .map(|i| format!("({vec}[{i}] - {vec}[{i}])"))
-                .collect();
-            let _ = writeln!(b, "    if ({} != {u}C(0)) {{", terms.join(" + "));
-            set_flag(&mut b, "        ", flag);
-            b.push_str("    }\n");
-        }
+        b.push_str(&self.straight_fault_check());
         if t.p == 0 {
             b.push_str("    (void)z;\n");
         }
@@ -401,43 +452,60 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                 b.push_str("            (void)g;\n            (void)x;\n");
             }
             b.push_str("            /* Saturation: |u_s| <= max(u_max_s, 0); NaN -> 0, +-inf -> +-level. */\n");
-            if t.u_max.iter().all(|v| *v == f64::INFINITY) {
-                let _ = writeln!(
-                    b,
-                    "            (void){p}u_max; /* every channel unlimited */"
-                );
-            }
+            let unlimited = t.u_max.iter().all(|v| *v == f64::INFINITY);
+            let mut sat = String::new();
             for s in 0..m {
                 if t.u_max.get(s).is_some_and(|v| *v == f64::INFINITY) {
                     // An unlimited channel (level +inf in either real type):
                     // the runtime's tests leave a finite v and zero the rest.
                     let _ = writeln!(
-                        b,
+                        sat,
                         "            if (isfinite(u{s}) == 0) {{ /* unlimited channel */"
                     );
-                    set_flag(b, "                ", "COMMAND_NONFINITE");
-                    let _ = writeln!(b, "                u[{s}] = {u}C(0);\n            }} else {{\n                u[{s}] = u{s};\n            }}");
+                    set_flag(&mut sat, "                ", "COMMAND_NONFINITE");
+                    let _ = writeln!(sat, "                u[{s}] = {u}C(0);\n            }} else {{\n                u[{s}] = u{s};\n            }}");
                     continue;
                 }
                 let _ = writeln!(
-                    b,
+                    sat,
                     "            {{\n                const {real} b = {p}u_max[{s}] >= {u}C(0) ? {p}u_max[{s}] : {u}C(0);\n                {real} v = u{s};\n                if (isfinite(v) == 0) {{"
                 );
-                set_flag(b, "                    ", "COMMAND_NONFINITE");
+                set_flag(&mut sat, "                    ", "COMMAND_NONFINITE");
                 let _ = writeln!(
-                    b,
+                    sat,
                     "                    if ((isnan(v) != 0) || (isfinite(b) == 0)) {{\n                        v = {u}C(0);\n                    }}\n                }}\n                if (v > b) {{"
                 );
-                set_flag(b, "                    ", "SATURATED");
+                set_flag(&mut sat, "                    ", "SATURATED");
                 let _ = writeln!(
-                    b,
+                    sat,
                     "                    u[{s}] = b;\n                }} else if (v < -b) {{"
                 );
-                set_flag(b, "                    ", "SATURATED");
+                set_flag(&mut sat, "                    ", "SATURATED");
                 let _ = writeln!(
-                    b,
+                    sat,
                     "                    u[{s}] = -b;\n                }} else {{\n                    u[{s}] = v;\n                }}\n            }}"
                 );
+            }
+            if unlimited {
+                // Every channel unlimited: the runtime keeps each finite value,
+                // so one test of their sum (finite when all are, or overflowing
+                // rarely) comes first, the channel-by-channel tests after it.
+                let us: Vec<String> = (0..m).map(|s| format!("u{s}")).collect();
+                let _ = writeln!(
+                    b,
+                    "            (void){p}u_max; /* every channel unlimited */\n            {{\n                const {real} all = {};\n                if (all - all == {u}C(0)) {{",
+                    us.join(" + ")
+                );
+                for s in 0..m {
+                    let _ = writeln!(b, "                    u[{s}] = u{s};");
+                }
+                b.push_str("                } else {\n");
+                for line in sat.lines() {
+                    let _ = writeln!(b, "        {line}");
+                }
+                b.push_str("                }\n            }\n");
+            } else {
+                b.push_str(&sat);
             }
             b.push_str("        }\n");
         } else {
@@ -491,7 +559,9 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                             (true, true) => format!("}} else {{\n                {one}\n            }}"),
                             (true, false) => format!("}} else if (zv <= {cc}) {{\n                {one}\n            }} else {{\n                {falling}\n            }}"),
                             (false, true) => format!("}} else if (zv >= {bb}) {{\n                {one}\n            }} else {{\n                {rising}\n            }}"),
-                            (false, false) => format!("}} else if ((zv >= {bb}) && (zv <= {cc})) {{\n                {one}\n            }} else if (zv < {bb}) {{\n                {rising}\n            }} else {{\n                {falling}\n            }}"),
+                            // Within [a, d] (z is not NaN here) the runtime's
+                            // plateau test, then z < b, is z < b, then z > c.
+                            (false, false) => format!("}} else if (zv < {bb}) {{\n                {rising}\n            }} else if (zv > {cc}) {{\n                {falling}\n            }} else {{\n                {one}\n            }}"),
                         };
                         let _ = writeln!(b, "            {tail}");
                     }
@@ -512,7 +582,22 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
                         );
                     }
                 }
-                let _ = writeln!(b, "            deg{k} = {p}clamp01(v);\n        }}");
+                if let Some(signed_zero) = trap_signed_zero(*set) {
+                    // The runtime's clamp is an identity here but for the sign of
+                    // zero: within a <= z < b, 0 <= fl(z - a) <= fl(b - a) (rounding
+                    // is monotone), so the ratio is in [0, 1]; likewise on the
+                    // falling edge; the other branches give +0 and 1. The ratio is
+                    // -0 only for z = -0 on an edge from a = +0 (or to d = -0),
+                    // where the clamp gives +0: then `v + 0` does the same.
+                    let fix = if signed_zero {
+                        format!(" + {u}C(0)")
+                    } else {
+                        String::new()
+                    };
+                    let _ = writeln!(b, "            deg{k} = v{fix};\n        }}");
+                } else {
+                    let _ = writeln!(b, "            deg{k} = {p}clamp01(v);\n        }}");
+                }
             }
             TermSpec::About {
                 first,
@@ -539,4 +624,21 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
             }
         }
     }
+}
+
+/// For a trapezoid (or triangle) set: whether its degree can come out as -0
+/// from a sloped edge (`Some`), or `None` for other sets. `z - a` is -0 only
+/// for `z = -0`, `a = +0`; `d - z` only for `d = -0`, `z = +0` (round to
+/// nearest); a vertical edge has no ratio. Judged on the f32 rounding of the
+/// corners, which is +-0 whenever the f64 value is (the C may be built with
+/// either real type).
+fn trap_signed_zero(set: SetShape) -> Option<bool> {
+    let (a, b, c, d) = match set {
+        SetShape::Tri(a, b, c) => (a, b, b, c),
+        SetShape::Trap(a, b, c, d) => (a, b, c, d),
+        SetShape::Gauss(..) | SetShape::Sigmoid(..) => return None,
+    };
+    let zero =
+        |v: f64, positive: bool| (v as f32) == 0.0 && (v as f32).is_sign_positive() == positive;
+    Some((a != b && zero(a, true)) || (c != d && zero(d, false)))
 }
