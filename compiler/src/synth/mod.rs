@@ -29,6 +29,7 @@ pub mod objectives;
 pub mod pair_stability;
 pub mod plan;
 pub mod reduction;
+pub mod region_auto;
 pub mod relaxation;
 pub mod relaxations;
 mod sampled;
@@ -36,6 +37,7 @@ pub mod sampling;
 mod search;
 pub mod signal_trigger;
 pub mod solved;
+pub mod transmissions;
 pub mod trigger;
 pub mod vertices;
 
