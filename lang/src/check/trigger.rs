@@ -796,6 +796,20 @@ mod tests {
             synthesis("weight = synthesize codesign(rounds = 4);"),
             Some(TriggerSynthesis::Codesign { rounds: 4 })
         );
+        assert_eq!(
+            synthesis("weight = synthesize transmissions;"),
+            Some(TriggerSynthesis::Transmissions {
+                points: 6,
+                gamma: None
+            })
+        );
+        assert_eq!(
+            synthesis("weight = synthesize transmissions(points = 12, gamma = 0.16);"),
+            Some(TriggerSynthesis::Transmissions {
+                points: 12,
+                gamma: Some(0.16)
+            })
+        );
         let rounds = |w: &str| {
             only_error_of(&format!(
                 "{}disturbance d; D = 1; output z = x1;\n\

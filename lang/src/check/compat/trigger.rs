@@ -414,6 +414,18 @@ mod tests {
         );
         valid(&src.replace("{}", ""));
         valid(&src.replace("{}", " codesign"));
+        valid(&src.replace("{}", " transmissions"));
+        // `auto` is the few-transmissions design's: it grows the box for its gains.
+        let auto = src.replace("-0.5 .. 0.5", "auto");
+        valid(&auto.replace("{}", " transmissions(points = 3)"));
+        let (m, at) = only_error_of(&auto.replace("{}", " codesign"));
+        assert_eq!(
+            (m.as_str(), at.as_str()),
+            (
+                "`region .. = auto` needs `weight = synthesize transmissions`",
+                "region x1 = auto;"
+            )
+        );
         let (m, _) = only_error_of(&src.replace("{}", " theorem2"));
         assert_eq!(m, want);
         // With modes the loop is certified on the whole range.
