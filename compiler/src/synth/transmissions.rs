@@ -96,7 +96,7 @@ pub fn pick(points: &[Point]) -> Option<usize> {
         .min_by_key(|&(t, i)| (t, std::cmp::Reverse(i)));
     counted
         .map(|(_, i)| i)
-        .or_else(|| within().map(|(i, _)| i).last())
+        .or_else(|| within().map(|(i, _)| i).next_back())
 }
 
 /// The trade-off table of a search, one line per point (report notes and summary).
