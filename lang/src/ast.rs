@@ -349,6 +349,8 @@ pub enum ItemKind {
     Relaxation(Ident, Vec<NamedArg>),
     /// `lyapunov kind[(args)];`
     Lyapunov(Ident, Vec<NamedArg>),
+    /// `plant region x1 = lo .. hi, ..;`: the region of the plant claim.
+    PlantRegion(Vec<(Ident, Expr, Expr)>),
     /// `rules kind;`: rules the compiler builds (`rules sector;`).
     Rules(Ident),
     /// `trigger kind { settings }`

@@ -806,6 +806,9 @@ pub struct Spec {
     pub sector: Option<crate::sector::SectorModel>,
     /// The adaptive controller (`adaptive { ... }`), if the spec is one.
     pub adaptive: Option<crate::adaptive::Adaptive>,
+    /// `plant region ..;`: the region the plant claim is asked for, per state
+    /// `[lo, hi]` (infinite where not written); `None`: the default region.
+    pub plant_region: Option<Vec<(f64, f64)>>,
 }
 
 impl Spec {

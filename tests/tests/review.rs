@@ -5,6 +5,7 @@
 //! renders it without a console error (skipped, with a message, when the
 //! `chromium` package is not installed).
 
+use crate::common::chromium;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -335,15 +336,6 @@ fn missing_spec_is_a_usage_error() {
     let e = tsfc::review::review(&out.join("nope.tsf"), None, &out).expect_err("no spec");
     assert_eq!(e.exit_code(), 2);
     let _ = std::fs::remove_dir_all(&out);
-}
-
-/// The Chromium binary on PATH (`chromium`, the Debian package), if any.
-fn chromium() -> Option<PathBuf> {
-    std::env::var_os("PATH")?
-        .to_str()?
-        .split(':')
-        .map(|d| Path::new(d).join("chromium"))
-        .find(|p| p.is_file())
 }
 
 /// Renders the file `page` in headless Chromium (fresh profile, no network

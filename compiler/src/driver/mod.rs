@@ -7,7 +7,7 @@
 //! synthesis and the certificate ([`compile`]) to tables and generated files;
 //! [`prepare`] hands the simulator a certified design ([`reuse`]: from a
 //! certified report, without solving again); [`adaptive`] runs an adaptive
-//! spec's design, code and simulation; [`summary`] is the terminal summary;
+//! spec's design, code and simulation; [`plant`] the plant claim (robust design on a region); [`summary`] is the terminal summary;
 //! [`format`] is `tsfc fmt`; [`check_json`] is `tsfc check --format json`'s
 //! document; [`schema`] the JSON Schemas of every JSON tsfc writes.
 
@@ -18,6 +18,7 @@ pub mod compile;
 pub mod format;
 pub mod frontend;
 pub mod pipeline;
+pub mod plant;
 pub mod prepare;
 pub mod reuse;
 pub mod schema;

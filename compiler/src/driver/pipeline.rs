@@ -4,7 +4,7 @@
 
 use crate::certify::Certificate;
 use crate::codegen::{self, GeneratedFile};
-use crate::driver::compile::{compile as compile_model, Compiled, Status};
+use crate::driver::compile::{Compiled, Status};
 use crate::driver::frontend::{self, Checked, Source};
 use crate::model::TsModel;
 use crate::report::SpecInfo;
@@ -91,7 +91,11 @@ impl Front {
             path: name.clone(),
             sha256: sha256.clone(),
         };
-        let compiled = compile_model(&model, info, settings, front_times);
+        let request = crate::driver::plant::PlantRequest {
+            bound: crate::driver::plant::production_bound(),
+            region: None,
+        };
+        let compiled = crate::driver::plant::compile(&model, info, settings, front_times, request);
         Ok(Run {
             source,
             model,

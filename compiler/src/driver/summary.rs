@@ -5,10 +5,23 @@ use crate::model::TsModel;
 use std::fmt::Write;
 use std::path::Path;
 
-/// A few lines: verdict, achieved objectives, certificate, solver, where the report is.
+/// A few lines: what is certified of the plant first, then verdict, achieved
+/// objectives, certificate, solver, where the report is.
 pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
     let mut s = String::new();
     let r = &c.report;
+    match (&r.plant.claim, &r.plant.note) {
+        (Some(claim), _) => {
+            let _ = writeln!(s, "plant: {claim}");
+        }
+        (None, Some(note)) => {
+            let _ = writeln!(s, "plant: {note}");
+        }
+        (None, None) => {}
+    }
+    if let Some(t) = &r.plant.truth_plant {
+        let _ = writeln!(s, "plant: {t}");
+    }
     let verdict = match c.status {
         Status::Certified => "certified",
         Status::Infeasible => "infeasible",

@@ -35,6 +35,7 @@ pub const KEYWORDS: &[&str] = &[
     "with",
     "relaxation",
     "lyapunov",
+    "plant",
     "trigger",
     "emit",
     "precision",

@@ -10,8 +10,8 @@
 use super::finite;
 use super::premise::{premise_values, rule_weight, PremiseLayout, TermSpec};
 use super::LocalModel;
-use crate::tape::lower::{Lowerer, Scope};
-use crate::tape::{Builder, Registers, Tape};
+use crate::tape::lower::{Lowerer, Scope, Unsupported};
+use crate::tape::{Builder, Id, Registers, Tape};
 use nalgebra::DMatrix;
 use tsf_lang::eval::Mode;
 use tsf_lang::spec::{ModelMatrix, Spec};
@@ -251,34 +251,14 @@ struct Compiled {
 
 impl Compiled {
     fn new(spec: &Spec, mats: &[&ModelMatrix]) -> Option<Self> {
-        let n = spec.n();
-        let mut lw = Lowerer::new(Builder::new(n), &spec.consts, &spec.fns);
-        // The interpreter's bindings (`Spec::state_env`), in its order.
-        let mut scope = vec![("x".to_string(), lw.inputs(0, n))];
-        scope.extend(lw.bind(&spec.states, 0));
-        let scope: &Scope = &scope;
-        let mut outputs = Vec::new();
-        for p in &spec.premises {
-            let v = lw.expr(&p.expr, scope).ok()?;
-            match p.component {
-                Some(k) => outputs.push(*v.data.get(k)?),
-                None => outputs.extend(v.data),
-            }
-        }
-        let nz = outputs.len();
-        let mut shapes = Vec::with_capacity(mats.len());
-        for m in mats {
-            let v = lw.expr(&m.expr, scope).ok()?;
-            shapes.push((v.rows, v.cols));
-            outputs.extend(v.data);
-        }
-        let tape = lw.finish(&outputs).ok()?;
+        let g = StateGraph::lower(spec, mats).ok()?;
+        let tape = g.builder.finish(&g.outputs)?;
         Some(Compiled {
             regs: tape.registers(),
-            out: vec![0.0; outputs.len()],
+            out: vec![0.0; g.outputs.len()],
             tape,
-            nz,
-            shapes,
+            nz: g.nz,
+            shapes: g.shapes,
         })
     }
 
@@ -302,6 +282,56 @@ impl Compiled {
         let at = self.nz + self.shapes[..k].iter().map(|(r, c)| r * c).sum::<usize>();
         let (r, c) = self.shapes[k];
         (&self.out[at..at + r * c], (r, c))
+    }
+}
+
+/// The premise values z(x) and matrices of state expressions as one graph
+/// over the state (the interpreter's bindings, `Spec::state_env`): shared by
+/// the consistency grid and the model-error bound.
+pub(super) struct StateGraph {
+    /// The graph.
+    pub builder: Builder,
+    /// Its outputs: z, then each matrix column-major.
+    pub outputs: Vec<Id>,
+    /// Number of premise values (the first outputs).
+    pub nz: usize,
+    /// Shapes of the matrices that follow.
+    pub shapes: Vec<(usize, usize)>,
+}
+
+impl StateGraph {
+    /// Lowers the premises and `mats`, or why they have no tape form.
+    pub fn lower(spec: &Spec, mats: &[&ModelMatrix]) -> Result<StateGraph, Unsupported> {
+        let n = spec.n();
+        let mut lw = Lowerer::new(Builder::new(n), &spec.consts, &spec.fns);
+        let mut scope = vec![("x".to_string(), lw.inputs(0, n))];
+        scope.extend(lw.bind(&spec.states, 0));
+        let scope: &Scope = &scope;
+        let mut outputs = Vec::new();
+        for p in &spec.premises {
+            let v = lw.expr(&p.expr, scope)?;
+            match p.component {
+                Some(k) => outputs.push(
+                    *v.data
+                        .get(k)
+                        .ok_or_else(|| Unsupported("premise component".into()))?,
+                ),
+                None => outputs.extend(v.data),
+            }
+        }
+        let nz = outputs.len();
+        let mut shapes = Vec::with_capacity(mats.len());
+        for m in mats {
+            let v = lw.expr(&m.expr, scope)?;
+            shapes.push((v.rows, v.cols));
+            outputs.extend(v.data);
+        }
+        Ok(StateGraph {
+            builder: lw.b,
+            outputs,
+            nz,
+            shapes,
+        })
     }
 }
 
@@ -331,7 +361,7 @@ fn blend_distance(
 
 /// Normalized rule weights at premise values `z` into `h`: `true` if the
 /// values lie in the declared ranges and some rule fires.
-fn normalized_weights(
+pub(super) fn normalized_weights(
     z: &[f64],
     ranges: &[(f64, f64)],
     terms: &[Vec<TermSpec>],

@@ -5,9 +5,11 @@
 
 mod consistency;
 mod coverage;
+pub mod error_bound;
 pub mod explain;
 mod finite;
 mod local;
+pub mod plant_error;
 mod premise;
 pub mod region;
 
@@ -57,6 +59,9 @@ pub struct TsModel {
     pub coverage: Coverage,
     /// The blended model against A(x), B(x) (`None`: neither depends on x).
     pub consistency: Option<Consistency>,
+    /// The model error the design must tolerate (robust conditions; `None`:
+    /// the nominal design of the rules' blend).
+    pub plant_error: Option<plant_error::PlantError>,
 }
 
 impl TsModel {
@@ -117,6 +122,7 @@ pub fn build(spec: Spec, diags: &mut Vec<Diagnostic>) -> Option<TsModel> {
     }
     let model = TsModel {
         consistency,
+        plant_error: None,
         n: spec.n(),
         m: spec.m(),
         q: spec.q(),

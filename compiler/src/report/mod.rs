@@ -2,6 +2,7 @@
 
 pub mod markov;
 pub mod objectives;
+pub mod plant;
 
 use crate::certify::Certificate;
 use crate::model::TsModel;
@@ -14,7 +15,7 @@ pub use crate::util::matrix::rows;
 pub use crate::util::hash::sha256_hex;
 
 /// `spec` section.
-#[derive(Debug, Serialize, schemars::JsonSchema)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct SpecInfo {
     /// Path as given.
     pub path: String,
@@ -326,6 +327,9 @@ pub struct Report {
     pub region_of_attraction: Option<RegionOfAttraction>,
     /// The blended T-S model against the state-dependent A(x), B(x).
     pub model_consistency: Option<ConsistencyReport>,
+    /// What is certified of the plant A(x), B(x) the spec declares (not of
+    /// the rules' blend), or why nothing is.
+    pub plant: plant::PlantSection,
     /// The synthesized event trigger.
     pub trigger: Option<TriggerReport>,
     /// The certified sampled loop (periodic trigger, or aperiodic sampling
@@ -470,6 +474,7 @@ pub fn report(
             _ => None,
         },
         diagnosis,
+        plant: plant::nominal(model, design.filter(|_| certified).map(|d| &d.p)),
         model_consistency: model.consistency.as_ref().map(|c| ConsistencyReport {
             points: c.points,
             worst_relative_mismatch: c.worst,

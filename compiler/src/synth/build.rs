@@ -6,7 +6,7 @@
 //! problem). When no objective contains the Lyapunov decrease, plain
 //! stability is imposed.
 
-use super::objective::{BuildError, Ctx, GainTerm, Lmis, Objective};
+use super::objective::{BuildError, Ctx, GainTerm, Lmis, ModelError, Objective};
 use super::objectives::{self, Decay};
 use super::plan::Plan;
 use super::reduction::Reduction;
@@ -109,7 +109,16 @@ pub fn build(
     for o in plan.ordered(objectives::DECLARE_ORDER) {
         o.declare(model, &mut lmis)?;
     }
+    let model_error = match &model.plant_error {
+        Some(e) if !e.is_zero() => Some(ModelError {
+            eps: lmis.scalar(names::MODEL_ERROR)?,
+            a2: e.a * e.a,
+            b2: e.b * e.b,
+        }),
+        _ => None,
+    };
     let ctx = Ctx {
+        model_error,
         model,
         plan,
         x,

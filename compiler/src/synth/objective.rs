@@ -257,9 +257,72 @@ pub struct Ctx<'a> {
     pub m: Vec<GainTerm>,
     /// The sector variables, if the saturation objective declared them.
     pub sector: Option<Sector>,
+    /// The multiplier of the model error, when the model carries a nonzero one.
+    pub model_error: Option<ModelError>,
+}
+
+/// The model error as norm-bounded uncertainty in the decrease condition:
+/// ||dA|| <= a, ||dB|| <= b, with the S-procedure multiplier `eps`
+/// (Petersen 1987; Tanaka & Wang 2001, ch. 8).
+#[derive(Debug, Clone, Copy)]
+pub struct ModelError {
+    /// The multiplier eps > 0 (a decision variable).
+    pub eps: Var,
+    /// a^2.
+    pub a2: f64,
+    /// b^2.
+    pub b2: f64,
 }
 
 impl Ctx<'_> {
+    /// Q_ij of the decrease with the model error (Petersen's lemma): in
+    /// X = P^{-1} coordinates He(dA X + dB M_j) <= eps (a^2 + b^2) I +
+    /// eps^{-1} (X X + M_j' M_j) for every ||dA|| <= a, ||dB|| <= b (and with
+    /// saturation, |sat(u)| <= |u| bounds dB sat(u) the same way), so
+    /// `q` (state block first) becomes, by a Schur complement,
+    /// [[q + eps (a^2 + b^2) I, X, M_j'], [*, -eps I, 0], [*, *, -eps I]]
+    /// (a column left out when its bound is 0). Unchanged without a model error.
+    pub fn with_model_error(&self, j: usize, q: Expr) -> Result<Expr, LmiError> {
+        let Some(me) = self.model_error else {
+            return Ok(q);
+        };
+        let (n, m) = (self.model.n, self.model.m);
+        let k = q.shape().0;
+        let pad = |e: Expr| -> Result<Expr, LmiError> {
+            let (h, w) = e.shape();
+            if h == k {
+                return Ok(e);
+            }
+            Expr::blocks(vec![vec![Some(e)], vec![Some(Expr::zeros(k - h, w))]])
+        };
+        let diag = Expr::scaled(me.eps, &(DMatrix::identity(n, n) * (me.a2 + me.b2)))?;
+        let diag = if k == n {
+            diag
+        } else {
+            Expr::blocks(vec![
+                vec![Some(diag), None],
+                vec![None, Some(Expr::zeros(k - n, k - n))],
+            ])?
+        };
+        let mut grid: Vec<Vec<Option<Expr>>> = vec![vec![Some(q.add(diag)?)]];
+        let mut cols = Vec::new();
+        if me.a2 > 0.0 {
+            cols.push((pad(Expr::var(self.x))?, n));
+        }
+        if me.b2 > 0.0 {
+            cols.push((pad(self.m[j].expr(self.x, m, n)?.transpose())?, m));
+        }
+        let size = cols.len() + 1;
+        grid[0].resize(size, None);
+        for (c, (col, width)) in cols.into_iter().enumerate() {
+            grid[0][c + 1] = Some(col);
+            let mut row = vec![None; size];
+            row[c + 1] = Some(Expr::scaled(me.eps, &(-DMatrix::identity(width, width)))?);
+            grid.push(row);
+        }
+        Expr::sym_blocks(grid)
+    }
+
     /// Upsilon_ij = He(A_i X + B_i M_j) (+ shift * X).
     pub fn upsilon(&self, i: usize, j: usize, shift: f64) -> Result<Expr, LmiError> {
         let n = self.model.n;

@@ -22,6 +22,8 @@ pub mod names {
     pub const LOOP_GAMMA: &str = "gamma_tr";
     /// xi of the sampled loop's L-inf bound.
     pub const LOOP_XI: &str = "xi_tr";
+    /// The S-procedure multiplier of the model error (robust conditions).
+    pub const MODEL_ERROR: &str = "eps_model";
 
     /// M_j = F_j X of rule `j` (0-based).
     pub fn gain_product(j: usize) -> String {

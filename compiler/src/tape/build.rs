@@ -11,8 +11,16 @@ use std::collections::HashMap;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Id(u32);
 
+impl Id {
+    /// The node's index in [`Builder`]'s order.
+    pub(super) fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// What a node computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-enum Node {
+pub(super) enum Node {
     Input(u32),
     /// The constant's bits (so NaN constants hash and compare).
     Const(u64),
@@ -96,6 +104,16 @@ impl Builder {
 
     fn node(&self, id: Id) -> Option<Node> {
         self.nodes.get(id.0 as usize).copied()
+    }
+
+    /// Every node, operands before the nodes that read them.
+    pub(super) fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// The number of inputs.
+    pub(super) fn input_count(&self) -> usize {
+        self.inputs
     }
 
     /// The operand of a negation.

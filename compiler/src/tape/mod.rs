@@ -23,6 +23,7 @@
 //! should it succeed). Divisions are kept even where their value is unused
 //! (multiplied by 0), as the interpreter evaluates every subexpression.
 
+pub mod affine;
 mod build;
 pub mod lower;
 

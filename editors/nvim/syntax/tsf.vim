@@ -4,8 +4,8 @@ if exists("b:current_syntax")
   finish
 endif
 
-syn keyword tsfDeclaration tsf controller const fn state input disturbance output signal premise rules rule objective relaxation lyapunov trigger emit precision simulate dynamics monte_carlo sweep columns modes mode adaptive
-syn keyword tsfKeyword saturate bound energy range sigma is and about at for in with step scale offset converged by estimate robust rate bounds init layer
+syn keyword tsfDeclaration tsf controller const fn state input disturbance output signal premise rules rule objective relaxation lyapunov trigger emit precision simulate dynamics monte_carlo sweep columns modes mode adaptive plant
+syn keyword tsfKeyword saturate bound energy range sigma is and about at for in with step scale offset converged by estimate robust rate bounds init layer region
 syn keyword tsfMembership tri trap gauss sigmoid
 syn keyword tsfBuiltin sqrt sin cos tan atan exp log abs sign sinc exprel atan2 min max pi eye zeros ones diag inv det trace transpose norm sum mean dot cross skew blkdiag
 syn match tsfNumber "\<\d\+\(\.\d\+\)\=\([eE][+-]\=\d\+\)\="

@@ -25,6 +25,7 @@ mod modes;
 mod monte_carlo;
 mod objective_parts;
 mod objectives;
+mod plant_region;
 mod precision;
 mod premises;
 mod relaxation;
@@ -174,6 +175,8 @@ struct Draft<'a> {
     precision_seen: Option<Span>,
     simulate: Option<Simulation>,
     simulate_seen: Option<Span>,
+    /// `plant region ..;` and where it is written.
+    plant_region: Option<Spanned<Vec<(f64, f64)>>>,
 }
 
 /// Checks a parsed file. Returns the spec when there is no error, and all diagnostics.
@@ -349,6 +352,7 @@ impl<'a> Checker<'a> {
             periodic_design: draft.periodic_design,
             sector,
             adaptive,
+            plant_region: draft.plant_region.map(|r| r.node),
         };
         self.f32_storable(&spec, saturate_span);
         Some(spec)
@@ -368,6 +372,7 @@ impl<'a> Checker<'a> {
             ItemKind::Objective { .. } => draft.objective_items.push(it),
             ItemKind::Relaxation(name, args) => self.relaxation_item(it, name, args, draft),
             ItemKind::Lyapunov(name, args) => self.lyapunov_item(it, name, args, draft),
+            ItemKind::PlantRegion(bounds) => self.plant_region_item(it, bounds, dims.n, draft),
             ItemKind::Trigger(kind, settings) => {
                 self.trigger_item(it, kind, settings, dims.n, draft)
             }

@@ -376,6 +376,16 @@ impl Cx {
                 let name = self.ident(next(&mut it, span)?);
                 ItemKind::Relaxation(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)
             }
+            Rule::plant_decl => ItemKind::PlantRegion(
+                it.map(|b| {
+                    let mut parts = b.into_inner();
+                    let name = self.ident(next(&mut parts, span)?);
+                    let lo = self.expr(next(&mut parts, span)?)?;
+                    let hi = self.expr(next(&mut parts, span)?)?;
+                    Ok((name, lo, hi))
+                })
+                .collect::<PResult<_>>()?,
+            ),
             Rule::lyapunov_decl => {
                 let name = self.ident(next(&mut it, span)?);
                 ItemKind::Lyapunov(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)

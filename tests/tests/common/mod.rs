@@ -212,3 +212,13 @@ pub fn fresh_dir(prefix: &str, tag: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).expect("a fresh temporary folder");
     dir
 }
+
+/// The Chromium binary on PATH (`chromium`, the Debian package), if any (the review and
+/// playground tests drive it; they skip without it).
+pub fn chromium() -> Option<PathBuf> {
+    std::env::var_os("PATH")?
+        .to_str()?
+        .split(':')
+        .map(|d| Path::new(d).join("chromium"))
+        .find(|p| p.is_file())
+}

@@ -198,7 +198,11 @@ fn clarabel_settings(s: &SolveSettings) -> DefaultSettings<f64> {
         chordal_decomposition_enable: s.chordal_decomposition,
         equilibrate_enable: s.equilibrate,
         direct_solve_method: match s.linear_solver {
+            #[cfg(target_pointer_width = "64")]
             LinearSolver::Faer => "faer".to_string(),
+            // Clarabel has no faer LDL on 32-bit targets (see LinearSolver::DEFAULT).
+            #[cfg(not(target_pointer_width = "64"))]
+            LinearSolver::Faer => "qdldl".to_string(),
             LinearSolver::Qdldl => "qdldl".to_string(),
         },
         max_threads: s.threads,

@@ -40,6 +40,17 @@ pub enum LinearSolver {
     Qdldl,
 }
 
+impl LinearSolver {
+    /// faer's LDL on 64-bit targets; QDLDL on 32-bit ones (the wasm32
+    /// playground), where Clarabel's faer does not build.
+    #[cfg(target_pointer_width = "64")]
+    pub const DEFAULT: LinearSolver = LinearSolver::Faer;
+    /// faer's LDL on 64-bit targets; QDLDL on 32-bit ones (the wasm32
+    /// playground), where Clarabel's faer does not build.
+    #[cfg(not(target_pointer_width = "64"))]
+    pub const DEFAULT: LinearSolver = LinearSolver::Qdldl;
+}
+
 impl Default for SolveSettings {
     fn default() -> Self {
         SolveSettings {
@@ -53,7 +64,7 @@ impl Default for SolveSettings {
             tol_infeas_rel: 1e-8,
             chordal_decomposition: true,
             equilibrate: true,
-            linear_solver: LinearSolver::Faer,
+            linear_solver: LinearSolver::DEFAULT,
             threads: 1,
         }
     }

@@ -389,10 +389,17 @@ pub(crate) fn render(fig: &Figure) -> Result<(Vec<u8>, Vec<u8>), SimError> {
 
 /// The figure as SVG text; the same figure gives the same text.
 pub(crate) fn render_svg(fig: &Figure) -> Result<String, SimError> {
-    font::ensure()?;
     let mut s = String::new();
+    #[cfg(not(target_arch = "wasm32"))]
     {
+        font::ensure()?;
         let root = SVGBackend::with_string(&mut s, size(fig)).into_drawing_area();
+        draw(&root, fig)?;
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let svg = SVGBackend::with_string(&mut s, size(fig));
+        let root = Typeset::measuring(svg, font::faces()?).into_drawing_area();
         draw(&root, fig)?;
     }
     Ok(s)

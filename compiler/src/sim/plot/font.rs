@@ -6,16 +6,22 @@
 
 use crate::sim::SimError;
 use ab_glyph::FontRef;
+#[cfg(not(target_arch = "wasm32"))]
 use plotters::style::{register_font, FontStyle};
+#[cfg(not(target_arch = "wasm32"))]
 use std::sync::OnceLock;
 
 /// The font family every text of the plots uses.
 pub(crate) const FAMILY: &str = "sans-serif";
 
+#[cfg(not(target_arch = "wasm32"))]
 static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
 
 /// Registers the embedded font (the first call only; later calls return the
 /// first outcome). A font the text backend cannot parse is an error, never a panic.
+/// (On wasm32 plotters has no font registry: its SVG text is measured by
+/// [`super::glyphs::Typeset::measuring`].)
+#[cfg(not(target_arch = "wasm32"))]
 pub(crate) fn ensure() -> Result<(), SimError> {
     REGISTERED
         .get_or_init(|| {

@@ -3,6 +3,8 @@
 //! itself with `ab_glyph` and the embedded font ([`super::font`]), with each
 //! glyph's side bearing and kerning, a baseline that honours the anchor, and
 //! rotation (the y-axis labels). Everything else goes to the inner backend.
+//! On wasm32 (the playground) the SVG backend is wrapped too, for the
+//! measures only ([`Typeset::measuring`]): plotters has no font there.
 
 use ab_glyph::{point, Font, FontRef, GlyphId, PxScaleFont, ScaleFont};
 use plotters_backend::{
@@ -16,6 +18,8 @@ pub(crate) struct Typeset<B> {
     inner: B,
     regular: FontRef<'static>,
     bold: FontRef<'static>,
+    /// Text is drawn by `inner` (only measured here).
+    measure_only: bool,
 }
 
 impl<B> Typeset<B> {
@@ -25,6 +29,17 @@ impl<B> Typeset<B> {
             inner,
             regular,
             bold,
+            measure_only: false,
+        }
+    }
+
+    /// `inner` drawing its own text (SVG `<text>`), measured with `regular`
+    /// and `bold` (the layout of titles, ticks and legends).
+    #[cfg(target_arch = "wasm32")]
+    pub fn measuring(inner: B, faces: (FontRef<'static>, FontRef<'static>)) -> Self {
+        Typeset {
+            measure_only: true,
+            ..Typeset::new(inner, faces)
         }
     }
 
@@ -128,6 +143,9 @@ impl<B: DrawingBackend> DrawingBackend for Typeset<B> {
         style: &S,
         pos: BackendCoord,
     ) -> Result<(), DrawingErrorKind<B::ErrorType>> {
+        if self.measure_only {
+            return self.inner.draw_text(text, style, pos);
+        }
         let color = style.color();
         if color.alpha == 0.0 {
             return Ok(());

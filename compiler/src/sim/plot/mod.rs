@@ -296,6 +296,14 @@ pub(crate) fn figures(o: &Outcome) -> Vec<(Figure, &'static str)> {
     figures
 }
 
+/// The plots of a run as SVG only: `(file name, SVG text)` (the playground's).
+pub fn svgs(o: &Outcome) -> Result<Vec<(String, String)>, SimError> {
+    figures(o)
+        .into_iter()
+        .map(|(fig, tag)| Ok((format!("{}.{tag}.svg", o.name), chart::render_svg(&fig)?)))
+        .collect()
+}
+
 /// The plot files of a run: `(file name, bytes)`.
 pub fn plots(o: &Outcome) -> Result<Vec<(String, Vec<u8>)>, SimError> {
     let mut files = Vec::new();

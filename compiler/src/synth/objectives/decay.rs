@@ -99,9 +99,17 @@ impl Objective for Decay {
             return Ok(());
         }
         let shift = 2.0 * self.alpha;
+        let name = if ctx.model_error.is_some() {
+            format!("robust {name}")
+        } else {
+            name.to_string()
+        };
         let fam = Family {
-            name: name.into(),
-            q: Box::new(|i, j| ctx.with_sector(i, j, ctx.upsilon(i, j, shift)?, None)),
+            name,
+            q: Box::new(|i, j| {
+                let q = ctx.with_sector(i, j, ctx.upsilon(i, j, shift)?, None)?;
+                ctx.with_model_error(j, q)
+            }),
         };
         lmis.impose(&fam)?;
         Ok(())

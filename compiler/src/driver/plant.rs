@@ -1,0 +1,251 @@
+//! The plant claim: the design made robust to the model error over a region
+//! R, and R shrunk until the robust conditions hold.
+//!
+//! The model error comes through one seam, an [`ErrorBound`]: a function
+//! that bounds ||A(x) - A_h(x)|| and ||B(x) - B_h(x)|| over a box of states.
+//! With a bound, the model carries it ([`crate::model::TsModel::plant_error`]),
+//! the decrease LMIs carry it as norm-bounded uncertainty
+//! ([`crate::synth::objective::Ctx::with_model_error`]) and the certificate
+//! re-checks them. When they fail on R, R is scaled about the origin by a
+//! bisection of [`SHRINK_STEPS`] steps; the largest scale that certifies
+//! gives the claim. An explicit region that fails is refused (exit 3) with
+//! the largest region that certifies in the message.
+
+use crate::driver::compile::{compile as compile_model, Compiled, Status};
+use crate::model::error_bound::{self, BoundLimits};
+use crate::model::plant_error::{default_region, nominal_slack, scaled, PlantError, StateBox};
+use crate::model::TsModel;
+use crate::report::plant::{not_covered, region_words, with_claim, without_claim, Claimed};
+use crate::report::{schema_id, Diagnosis, SpecInfo};
+use crate::synth::Settings;
+use std::time::Duration;
+use tsf_lang::Diagnostic;
+
+/// Bounds the model error of `model` over a box of states (where the
+/// rigorous bound of `model::error_bound` plugs in).
+pub type ErrorBound<'a> = &'a dyn Fn(&TsModel, &StateBox) -> Result<PlantError, Diagnostic>;
+
+/// Bisection steps of the region's scale when the robust conditions fail on
+/// R (the certified scale is then known to within 2^-8 of R).
+pub const SHRINK_STEPS: usize = 8;
+
+/// The note of a claim the nominal design carries ([`nominal_slack`]).
+const ABSORBED: &str = "the nominal design's decrease conditions absorb the model error (margin check: no robust re-design needed)";
+
+/// What the plant claim is asked for.
+#[derive(Default, Clone, Copy)]
+pub struct PlantRequest<'a> {
+    /// The model-error bound (`None`: none available; the report says so).
+    pub bound: Option<ErrorBound<'a>>,
+    /// The region the user asks the claim for (`None`: the spec's `plant
+    /// region`, else the default region, shrunk if needed). An explicit
+    /// region (here or in the spec) that fails is refused.
+    pub region: Option<&'a StateBox>,
+}
+
+/// The bound `tsfc compile` uses: the rigorous affine-arithmetic bound of
+/// [`crate::model::error_bound::bound`] at its default work limits.
+pub fn production_bound() -> Option<ErrorBound<'static>> {
+    Some(&rigorous)
+}
+
+/// [`crate::model::error_bound::bound`] as an [`ErrorBound`]. A region that
+/// reaches states whose premise values leave their declared ranges (where the
+/// blend, hence the bound, is not defined) is no region for a claim.
+fn rigorous(model: &TsModel, region: &StateBox) -> Result<PlantError, Diagnostic> {
+    let b = error_bound::bound(model, &model.spec, region, &BoundLimits::default())?;
+    if b.outside_premise {
+        return Err(Diagnostic::error(
+            model.spec.controller.span,
+            format!(
+                "the region {} reaches states whose premise values leave their declared ranges",
+                region_words(model, region)
+            ),
+        ));
+    }
+    Ok(PlantError {
+        a: b.a_norm,
+        b: b.b_norm,
+        d: b.d_norm,
+        boxes: b.boxes,
+        converged: b.converged,
+        sampled_max: b.sampled_max,
+    })
+}
+
+/// Compiles `model` and makes the plant claim `request` asks for.
+pub fn compile(
+    model: &TsModel,
+    info: SpecInfo,
+    settings: &Settings,
+    front: (Duration, Duration),
+    request: PlantRequest<'_>,
+) -> Compiled {
+    let nominal = || compile_model(model, info.clone(), settings, front);
+    let Some(bound) = request.bound else {
+        return nominal();
+    };
+    if not_covered(model).is_some() {
+        return nominal();
+    }
+    // The request's region, else the spec's `plant region`, else the default.
+    let explicit = request.region.or(model.spec.plant_region.as_ref());
+    let r0 = explicit.cloned().unwrap_or_else(|| default_region(model));
+    let shrink_note = |s: f64| {
+        (s < 1.0).then(|| {
+            format!(
+                "the robust conditions fail on {}; the largest region that certifies is scale {s} of it ({SHRINK_STEPS} bisection steps)",
+                region_words(model, &r0)
+            )
+        })
+    };
+    let nominal_once = std::cell::OnceCell::new();
+    // Err: the compile that failed (None when the bound itself failed) and why.
+    let attempt = |s: f64| -> Result<Compiled, (Option<Compiled>, String)> {
+        let region = scaled(&r0, s);
+        let pe = match bound(model, &region) {
+            Ok(pe) => pe,
+            Err(d) => return Err((None, format!("no model-error bound: {}", d.message))),
+        };
+        // The nominal design first: when its decrease conditions absorb the
+        // error (no saturation term), it ships unchanged; else a robust design.
+        if model.spec.saturation.is_none() {
+            let c = nominal_once.get_or_init(nominal);
+            if let Some(sec) = absorbed(model, c, &region, &pe, shrink_note(s)) {
+                let mut c = compile_model(model, info.clone(), settings, front);
+                c.report.plant = sec;
+                return Ok(c);
+            }
+        }
+        let mut robust = model.clone();
+        robust.plant_error = Some(pe.clone());
+        let mut c = compile_model(&robust, info.clone(), settings, front);
+        let section = match (&c.status, &c.outcome) {
+            (Status::Certified, Ok((d, _))) => with_claim(
+                model,
+                &Claimed {
+                    region: &region,
+                    bound: &pe,
+                    p: &d.p,
+                    alpha: c.report.objectives.decay_rate.unwrap_or(0.0),
+                    saturation_level: model.spec.saturation.as_ref().map(|_| 1.0),
+                    note: shrink_note(s),
+                },
+            ),
+            _ => None,
+        };
+        match section {
+            Some(sec) => {
+                c.report.plant = sec;
+                Ok(c)
+            }
+            None => {
+                let why = format!(
+                    "the robust conditions with ||dA|| <= {:.6e}, ||dB|| <= {:.6e} fail on {}",
+                    pe.a,
+                    pe.b,
+                    region_words(model, &region)
+                );
+                c.report.plant = without_claim(model, &region, Some(&pe), None, why.clone());
+                Err((Some(c), why))
+            }
+        }
+    };
+    let (first, why) = match attempt(1.0) {
+        Ok(c) => return c,
+        Err((Some(c), why)) => (c, why),
+        Err((None, why)) => {
+            let mut c = nominal();
+            let p = c.outcome.as_ref().ok().map(|(d, _)| d.p.clone());
+            c.report.plant = without_claim(
+                model,
+                &r0,
+                None,
+                p.as_ref(),
+                format!("no plant claim: {why}"),
+            );
+            return c;
+        }
+    };
+    let (mut lo, mut hi, mut best) = (0.0f64, 1.0f64, None);
+    for _ in 0..SHRINK_STEPS {
+        let mid = 0.5 * (lo + hi);
+        match attempt(mid) {
+            Ok(c) => {
+                lo = mid;
+                best = Some(c);
+            }
+            Err(_) => hi = mid,
+        }
+    }
+    let largest = match &best {
+        Some(_) => format!(
+            "the largest region that certifies is {} (scale {lo} of the region, {SHRINK_STEPS} bisection steps)",
+            region_words(model, &scaled(&r0, lo))
+        ),
+        None => format!(
+            "no region certifies down to scale 2^-{SHRINK_STEPS} of it ({SHRINK_STEPS} bisection steps)"
+        ),
+    };
+    let mut failed = first;
+    if explicit.is_some() {
+        let message = format!("plant claim refused: {why}; {largest}");
+        failed.status = Status::Refused;
+        failed.report.status = "refused";
+        failed.report.schema = schema_id("failed-report");
+        failed.report.diagnosis = Some(Diagnosis {
+            message: message.clone(),
+            achievable: Vec::new(),
+        });
+        failed.report.plant.note = Some(message);
+        return failed;
+    }
+    match best {
+        Some(c) => c,
+        None => {
+            let mut c = nominal();
+            let p = c.outcome.as_ref().ok().map(|(d, _)| d.p.clone());
+            let pe = bound(model, &r0).ok();
+            c.report.plant = without_claim(
+                model,
+                &r0,
+                pe.as_ref(),
+                p.as_ref(),
+                format!(
+                    "no plant claim: {why}; {largest}; the certificate covers the rules' blend"
+                ),
+            );
+            c
+        }
+    }
+}
+
+/// The claim the nominal design `c` makes when its decrease conditions absorb
+/// the error `pe` on `region` ([`nominal_slack`]; no saturation term).
+fn absorbed(
+    model: &TsModel,
+    c: &Compiled,
+    region: &StateBox,
+    pe: &PlantError,
+    shrunk: Option<String>,
+) -> Option<crate::report::plant::PlantSection> {
+    let (Status::Certified, Ok((d, _))) = (&c.status, &c.outcome) else {
+        return None;
+    };
+    let alpha = c.report.objectives.decay_rate.unwrap_or(0.0);
+    if !nominal_slack(&model.rules, &d.p, &d.gains, alpha, pe).is_some_and(|s| s > 0.0) {
+        return None;
+    }
+    let note = shrunk.map_or(ABSORBED.to_string(), |n| format!("{ABSORBED}; {n}"));
+    with_claim(
+        model,
+        &Claimed {
+            region,
+            bound: pe,
+            p: &d.p,
+            alpha,
+            saturation_level: None,
+            note: Some(note),
+        },
+    )
+}

@@ -1,0 +1,211 @@
+//! The report's `plant` section: what the certificate says of the plant the
+//! spec declares (A(x), B(x)), not of the rules' blend: the region R where the
+//! model-error bound holds, the bound, the certified level set E(P, c) inside
+//! R and one sentence of what is certified, or why no such sentence can be
+//! written.
+
+use crate::model::plant_error::{extents, level_inside, PlantError, StateBox};
+use crate::model::TsModel;
+use nalgebra::DMatrix;
+use serde::Serialize;
+use tsf_lang::spec::{Lyapunov, Objective, Trigger};
+
+/// The `plant` section.
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
+pub struct PlantSection {
+    /// The region R of the claim: per state `[lo, hi]`, null where unbounded.
+    pub region: Vec<Option<(f64, f64)>>,
+    /// The model-error bound over R (null: no rigorous bound available).
+    pub error_bound: Option<PlantError>,
+    /// P of V = x' P x (null without a certified design).
+    #[serde(rename = "P")]
+    pub p: Option<Vec<Vec<f64>>>,
+    /// The level c of the certified set E(P, c) = {x' P x <= c}, inside R.
+    pub level: Option<f64>,
+    /// Per state, the extent sqrt(c (P^{-1})_kk) of E(P, c).
+    pub extents: Option<Vec<f64>>,
+    /// What is certified of the plant, in one sentence (null: nothing).
+    pub claim: Option<String>,
+    /// Why no claim is made, or how R was found.
+    pub note: Option<String>,
+    /// With a `dynamics` block: the claim is for the design model, the truth
+    /// plant is simulated, not certified.
+    pub truth_plant: Option<String>,
+}
+
+/// The region as the report writes it (null where unbounded).
+pub fn region_json(region: &StateBox) -> Vec<Option<(f64, f64)>> {
+    region
+        .iter()
+        .map(|&(lo, hi)| (lo.is_finite() && hi.is_finite()).then_some((lo, hi)))
+        .collect()
+}
+
+/// The region in words: `x1 in [-1, 1], x2 unbounded`.
+pub fn region_words(model: &TsModel, region: &StateBox) -> String {
+    model
+        .spec
+        .states
+        .iter()
+        .zip(region)
+        .filter(|(_, (lo, hi))| lo.is_finite() || hi.is_finite())
+        .map(|(s, (lo, hi))| format!("{} in [{lo:.6}, {hi:.6}]", s.name))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// What the robust conditions do not cover in this spec (`None`: covered):
+/// they are built for the continuous PDC loop with a quadratic V, stability,
+/// decay rate, input and output bounds and the saturation region.
+pub fn not_covered(model: &TsModel) -> Option<String> {
+    let spec = &model.spec;
+    if spec.adaptive.is_some() {
+        return Some("an adaptive controller".into());
+    }
+    if spec.modes.is_some() {
+        return Some("Markov-switching modes".into());
+    }
+    if let Some(t) = &spec.trigger {
+        if !matches!(t.node, Trigger::Continuous) {
+            return Some("a sampled or event-triggered loop (the robust conditions cover the continuous loop only)".into());
+        }
+    }
+    if spec.periodic_design.is_some() {
+        return Some("a discrete-time periodic design".into());
+    }
+    if !matches!(spec.lyapunov.node, Lyapunov::Quadratic) {
+        return Some("a fuzzy Lyapunov function".into());
+    }
+    let region_objective = spec
+        .objectives
+        .iter()
+        .any(|o| matches!(o.node, Objective::SaturationRegion { .. }));
+    if spec.saturation.is_some() && !region_objective {
+        return Some(
+            "saturation without `objective saturation region` (its E(P, 1) sizes the claim)".into(),
+        );
+    }
+    spec.objectives.iter().find_map(|o| match &o.node {
+        Objective::Hinf { .. } => Some("the H-inf objective".to_string()),
+        Objective::Linf { .. } => Some("the L-inf objective".to_string()),
+        Objective::FiniteTime(_) => Some("finite-time boundedness".to_string()),
+        _ => None,
+    })
+}
+
+/// The one line of a spec with a truth plant.
+pub fn truth_plant(model: &TsModel) -> Option<String> {
+    let sim = model.spec.simulate.as_ref()?;
+    sim.dynamics.as_ref().map(|_| {
+        "the claim is for the design model A(x), B(x); the `dynamics` block (truth plant) is simulated, not certified".to_string()
+    })
+}
+
+/// The section when no claim is made: the region, the bound if there is
+/// one, P of the design and the reason.
+pub fn without_claim(
+    model: &TsModel,
+    region: &StateBox,
+    bound: Option<&PlantError>,
+    p: Option<&DMatrix<f64>>,
+    note: String,
+) -> PlantSection {
+    PlantSection {
+        region: region_json(region),
+        error_bound: bound.cloned(),
+        p: p.map(rows),
+        level: None,
+        extents: None,
+        claim: None,
+        note: Some(note),
+        truth_plant: truth_plant(model),
+    }
+}
+
+/// What a certified design of the covered kind says of the plant.
+pub struct Claimed<'a> {
+    /// The region R.
+    pub region: &'a StateBox,
+    /// The model-error bound over R the design tolerates.
+    pub bound: &'a PlantError,
+    /// P.
+    pub p: &'a DMatrix<f64>,
+    /// The certified decay rate (0: stability).
+    pub alpha: f64,
+    /// The saturation objective's level of E(P, level), if any.
+    pub saturation_level: Option<f64>,
+    /// How R was found (shrunk from a larger one), if worth saying.
+    pub note: Option<String>,
+}
+
+/// The section of a claim: c the largest level with E(P, c) inside R (and
+/// inside the saturation region's E(P, level)); `None` when R does not
+/// contain the origin in its interior or P is singular.
+pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
+    let p_inv = c.p.clone().try_inverse()?;
+    let mut level = level_inside(c.region, &p_inv)?;
+    if let Some(s) = c.saturation_level {
+        level = level.min(s);
+    }
+    let set = if level.is_finite() {
+        format!("E(P, c) = {{x' P x <= {level:.6e}}} (inside {})", {
+            let w = region_words(model, c.region);
+            if w.is_empty() {
+                "the state space".to_string()
+            } else {
+                w
+            }
+        })
+    } else {
+        "the state space".to_string()
+    };
+    let input = if model.spec.saturation.is_some() {
+        "B(x) sat(u)"
+    } else {
+        "B(x) u"
+    };
+    let rate = if c.alpha > 0.0 {
+        format!("decays at rate >= {}", c.alpha)
+    } else {
+        "converges to 0 (V = x' P x decreases)".to_string()
+    };
+    let claim = format!(
+        "for every x(0) in {set} the plant x' = A(x) x + {input} with this controller (continuous loop) {rate}, with ||A(x) - A_h(x)|| <= {:.6e} and ||B(x) - B_h(x)|| <= {:.6e} on the region",
+        c.bound.a, c.bound.b
+    );
+    Some(PlantSection {
+        region: region_json(c.region),
+        error_bound: Some(c.bound.clone()),
+        p: Some(rows(c.p)),
+        level: level.is_finite().then_some(level),
+        extents: level.is_finite().then(|| extents(&p_inv, level)),
+        claim: Some(claim),
+        note: c.note.clone(),
+        truth_plant: truth_plant(model),
+    })
+}
+
+/// The default section of a compile without a model-error bound.
+pub fn nominal(model: &TsModel, p: Option<&DMatrix<f64>>) -> PlantSection {
+    let region = model
+        .spec
+        .plant_region
+        .clone()
+        .unwrap_or_else(|| crate::model::plant_error::default_region(model));
+    let note = match (not_covered(model), &model.consistency) {
+        (Some(what), _) => format!(
+            "no plant claim: the robust conditions do not cover {what}; the certificate covers the rules' blend"
+        ),
+        (None, Some(c)) => format!(
+            "no plant claim: no rigorous bound of the model error is available in this build, so the certificate covers the rules' blend, not A(x), B(x) (the blend differs from A(x), B(x) by up to {:.1}% on a grid of {} states, a lower bound of the true mismatch)",
+            100.0 * c.worst,
+            c.points
+        ),
+        (None, None) => "no plant claim: no rigorous bound of the model error is available in this build (the spec's A, B do not depend on the state or no rule has an operating point to compare)".to_string(),
+    };
+    without_claim(model, &region, None, p, note)
+}
+
+fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    m.row_iter().map(|r| r.iter().copied().collect()).collect()
+}
