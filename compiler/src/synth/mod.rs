@@ -13,6 +13,7 @@
 pub mod achieved;
 pub mod adaptive;
 mod advice;
+pub mod bandwidth;
 mod blocks;
 pub mod build;
 pub mod codesign;

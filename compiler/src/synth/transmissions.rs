@@ -22,6 +22,7 @@
 //! point within the bound with the fewest ships (ties: the later, softer
 //! point); without one, the softest point within the bound ships.
 
+use super::bandwidth;
 use super::codesign::{stiffness, GainGoal, CODESIGN_REL_TOL};
 use super::design::{Design, SynthError, TriggerDesign};
 use super::search::Runner;
@@ -29,12 +30,20 @@ use super::trigger::{self, certified_threshold, TriggerPlan};
 use serde::Serialize;
 use std::time::Instant;
 
+/// With `region z = auto`, the share of the gamma goal a point may use on the
+/// seed box to be shipped; the rest is left for growing the box
+/// (docs/limits.md).
+pub const REGION_HEADROOM: f64 = 0.75;
+
 /// One point of the few-transmissions search, for the report and the docs'
 /// trade-off table.
 #[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Point {
-    /// 0: the two-step start; k: after the k-th gain step.
+    /// 0: the two-step start; then the points in the order they were made.
     pub point: u32,
+    /// How its gains were made: `two-step`, `soften` (a gain step) or
+    /// `lqr r = ..` (a member of [`super::bandwidth`]'s family).
+    pub route: String,
     /// Certified threshold of the point's trigger step.
     pub nu: f64,
     /// Its certified event-triggered L-inf gamma.
@@ -56,7 +65,7 @@ pub struct Point {
 impl Point {
     fn of(
         model: &crate::model::TsModel,
-        point: u32,
+        (point, route): (u32, String),
         t: &TriggerDesign,
         bound: f64,
         s: f64,
@@ -75,6 +84,7 @@ impl Point {
             .fold(0.0, f64::max);
         Point {
             point,
+            route,
             nu: t.plan.nu,
             gamma: t.gamma,
             gain_norm,
@@ -105,8 +115,9 @@ pub fn table(points: &[Point]) -> String {
         .iter()
         .map(|p| {
             format!(
-                "{}{}: nu {:.4}, gamma {:.4}{}, max ||F|| {:.2}, stiffness {:.4}, transmissions {} ({:.1} s)",
+                "{} {}{}: nu {:.4}, gamma {:.4}{}, max ||F|| {:.2}, stiffness {:.4}, transmissions {} ({:.1} s)",
                 p.point,
+                p.route,
                 if p.shipped { " (shipped)" } else { "" },
                 p.nu,
                 p.gamma,
@@ -148,10 +159,18 @@ impl Runner<'_> {
                 achievable: vec!["lower the threshold, shorten h_max, or add a premise `region`".into()],
             });
         };
-        let bound = gamma.unwrap_or(start.gamma);
+        let goal = gamma.unwrap_or(start.gamma);
+        // With `region z = auto` the points are scored on the seed box and
+        // the shipped one's box is grown until gamma reaches the goal: keep
+        // headroom for that growth.
+        let bound = if super::region_auto::wanted(self.model) {
+            REGION_HEADROOM * goal
+        } else {
+            goal
+        };
         let mut found = vec![Point::of(
             self.model,
-            0,
+            (0, "two-step".into()),
             &start,
             bound,
             t0.elapsed().as_secs_f64(),
@@ -181,7 +200,13 @@ impl Runner<'_> {
                     format!("point {k}: the trigger step for the softer gains gave no solution");
                 break;
             };
-            let p = Point::of(self.model, k, &next, bound, t1.elapsed().as_secs_f64());
+            let p = Point::of(
+                self.model,
+                (k, "soften".into()),
+                &next,
+                bound,
+                t1.elapsed().as_secs_f64(),
+            );
             let before = found.last().map_or(f64::INFINITY, |q| q.stiffness);
             let stalled = before - p.stiffness <= CODESIGN_REL_TOL * before;
             found.push(p);
@@ -194,6 +219,7 @@ impl Runner<'_> {
                 break;
             }
         }
+        self.bandwidth_points(&mut found, &mut designs, bound, target)?;
         if let Some(score) = self.settings.scorer {
             for (p, t) in found.iter_mut().zip(&designs) {
                 p.transmissions = score(self.model, design, t)?;
@@ -212,7 +238,7 @@ impl Runner<'_> {
             });
         };
         found[i].shipped = true;
-        let (mut shipped, grown) = self.grow_region(designs.swap_remove(i), bound)?;
+        let (mut shipped, grown) = self.grow_region(designs.swap_remove(i), goal)?;
         let mut notes = Vec::new();
         if let Some(note) = grown {
             let sent = match self.settings.scorer {
@@ -225,7 +251,7 @@ impl Runner<'_> {
             ));
         }
         notes.push(format!(
-            "few-transmissions design for nu(t_k) <= {target} and event-triggered gamma <= {bound}: point {i} ships (L-inf gamma {:.6}, xi {:.6}), stopped at {stopped}; points (point: nu, gamma, max ||F||, stiffness max ||B F||, transmissions in the spec's scenario, seconds): {}",
+            "few-transmissions design for nu(t_k) <= {target} and event-triggered gamma <= {goal} (points scored at gamma <= {bound} on the seed box): point {i} ships (L-inf gamma {:.6}, xi {:.6}), stopped at {stopped}; points (point: nu, gamma, max ||F||, stiffness max ||B F||, transmissions in the spec's scenario, seconds): {}",
             shipped.gamma,
             shipped.xi,
             table(&found)
@@ -236,6 +262,95 @@ impl Runner<'_> {
     }
 }
 
+impl Runner<'_> {
+    /// Appends the certified members of the LQR bandwidth family
+    /// ([`super::bandwidth`]) at the threshold `nu`: one common gain, the
+    /// start design's trigger plan otherwise; per damping weight, the members
+    /// halving the start's stiffness, then a bisection in log r between the
+    /// softest member within the bound and the next, softer one.
+    fn bandwidth_points(
+        &mut self,
+        found: &mut Vec<Point>,
+        designs: &mut Vec<TriggerDesign>,
+        bound: f64,
+        nu: f64,
+    ) -> Result<(), SynthError> {
+        let (Some(start), Some(first)) = (designs.first().cloned(), found.first()) else {
+            return Ok(());
+        };
+        let start_stiffness = first.stiffness;
+        let (a, _) = bandwidth::nominal(self.model);
+        // The start's gain of the rule the family is designed on stabilizes it.
+        let f0 = self
+            .model
+            .rules
+            .iter()
+            .position(|r| r.a == a)
+            .and_then(|i| start.plan.gains.get(i))
+            .or(start.plan.gains.first())
+            .cloned()
+            .ok_or_else(|| SynthError::Internal("few-transmissions start without gains".into()))?;
+        for c in bandwidth::DAMPING {
+            let family = bandwidth::Family::new(self.model, &f0, c);
+            // (r, within the bound) of the members tried, increasing r.
+            let mut tried: Vec<(f64, bool)> = Vec::new();
+            for (r, f) in family.members(start_stiffness) {
+                let ok = self.bandwidth_point(found, designs, (&start, bound, nu), (r, c), f)?;
+                tried.push((r, ok));
+            }
+            let softest = tried.iter().rposition(|t| t.1);
+            let (Some(i), Some(&(r_hi, _))) = (softest, softest.and_then(|i| tried.get(i + 1)))
+            else {
+                continue;
+            };
+            let (mut lo, mut hi) = (tried[i].0.ln(), r_hi.ln());
+            for _ in 0..bandwidth::BISECTIONS {
+                let r = (0.5 * (lo + hi)).exp();
+                let Some(f) = family.at(r) else { break };
+                if self.bandwidth_point(found, designs, (&start, bound, nu), (r, c), f)? {
+                    lo = r.ln();
+                } else {
+                    hi = r.ln();
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Certifies the member (r, c) with gain `f` at the start's plan and
+    /// threshold; appends it when certified. Whether it is within the bound.
+    fn bandwidth_point(
+        &mut self,
+        found: &mut Vec<Point>,
+        designs: &mut Vec<TriggerDesign>,
+        (start, bound, nu): (&TriggerDesign, f64, f64),
+        (r, c): (f64, f64),
+        f: nalgebra::DMatrix<f64>,
+    ) -> Result<bool, SynthError> {
+        let t = Instant::now();
+        let plan = TriggerPlan {
+            nu,
+            gains: vec![f; self.model.r()],
+            ..start.plan.clone()
+        };
+        let Some(next) = self.trigger_attempt(&plan)? else {
+            return Ok(false);
+        };
+        let k = found.len() as u32;
+        let p = Point::of(
+            self.model,
+            (k, format!("lqr r = {r:.4e}, c = {c}")),
+            &next,
+            bound,
+            t.elapsed().as_secs_f64(),
+        );
+        let within = p.within_bound;
+        found.push(p);
+        designs.push(next);
+        Ok(within)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,6 +358,7 @@ mod tests {
     fn point(k: u32, within: bool, sent: Option<u64>) -> Point {
         Point {
             point: k,
+            route: "soften".into(),
             nu: 0.25,
             gamma: 0.1,
             gain_norm: 1.0,
