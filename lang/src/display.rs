@@ -173,6 +173,13 @@ impl Display for TriggerSynthesis {
                 write!(f, ", reading = {reading})")
             }
             TriggerSynthesis::Codesign { rounds } => write!(f, "codesign(rounds = {rounds})"),
+            TriggerSynthesis::Transmissions { points, gamma } => {
+                write!(f, "transmissions(points = {points}")?;
+                if let Some(g) = gamma {
+                    write!(f, ", gamma = {}", Num(*g))?;
+                }
+                f.write_str(")")
+            }
         }
     }
 }

@@ -68,6 +68,21 @@ pub const MAX_CODESIGN_ROUNDS: u32 = 30;
 /// their squares and inverse squares stay normal f64 numbers.
 pub const MIN_REGION_BOUND: f64 = 1e-100;
 
+/// Most points of `weight = synthesize transmissions(points = ..)`: each point
+/// solves two trigger-sized SDPs and, when the spec has a scenario, one simulation.
+pub const MAX_TRANSMISSION_POINTS: u32 = 12;
+
+/// Points of `weight = synthesize transmissions;` without `points`.
+pub const DEFAULT_TRANSMISSION_POINTS: u32 = 6;
+
+/// `region z = auto;` starts from the premise's range times this factor (the
+/// seed box the gains are designed on), then grows it by factors of 2 up to
+/// the range, then bisects [`REGION_AUTO_BISECTIONS`] times in log scale.
+pub const REGION_AUTO_SEED: f64 = 1.0 / 64.0;
+
+/// Log-scale bisection steps of `region z = auto;` after the doubling.
+pub const REGION_AUTO_BISECTIONS: u32 = 3;
+
 /// Rounds of `weight = synthesize codesign;` without `rounds`.
 pub const DEFAULT_CODESIGN_ROUNDS: u32 = 10;
 

@@ -471,6 +471,17 @@ pub enum TriggerSynthesis {
         /// Largest number of (gain step, trigger step) rounds, 1 ..= 30.
         rounds: u32,
     },
+    /// A design for few transmissions (`weight = synthesize transmissions(points = ..);`):
+    /// gains as soft as the L-inf bound allows, found by co-design rounds whose gain step
+    /// minimizes the gains' stiffness; every round is a point of the reported trade-off
+    /// (docs/event_trigger.md).
+    Transmissions {
+        /// Points of the search (gain step + trigger step each), 1 ..= 12.
+        points: u32,
+        /// The bound on the event-triggered L-inf gamma every point keeps
+        /// (`gamma = ..`); without it, the two-step design's gamma.
+        gamma: Option<f64>,
+    },
 }
 
 /// The sampling intervals [h - j, h + j] of `trigger jittered { every = h; jitter = j; }`.
@@ -526,8 +537,12 @@ pub enum Trigger {
 pub struct RegionBound {
     /// The premise variable.
     pub premise: String,
-    /// Bounds of each of its components.
+    /// Bounds of each of its components (for `region z = auto;`: the seed
+    /// box, the premise's range times [`crate::limits::REGION_AUTO_SEED`]).
     pub range: (f64, f64),
+    /// `region z = auto;`: tsfc grows the box from the seed to the largest
+    /// one on which the design certifies (docs/event_trigger.md).
+    pub auto: bool,
     /// The setting.
     pub span: Span,
 }

@@ -19,6 +19,7 @@ fn xu2020_checks_clean() {
         "xu2020_event_triggered.tsf",
         "xu2020_event_triggered_codesign.tsf",
         "xu2020_regional.tsf",
+        "xu2020_few_transmissions.tsf",
     ] {
         let m = check(name);
         assert_eq!((m.n, m.m, m.r()), (6, 3, 7), "{name}");

@@ -54,4 +54,5 @@ mod stored_precision;
 mod sweep;
 mod synthesis;
 mod tidy;
+mod transmit;
 mod xu_paper_evidence;

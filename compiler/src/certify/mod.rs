@@ -124,6 +124,7 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
     if let (Some(modes), Some(md)) = (&model.spec.modes, &design.modes) {
         return markov::certify(model, design, modes, md);
     }
+    let model = &*crate::synth::codesign::analysis_model(model, design);
     if let Some(given) = model.spec.given_gains() {
         let same = given.len() == design.gains.len()
             && given.iter().zip(&design.gains).all(|(f, g)| {

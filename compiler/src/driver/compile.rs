@@ -40,6 +40,7 @@ pub fn compile(
     let t0 = Instant::now();
     let mut settings = settings.clone();
     settings.verifier = Some(crate::certify::verdict);
+    settings.scorer = Some(super::transmissions::score);
     let (mut outcome, mut log) = run(model, &settings);
     if matches!(&outcome, Ok((_, c)) if !c.ok) {
         settings.eps *= 100.0;

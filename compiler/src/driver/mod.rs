@@ -23,6 +23,7 @@ pub mod prepare;
 pub mod reuse;
 pub mod schema;
 pub mod summary;
+pub mod transmissions;
 
 pub use builder::Builder;
 pub use prepare::{prepare, prepare_reusing, prepare_run};

@@ -30,6 +30,7 @@ use super::solved::{names, Solved};
 use super::trigger::{self, certified_threshold, Factor, LoopVars, TriggerPlan};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
+use std::borrow::Cow;
 use std::time::Instant;
 use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
 
@@ -60,19 +61,27 @@ pub struct Round {
 
 /// What the gain step optimizes.
 #[derive(Debug, Clone, Copy)]
-enum GainGoal {
+pub(super) enum GainGoal {
     /// Upsilon known, nu unknown: maximize nu up to the target.
     RaiseNu { target: f64 },
     /// Upsilon unknown, nu the plan's: minimize xi with gamma <= the bound.
     LowerXi { gamma_cap: f64 },
+    /// Upsilon unknown, nu the plan's: minimize the stiffness bound kappa,
+    /// ||B_i F||_2 <= kappa for every plant rule, with gamma <= the cap
+    /// (`weight = synthesize transmissions;`, [`super::transmissions`]).
+    Soften { gamma_cap: f64 },
 }
 
 /// The gains of a solved gain step.
-struct GainStep {
-    gains: Vec<DMatrix<f64>>,
-    sector: Vec<DMatrix<f64>>,
-    nu: f64,
-    xi: f64,
+pub(super) struct GainStep {
+    /// F_j (one gain in every rule).
+    pub gains: Vec<DMatrix<f64>>,
+    /// G_j.
+    pub sector: Vec<DMatrix<f64>>,
+    /// The threshold reached (the plan's unless raised).
+    pub nu: f64,
+    /// xi.
+    pub xi: f64,
 }
 
 /// A built gain step: the problem and the unknowns read back.
@@ -123,7 +132,7 @@ fn gain_step_problem(
             Factor::Val(&w_known),
             Some(problem.scalar("nu_cd").map_err(internal)?),
         ),
-        GainGoal::LowerXi { .. } => (
+        GainGoal::LowerXi { .. } | GainGoal::Soften { .. } => (
             Factor::Var(
                 problem
                     .symmetric(names::TRIGGER_WEIGHT, n)
@@ -181,6 +190,18 @@ fn gain_step_problem(
                 .and_then(|_| problem.minimize(Expr::var(xi)))
                 .map_err(internal)?;
         }
+        GainGoal::Soften { gamma_cap } => {
+            problem
+                .add_scalar(
+                    "co-design gamma <= bound",
+                    Expr::var(gamma),
+                    Relation::Le,
+                    gamma_cap,
+                )
+                .map_err(internal)?;
+            let kappa = stiffness_bound(&mut problem, model, f1).map_err(internal)?;
+            problem.minimize(Expr::var(kappa)).map_err(internal)?;
+        }
     }
     Ok(GainStepProblem {
         problem,
@@ -191,9 +212,66 @@ fn gain_step_problem(
     })
 }
 
+/// `model` with `gains` as the rules' given gains.
+fn with_gains(model: &TsModel, gains: &[DMatrix<f64>]) -> TsModel {
+    let mut given = model.clone();
+    for (rule, f) in given.spec.rules.iter_mut().zip(gains) {
+        rule.gain = Some((f.clone(), Default::default()));
+    }
+    given
+}
+
+/// The model the continuous loop of `design` is certified on: the spec's,
+/// or, for a few-transmissions design with a premise region (one common gain,
+/// re-analyzed on the box), the spec's with that gain given in every rule.
+pub fn analysis_model<'a>(model: &'a TsModel, design: &Design) -> Cow<'a, TsModel> {
+    match design.loop_design.event() {
+        Some(t) if t.method == "transmissions" && t.plan.region.is_some() => {
+            Cow::Owned(super::region_auto::scaled(
+                &with_gains(model, &design.gains),
+                t.region_scale.unwrap_or(1.0),
+            ))
+        }
+        _ => Cow::Borrowed(model),
+    }
+}
+
+/// The stiffness of a common gain F: max over the plant rules of
+/// ||B_i F||_2, the closed-loop effect of a state error on x' (Tabuada's
+/// inter-event bound grows with ||B K||). Distinct B_i only.
+pub fn stiffness(model: &TsModel, f: &DMatrix<f64>) -> f64 {
+    model
+        .rules
+        .iter()
+        .map(|rule| (&rule.b * f).singular_values().max())
+        .fold(0.0, f64::max)
+}
+
+/// Declares kappa with [kappa I, B_i F; *, kappa I] >= 0 (||B_i F||_2 <= kappa)
+/// for every distinct B_i of the model.
+fn stiffness_bound(problem: &mut Problem, model: &TsModel, f: Var) -> Result<Var, LmiError> {
+    let kappa = problem.scalar("stiffness kappa")?;
+    let n = model.n;
+    let mut seen: Vec<&DMatrix<f64>> = Vec::new();
+    for rule in &model.rules {
+        if seen.contains(&&rule.b) {
+            continue;
+        }
+        seen.push(&rule.b);
+        let eye = DMatrix::identity(n, n);
+        let bf = Expr::product(&rule.b, f, &eye)?;
+        let block = Expr::sym_blocks(vec![
+            vec![Some(Expr::scaled(kappa, &eye)?), Some(bf)],
+            vec![None, Some(Expr::scaled(kappa, &eye)?)],
+        ])?;
+        problem.psd(&format!("stiffness of rule {}", rule.name), block, 0.0)?;
+    }
+    Ok(kappa)
+}
+
 impl Runner<'_> {
     /// Solves one gain step; `None` when the solver gives no solution.
-    fn gain_step(
+    pub(super) fn gain_step(
         &mut self,
         plan: &TriggerPlan,
         last: &TriggerDesign,
@@ -383,15 +461,21 @@ impl Runner<'_> {
         plan: &Plan,
         goal: Goal,
         gains: &[DMatrix<f64>],
+        region_scale: Option<f64>,
     ) -> Result<Design, SynthError> {
-        let mut given = self.model.clone();
-        for (rule, f) in given.spec.rules.iter_mut().zip(gains) {
-            rule.gain = Some((f.clone(), Default::default()));
+        let mut given = with_gains(self.model, gains);
+        let regional = region_scale.is_some();
+        if let Some(s) = region_scale {
+            given = super::region_auto::scaled(&given, s);
         }
         // The certificate rebuilds the synthesis form on the spec's rules, so
-        // the re-analysis stays on the whole premise range even with a region
-        // (only the trigger step is regional for a co-design).
-        given.spec.trigger_region.clear();
+        // the re-analysis of a co-design stays on the whole premise range
+        // (only its trigger step is regional). A few-transmissions design
+        // keeps the region: its common gain is analyzed on the box, and the
+        // certificate does the same ([`analysis_model`]).
+        if !regional {
+            given.spec.trigger_region.clear();
+        }
         let mut sub = Runner {
             model: &given,
             settings: self.settings,
@@ -406,9 +490,11 @@ impl Runner<'_> {
                 achievable: vec!["use `weight = synthesize two_step;`".into()],
             });
         };
-        let x = d.values.required(names::X)?;
-        for (j, f) in gains.iter().enumerate() {
-            d.values.push((names::gain_product(j), f * &x));
+        if !regional {
+            let x = d.values.required(names::X)?;
+            for (j, f) in gains.iter().enumerate() {
+                d.values.push((names::gain_product(j), f * &x));
+            }
         }
         Ok(d)
     }

@@ -30,7 +30,16 @@ pub struct Settings {
     /// whether a candidate certifies (the per-objective verdicts of given
     /// gains). `None`: such searches report that no verdict was available.
     pub verifier: Option<Verifier>,
+    /// Transmissions of a candidate event-triggered design in the spec's
+    /// scenario, handed in by the driver (which runs the simulator);
+    /// `weight = synthesize transmissions;` ships the candidate with the
+    /// fewest. `None`: the search ships the softest candidate within the bound.
+    pub scorer: Option<Scorer>,
 }
+
+/// Transmissions of a candidate: the continuous design and the candidate
+/// trigger design (its plan carries the gains); `Ok(None)` without a scenario.
+pub type Scorer = fn(&TsModel, &Design, &TriggerDesign) -> Result<Option<u64>, SynthError>;
 
 /// The certificate's verdict on a design: `Ok(true)` when every condition holds.
 pub type Verifier = fn(&TsModel, &Design) -> Result<bool, SynthError>;
@@ -57,6 +66,7 @@ impl Default for Settings {
                 .and_then(|v| v.trim().parse::<u64>().ok())
                 .map_or(DEFAULT_MEMORY_LIMIT, |mb| mb << 20),
             verifier: None,
+            scorer: None,
         }
     }
 }
@@ -219,6 +229,12 @@ pub struct TriggerDesign {
     /// The co-design's rounds (round 0: the two-step start); empty for the
     /// two-step method.
     pub rounds: Vec<super::codesign::Round>,
+    /// The points of a few-transmissions search (`weight = synthesize
+    /// transmissions;`), point 0 the two-step start; empty otherwise.
+    pub search: Vec<super::transmissions::Point>,
+    /// With `region z = auto;`: the scale of the seed box the design's box
+    /// was grown to ([`super::region_auto`]); `None` otherwise.
+    pub region_scale: Option<f64>,
 }
 
 impl TriggerDesign {

@@ -13,6 +13,7 @@
 pub mod achieved;
 pub mod adaptive;
 mod advice;
+pub mod bandwidth;
 mod blocks;
 pub mod build;
 pub mod codesign;
@@ -30,6 +31,7 @@ pub mod observer;
 pub mod pair_stability;
 pub mod plan;
 pub mod reduction;
+pub mod region_auto;
 pub mod relaxation;
 pub mod relaxations;
 mod sampled;
@@ -37,6 +39,7 @@ pub mod sampling;
 mod search;
 pub mod signal_trigger;
 pub mod solved;
+pub mod transmissions;
 pub mod trigger;
 pub mod vertices;
 

@@ -587,7 +587,9 @@ pub fn wanted(model: &TsModel) -> bool {
         })
     ) && matches!(
         model.spec.trigger_synthesis,
-        None | Some(TriggerSynthesis::TwoStep) | Some(TriggerSynthesis::Codesign { .. })
+        None | Some(TriggerSynthesis::TwoStep)
+            | Some(TriggerSynthesis::Codesign { .. })
+            | Some(TriggerSynthesis::Transmissions { .. })
     )
 }
 
@@ -595,6 +597,17 @@ pub fn wanted(model: &TsModel) -> bool {
 pub fn codesign_rounds(model: &TsModel) -> Option<u32> {
     match model.spec.trigger_synthesis {
         Some(TriggerSynthesis::Codesign { rounds }) if wanted(model) => Some(rounds),
+        _ => None,
+    }
+}
+
+/// The points of `weight = synthesize transmissions(points = ..);`, if the
+/// spec asks for a few-transmissions design.
+pub fn transmission_points(model: &TsModel) -> Option<(u32, Option<f64>)> {
+    match model.spec.trigger_synthesis {
+        Some(TriggerSynthesis::Transmissions { points, gamma }) if wanted(model) => {
+            Some((points, gamma))
+        }
         _ => None,
     }
 }
@@ -817,6 +830,8 @@ impl Runner<'_> {
             values: all,
             reductions: built.reductions,
             rounds: Vec::new(),
+            search: Vec::new(),
+            region_scale: None,
         }))
     }
 

@@ -5,7 +5,10 @@
 use super::{unknown_choice, Checker, Draft};
 use crate::ast::{Expr, ExprKind, Ident, Item, Setting, Value};
 use crate::diag::Diagnostic;
-use crate::limits::{DEFAULT_CODESIGN_ROUNDS, MAX_CODESIGN_ROUNDS, MIN_REGION_BOUND};
+use crate::limits::{
+    DEFAULT_CODESIGN_ROUNDS, DEFAULT_TRANSMISSION_POINTS, MAX_CODESIGN_ROUNDS,
+    MAX_TRANSMISSION_POINTS, MIN_REGION_BOUND, REGION_AUTO_SEED,
+};
 use crate::num::Num;
 use crate::span::Spanned;
 use crate::spec::{
@@ -87,9 +90,26 @@ impl Checker<'_> {
             ));
             return None;
         }
+        if let Value::Expr(Expr {
+            kind: ExprKind::Name(word),
+            ..
+        }) = &s.value
+        {
+            if word == "auto" {
+                // The seed box is set once the premise's range is known
+                // ([`Checker::trigger_region`]).
+                return Some(RegionBound {
+                    premise: premise.node.clone(),
+                    range: (-1.0, 1.0),
+                    auto: true,
+                    span: s.span,
+                });
+            }
+        }
         let Value::Range(lo, hi, None) = &s.value else {
             self.err(
-                Diagnostic::error(s.span, "`region` takes a range `lo .. hi`").with_help(hint),
+                Diagnostic::error(s.span, "`region` takes a range `lo .. hi` or `auto`")
+                    .with_help(hint),
             );
             return None;
         };
@@ -123,6 +143,7 @@ impl Checker<'_> {
         Some(RegionBound {
             premise: premise.node.clone(),
             range: (lo, hi),
+            auto: false,
             span: s.span,
         })
     }
@@ -154,6 +175,23 @@ impl Checker<'_> {
                 );
                 continue;
             };
+            if b.auto {
+                let Some((lo, hi)) = p.range.filter(|(lo, hi)| *lo < 0.0 && *hi > 0.0) else {
+                    self.err(
+                        Diagnostic::error(
+                            b.span,
+                            format!("`region {} = auto` needs the premise's range lo .. hi with lo < 0 < hi", b.premise),
+                        )
+                        .with_help("give the premise a range (`premise z range lo .. hi;`) or write the box (`region z = lo .. hi;`)"),
+                    );
+                    continue;
+                };
+                out.push(RegionBound {
+                    range: (lo * REGION_AUTO_SEED, hi * REGION_AUTO_SEED),
+                    ..b.clone()
+                });
+                continue;
+            }
             if let Some((lo, hi)) = p.range {
                 if b.range.0 < lo || b.range.1 > hi {
                     self.err(
@@ -570,13 +608,47 @@ impl Checker<'_> {
                 });
                 continue;
             }
+            if m.name.node == "transmissions" {
+                let p = self.named(&m.args, &["points", "gamma"], "`transmissions`")?;
+                let points = p
+                    .get("points")
+                    .copied()
+                    .unwrap_or(f64::from(DEFAULT_TRANSMISSION_POINTS));
+                if points.fract() != 0.0
+                    || !(1.0..=f64::from(MAX_TRANSMISSION_POINTS)).contains(&points)
+                {
+                    let at = m
+                        .args
+                        .iter()
+                        .find(|a| a.name.node == "points")
+                        .map_or(m.name.span, |a| a.value.span);
+                    self.err(
+                        Diagnostic::error(at, format!("`points` is a whole number in 1 ..= {MAX_TRANSMISSION_POINTS}"))
+                            .with_help("each point solves two trigger-sized SDPs and simulates the spec's scenario once"),
+                    );
+                    return None;
+                }
+                let gamma = p.get("gamma").copied();
+                if let Some(g) = gamma.filter(|g| !(g.is_finite() && *g > 0.0)) {
+                    self.err(Diagnostic::error(
+                        m.name.span,
+                        format!("`gamma` is a positive bound on the event-triggered L-inf gain, not {g}"),
+                    ));
+                    return None;
+                }
+                out = Some(TriggerSynthesis::Transmissions {
+                    points: points as u32,
+                    gamma,
+                });
+                continue;
+            }
             if m.name.node != "theorem2" {
                 self.err(
                     Diagnostic::error(
                         m.name.span,
                         format!("unknown weight design method `{}`", m.name.node),
                     )
-                    .with_help("write `weight = synthesize two_step;`, `weight = synthesize codesign;` or `weight = synthesize theorem2(eps1 = 1, eps2 = 1, eps3 = 1);`"),
+                    .with_help("write `weight = synthesize two_step;`, `weight = synthesize codesign;`, `weight = synthesize transmissions;` or `weight = synthesize theorem2(eps1 = 1, eps2 = 1, eps3 = 1);`"),
                 );
                 return None;
             }
@@ -723,6 +795,20 @@ mod tests {
         assert_eq!(
             synthesis("weight = synthesize codesign(rounds = 4);"),
             Some(TriggerSynthesis::Codesign { rounds: 4 })
+        );
+        assert_eq!(
+            synthesis("weight = synthesize transmissions;"),
+            Some(TriggerSynthesis::Transmissions {
+                points: 6,
+                gamma: None
+            })
+        );
+        assert_eq!(
+            synthesis("weight = synthesize transmissions(points = 12, gamma = 0.16);"),
+            Some(TriggerSynthesis::Transmissions {
+                points: 12,
+                gamma: Some(0.16)
+            })
         );
         let rounds = |w: &str| {
             only_error_of(&format!(

@@ -28,7 +28,9 @@ impl LoopLaw for TwoStep {
     }
 
     fn claims(&self, model: &TsModel) -> bool {
-        trigger::wanted(model) && trigger::codesign_rounds(model).is_none()
+        trigger::wanted(model)
+            && trigger::codesign_rounds(model).is_none()
+            && trigger::transmission_points(model).is_none()
     }
 
     fn design(
@@ -64,10 +66,54 @@ impl LoopLaw for Codesign {
         start: &Start,
     ) -> Result<LoopDesign, SynthError> {
         let rounds = trigger::codesign_rounds(runner.model).unwrap_or(1);
-        // The gains change: the continuous loop is re-analyzed for the
-        // co-designed ones, so every certificate speaks of them.
         let (t, notes) = runner.codesign(d, rounds)?;
-        let mut again = runner.reanalyze(&start.plan, start.goal, &t.plan.gains)?;
+        reanalyzed(runner, d, start, t, notes, None)
+    }
+}
+
+/// The few-transmissions design: softer gains in co-design points, the one
+/// with the fewest transmissions in the spec's scenario shipped.
+#[derive(Debug, Clone, Copy)]
+pub struct Transmissions;
+
+impl LoopLaw for Transmissions {
+    fn name(&self) -> &'static str {
+        "event trigger (few transmissions)"
+    }
+
+    fn claims(&self, model: &TsModel) -> bool {
+        trigger::transmission_points(model).is_some()
+    }
+
+    fn design(
+        &self,
+        runner: &mut Runner<'_>,
+        d: &mut Design,
+        start: &Start,
+    ) -> Result<LoopDesign, SynthError> {
+        let (points, gamma) = trigger::transmission_points(runner.model).unwrap_or((1, None));
+        let (t, notes) = runner.transmissions(d, points, gamma)?;
+        let region_scale = t
+            .plan
+            .region
+            .as_ref()
+            .map(|_| t.region_scale.unwrap_or(1.0));
+        reanalyzed(runner, d, start, t, notes, region_scale)
+    }
+}
+
+/// The gains changed: the continuous loop is re-analyzed for the co-designed
+/// ones, so every certificate speaks of them.
+fn reanalyzed(
+    runner: &mut Runner<'_>,
+    d: &mut Design,
+    start: &Start,
+    t: TriggerDesign,
+    notes: Vec<String>,
+    region_scale: Option<f64>,
+) -> Result<LoopDesign, SynthError> {
+    {
+        let mut again = runner.reanalyze(&start.plan, start.goal, &t.plan.gains, region_scale)?;
         again.notes.splice(0..0, d.notes.drain(..));
         again.notes.push(format!(
             "continuous design before co-design: {}",
@@ -139,6 +185,9 @@ pub struct TriggerReport {
     /// The premise region the certificate is local to (`region z = lo .. hi;`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub region: Option<RegionReport>,
+    /// The points of a few-transmissions search (`weight = synthesize transmissions;`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub search: Vec<crate::synth::transmissions::Point>,
 }
 
 /// A local (regional) event-trigger certificate: the LMIs hold at vertices
@@ -187,6 +236,7 @@ impl TriggerDesign {
             linf_xi: t.xi,
             weight_eigenvalues: eig,
             region: region_report(model, t),
+            search: t.search.clone(),
         }
     }
 }

@@ -67,6 +67,7 @@ pub struct Start {
 pub const LAWS: &[&dyn LoopLaw] = &[
     &modes::SampledModes,
     &event::Codesign,
+    &event::Transmissions,
     &event::TwoStep,
     &mixed::Mixed,
     &every_sample::EverySample,

@@ -135,6 +135,7 @@ impl Checker<'_> {
         let method = match &draft.trigger_synthesis {
             Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2",
             Some(TriggerSynthesis::Codesign { .. }) => "co-design",
+            Some(TriggerSynthesis::Transmissions { .. }) => "few-transmissions",
             _ => return,
         };
         self.err(
@@ -154,6 +155,9 @@ impl Checker<'_> {
         let method = match &draft.trigger_synthesis {
             Some(TriggerSynthesis::Theorem2 { .. }) => "Theorem 2 (`theorem2`)",
             Some(TriggerSynthesis::Codesign { .. }) => "the co-design (`codesign`)",
+            Some(TriggerSynthesis::Transmissions { .. }) => {
+                "the few-transmissions design (`transmissions`)"
+            }
             _ => "the two-step method",
         };
         let (Some(linf), Some(_)) = (found.linf, found.saturation) else {
@@ -228,8 +232,24 @@ impl Checker<'_> {
         let event = synthesized(draft)
             && matches!(
                 draft.trigger_synthesis,
-                None | Some(TriggerSynthesis::TwoStep) | Some(TriggerSynthesis::Codesign { .. })
+                None | Some(TriggerSynthesis::TwoStep)
+                    | Some(TriggerSynthesis::Codesign { .. })
+                    | Some(TriggerSynthesis::Transmissions { .. })
             );
+        let transmissions = matches!(
+            draft.trigger_synthesis,
+            Some(TriggerSynthesis::Transmissions { .. })
+        );
+        if let Some(auto) = around.trigger_region.iter().find(|b| b.auto) {
+            if event && !transmissions {
+                self.err(
+                    Diagnostic::error(auto.span, "`region .. = auto` needs `weight = synthesize transmissions`")
+                        .with_label("only the few-transmissions design grows the box for its gains")
+                        .with_help("write the box (`region z = lo .. hi;`), or use `weight = synthesize transmissions(points = .., gamma = ..);`"),
+                );
+                return;
+            }
+        }
         if event && around.modes.is_none() {
             return;
         }
@@ -394,6 +414,18 @@ mod tests {
         );
         valid(&src.replace("{}", ""));
         valid(&src.replace("{}", " codesign"));
+        valid(&src.replace("{}", " transmissions"));
+        // `auto` is the few-transmissions design's: it grows the box for its gains.
+        let auto = src.replace("-0.5 .. 0.5", "auto");
+        valid(&auto.replace("{}", " transmissions(points = 3)"));
+        let (m, at) = only_error_of(&auto.replace("{}", " codesign"));
+        assert_eq!(
+            (m.as_str(), at.as_str()),
+            (
+                "`region .. = auto` needs `weight = synthesize transmissions`",
+                "region x1 = auto;"
+            )
+        );
         let (m, _) = only_error_of(&src.replace("{}", " theorem2"));
         assert_eq!(m, want);
         // With modes the loop is certified on the whole range.
