@@ -63,7 +63,7 @@ pub fn expf(x: f32) -> f32 {
     if x <= EXPF_UNDERFLOW {
         return 0.0;
     }
-    if fabsf(x) < 0.000_061_035_156_25 {
+    if fabsf(x) < 1.0 / 16_384.0 {
         // 2^-14: e^x = 1 + x + x^2/2, x^2/2 < 2^-29.
         return 1.0 + x;
     }
@@ -191,7 +191,7 @@ pub fn atanf(x: f32) -> f32 {
         return x;
     }
     let a = fabsf(x);
-    if a < 0.000_244_140_625 {
+    if a < 1.0 / 4_096.0 {
         return x;
     }
     let r = if a > 67_108_864.0 {
@@ -286,7 +286,7 @@ fn rem_pio2f(x: f32) -> (i32, f32) {
 }
 
 /// Taylor coefficients of `sin`: `-1/6, 1/120, -1/5040, 1/362880`.
-const SINF_S: [f32; 4] = [-0.166_666_67, 8.333_333_5e-3, -1.984_127e-4, 2.755_731_8e-6];
+const SINF_S: [f32; 4] = [-0.166_666_67, 8.333_334e-3, -1.984_127e-4, 2.755_731_8e-6];
 /// Taylor coefficients of `cos` beyond `1 - z/2`: `1/24, -1/720, 1/40320, -1/3628800`.
 const COSF_C: [f32; 4] = [
     4.166_666_8e-2,
@@ -315,7 +315,7 @@ fn kernel_cosf(y: f32) -> f32 {
 }
 
 /// `pi/4` rounded down to binary32.
-const PIO4F: f32 = 0.785_398_1;
+const PIO4F: f32 = f32::from_bits(0x3f49_0fda);
 
 /// Sine (binary32): NaN/inf -> NaN; `|x| < 2^-12` -> `x`; `|x| <= pi/4`
 /// the kernel; else [`rem_pio2f`] and `[ks, kc, -ks, -kc][n mod 4]`.
@@ -324,7 +324,7 @@ pub fn sinf(x: f32) -> f32 {
         return f32::NAN;
     }
     let a = fabsf(x);
-    if a < 0.000_244_140_625 {
+    if a < 1.0 / 4_096.0 {
         return x;
     }
     if a <= PIO4F {
@@ -346,7 +346,7 @@ pub fn cosf(x: f32) -> f32 {
         return f32::NAN;
     }
     let a = fabsf(x);
-    if a < 0.000_244_140_625 {
+    if a < 1.0 / 4_096.0 {
         return 1.0;
     }
     if a <= PIO4F {
@@ -379,7 +379,7 @@ pub const EXPRELF_COEFFS: [f32; 9] = [
     0.5,
     0.166_666_67,
     0.041_666_668,
-    8.333_333_5e-3,
+    8.333_334e-3,
     1.388_888_9e-3,
     1.984_127e-4,
     2.480_158_7e-5,
