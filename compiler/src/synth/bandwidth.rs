@@ -124,8 +124,7 @@ impl Family {
         let (a, b) = nominal(model);
         let mut grid = Vec::new();
         let mut from = f0.clone();
-        let grid_r = if model.n <= MAX_STATES { R_GRID } else { 1..=0 };
-        for k in grid_r {
+        for k in R_GRID.take_while(|_| model.n <= MAX_STATES) {
             let r = 10f64.powf(f64::from(k) / 8.0);
             if let Some(f) = lqr(&a, &b, (r, c), &from) {
                 let s = stiffness(model, &f);
