@@ -15,7 +15,7 @@ use crate::xu_paper_evidence::{
 };
 use nalgebra::DMatrix;
 use std::sync::OnceLock;
-use tsfc::driver::compile::{Compiled, Status};
+use tsfc::driver::compile::Compiled;
 use tsfc::model::region::premise_box;
 use tsfc::model::TsModel;
 use tsfc::synth::TriggerDesign;
@@ -32,10 +32,7 @@ fn compiled() -> &'static (TsModel, Compiled) {
 }
 
 fn trigger() -> &'static TriggerDesign {
-    let (_, c) = compiled();
-    assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
-    let (design, _) = c.outcome.as_ref().expect("certified");
-    design.loop_design.event().expect("a synthesized trigger")
+    common::event_design(&compiled().1)
 }
 
 /// States of the box: its 64 corners, then pseudo-random points.

@@ -34,10 +34,7 @@ fn compiled() -> &'static (TsModel, Compiled) {
 }
 
 fn trigger() -> &'static TriggerDesign {
-    let (_, c) = compiled();
-    assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
-    let (design, _) = c.outcome.as_ref().expect("certified");
-    design.loop_design.event().expect("a synthesized trigger")
+    common::event_design(&compiled().1)
 }
 
 #[test]

@@ -54,6 +54,18 @@ pub fn shipped(name: &str) -> TsModel {
     model_of(name, &text)
 }
 
+/// The event-trigger design of a compile that must be certified.
+pub fn event_design(c: &tsfc::driver::compile::Compiled) -> &tsfc::synth::TriggerDesign {
+    assert_eq!(
+        c.status,
+        tsfc::driver::compile::Status::Certified,
+        "{:?}",
+        c.report.diagnosis
+    );
+    let (design, _) = c.outcome.as_ref().expect("certified");
+    design.loop_design.event().expect("an event trigger")
+}
+
 /// A shipped spec's model and its compile with the default settings.
 pub fn compile_shipped(name: &str) -> (TsModel, tsfc::driver::compile::Compiled) {
     compile_model(name, String::new(), shipped(name))
