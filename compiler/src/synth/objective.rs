@@ -262,40 +262,86 @@ pub struct Ctx<'a> {
 }
 
 /// The model error as norm-bounded uncertainty in the decrease condition:
-/// ||dA|| <= a, ||dB|| <= b, with the S-procedure multiplier `eps`
-/// (Petersen 1987; Tanaka & Wang 2001, ch. 8).
+/// ||dA|| <= a, ||dB|| <= b (and ||dD|| <= d in the blocks of a disturbance),
+/// with the S-procedure multiplier `eps` of the decrease block
+/// (Petersen 1987; Tanaka & Wang 2001, ch. 8); the H-inf and L-inf blocks
+/// declare one multiplier each ([`declare_model_error`]).
 #[derive(Debug, Clone, Copy)]
 pub struct ModelError {
-    /// The multiplier eps > 0 (a decision variable).
-    pub eps: Var,
+    /// The multiplier eps > 0 of the decrease block (a decision variable;
+    /// `None` when the plan imposes no decrease block of its own).
+    pub eps: Option<Var>,
     /// a^2.
     pub a2: f64,
     /// b^2.
     pub b2: f64,
+    /// d^2 (0 when D is not state-dependent or the spec has no disturbance).
+    pub d2: f64,
+}
+
+/// Declares the model-error multiplier `name` of one objective family's
+/// block when the model carries a nonzero error (else nothing: the nominal
+/// problem, bit for bit).
+pub fn declare_model_error(
+    model: &TsModel,
+    lmis: &mut Lmis<'_>,
+    name: &str,
+) -> Result<(), LmiError> {
+    if model.plant_error.as_ref().is_some_and(|e| !e.is_zero()) {
+        lmis.scalar(name)?;
+    }
+    Ok(())
 }
 
 impl Ctx<'_> {
-    /// Q_ij of the decrease with the model error (Petersen's lemma): in
+    /// Q_ij of the decrease with the model error (Petersen's lemma), with the
+    /// decrease block's multiplier ([`Ctx::with_model_error_by`]).
+    pub fn with_model_error(&self, j: usize, q: Expr) -> Result<Expr, LmiError> {
+        let eps = self.model_error.and_then(|me| me.eps);
+        self.with_model_error_by(eps, j, q, None)
+    }
+
+    /// A block `q` (state rows first) with the model error as norm-bounded
+    /// uncertainty under the multiplier `eps` (Petersen's lemma): in
     /// X = P^{-1} coordinates He(dA X + dB M_j) <= eps (a^2 + b^2) I +
     /// eps^{-1} (X X + M_j' M_j) for every ||dA|| <= a, ||dB|| <= b (and with
-    /// saturation, |sat(u)| <= |u| bounds dB sat(u) the same way), so
-    /// `q` (state block first) becomes, by a Schur complement,
+    /// saturation, |sat(u)| <= |u| bounds dB sat(u) the same way), so `q`
+    /// becomes, by a Schur complement,
     /// [[q + eps (a^2 + b^2) I, X, M_j'], [*, -eps I, 0], [*, *, -eps I]]
-    /// (a column left out when its bound is 0). Unchanged without a model error.
-    pub fn with_model_error(&self, j: usize, q: Expr) -> Result<Expr, LmiError> {
-        let Some(me) = self.model_error else {
+    /// (a column left out when its bound is 0). With `w_rows` (the first
+    /// row of the disturbance block in `q`) and ||dD|| <= d, the term
+    /// He(e_x dD e_w') <= eps d^2 e_x e_x' + eps^{-1} e_w e_w' adds d^2 to the
+    /// state diagonal and the column e_w. Unchanged without a model error or
+    /// without `eps`.
+    pub fn with_model_error_by(
+        &self,
+        eps: Option<Var>,
+        j: usize,
+        q: Expr,
+        w_rows: Option<usize>,
+    ) -> Result<Expr, LmiError> {
+        let (Some(me), Some(eps)) = (self.model_error, eps) else {
             return Ok(q);
         };
         let (n, m) = (self.model.n, self.model.m);
         let k = q.shape().0;
-        let pad = |e: Expr| -> Result<Expr, LmiError> {
+        let d2 = if w_rows.is_some() { me.d2 } else { 0.0 };
+        let pad = |e: Expr, at: usize| -> Result<Expr, LmiError> {
             let (h, w) = e.shape();
-            if h == k {
+            if at == 0 && h == k {
                 return Ok(e);
             }
-            Expr::blocks(vec![vec![Some(e)], vec![Some(Expr::zeros(k - h, w))]])
+            let mut rows = Vec::new();
+            if at > 0 {
+                rows.push(vec![Some(Expr::zeros(at, w))]);
+            }
+            rows.push(vec![Some(e)]);
+            if k > at + h {
+                rows.push(vec![Some(Expr::zeros(k - at - h, w))]);
+            }
+            Expr::blocks(rows)
         };
-        let diag = Expr::scaled(me.eps, &(DMatrix::identity(n, n) * (me.a2 + me.b2)))?;
+        let diag = Expr::scaled(eps, &(DMatrix::identity(n, n) * (me.a2 + me.b2 + d2)))?;
         let diag = if k == n {
             diag
         } else {
@@ -307,17 +353,21 @@ impl Ctx<'_> {
         let mut grid: Vec<Vec<Option<Expr>>> = vec![vec![Some(q.add(diag)?)]];
         let mut cols = Vec::new();
         if me.a2 > 0.0 {
-            cols.push((pad(Expr::var(self.x))?, n));
+            cols.push((pad(Expr::var(self.x), 0)?, n));
         }
         if me.b2 > 0.0 {
-            cols.push((pad(self.m[j].expr(self.x, m, n)?.transpose())?, m));
+            cols.push((pad(self.m[j].expr(self.x, m, n)?.transpose(), 0)?, m));
+        }
+        if let (Some(at), true) = (w_rows, d2 > 0.0) {
+            let q_w = self.model.q;
+            cols.push((pad(Expr::identity(q_w), at)?, q_w));
         }
         let size = cols.len() + 1;
         grid[0].resize(size, None);
         for (c, (col, width)) in cols.into_iter().enumerate() {
             grid[0][c + 1] = Some(col);
             let mut row = vec![None; size];
-            row[c + 1] = Some(Expr::scaled(me.eps, &(-DMatrix::identity(width, width)))?);
+            row[c + 1] = Some(Expr::scaled(eps, &(-DMatrix::identity(width, width)))?);
             grid.push(row);
         }
         Expr::sym_blocks(grid)

@@ -24,6 +24,10 @@ pub mod names {
     pub const LOOP_XI: &str = "xi_tr";
     /// The S-procedure multiplier of the model error (robust conditions).
     pub const MODEL_ERROR: &str = "eps_model";
+    /// The model-error multiplier of the H-inf block.
+    pub const MODEL_ERROR_HINF: &str = "eps_model_hinf";
+    /// The model-error multiplier of the L-inf decrease block.
+    pub const MODEL_ERROR_LINF: &str = "eps_model_linf";
 
     /// M_j = F_j X of rule `j` (0-based).
     pub fn gain_product(j: usize) -> String {

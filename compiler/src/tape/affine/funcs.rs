@@ -276,8 +276,8 @@ pub fn unary(f: Unary, x: &Affine, noise: &mut Noise) -> Form {
                 slope_err,
                 m2: 1.0 / 3.0 + EPS,
             };
-            let i = if lo > 0.0 && hi < PI || hi < 0.0 && lo > -PI {
-                // Monotone on either side of 0 within (-pi, pi).
+            let i = if lo >= 0.0 && hi < PI || hi <= 0.0 && lo > -PI {
+                // Monotone on either side of 0 within (-pi, pi), 0 included.
                 let (a, ea) = sinc_value(lo);
                 let (b, eb) = sinc_value(hi);
                 Affine::interval(a.min(b) - ea.max(eb), a.max(b) + ea.max(eb), noise)
