@@ -22,7 +22,8 @@ use crate::model::TsModel;
 use crate::synth::achieved::{Achieved, Quantity};
 use crate::synth::blocks::{scalar_times_identity, Channel};
 use crate::synth::objective::{
-    bound_value, declare_model_error, scalar, Bound, BuildError, Ctx, Lmis, Objective, Sector,
+    bound_value, declare_model_error, model_error_multipliers, scalar, Bound, BuildError, Ctx,
+    Lmis, Objective, Sector,
 };
 use crate::synth::reduction::Values;
 use crate::synth::relaxation::Family;
@@ -75,7 +76,7 @@ impl Objective for Hinf {
         if !matches!(self.target, Bound::Fixed(_)) {
             lmis.scalar(G)?;
         }
-        declare_model_error(model, lmis, names::MODEL_ERROR_HINF)?;
+        declare_model_error(model, lmis, names::MODEL_ERROR_HINF, true)?;
         Ok(())
     }
 
@@ -90,10 +91,10 @@ impl Objective for Hinf {
         };
         // With a model error: one Petersen multiplier for this block, the
         // disturbance rows after the state's (and the dead zone's).
-        let robust = lmis.var(names::MODEL_ERROR_HINF);
+        let robust = model_error_multipliers(lmis, names::MODEL_ERROR_HINF);
         let w_rows = model.n + ctx.sector.as_ref().map_or(0, |_| model.m);
         let fam = Family {
-            name: if robust.is_some() {
+            name: if ctx.model_error.is_some() {
                 "robust hinf".into()
             } else {
                 "hinf".into()
@@ -115,7 +116,7 @@ impl Objective for Hinf {
                 if let Some(sector) = &ctx.sector {
                     dead_zone(ctx, &ch, sector, (i, j), &mut rows)?;
                 }
-                ctx.with_model_error_by(robust, j, Expr::sym_blocks(rows)?, Some(w_rows))
+                ctx.with_model_error_by(&robust, j, Expr::sym_blocks(rows)?, Some(w_rows))
             }),
         };
         lmis.impose(&fam)?;

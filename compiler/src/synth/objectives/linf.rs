@@ -9,7 +9,8 @@ use crate::model::TsModel;
 use crate::synth::achieved::{Achieved, Quantity};
 use crate::synth::blocks::{scalar_times_identity, Channel};
 use crate::synth::objective::{
-    bound_value, declare_model_error, scalar, Bound, BuildError, Ctx, Lmis, Objective,
+    bound_value, declare_model_error, model_error_multipliers, scalar, Bound, BuildError, Ctx,
+    Lmis, Objective,
 };
 use crate::synth::reduction::Values;
 use crate::synth::relaxation::Family;
@@ -110,7 +111,7 @@ impl Objective for Linf {
         if self.xi.is_none() {
             lmis.scalar(XI)?;
         }
-        declare_model_error(model, lmis, names::MODEL_ERROR_LINF)?;
+        declare_model_error(model, lmis, names::MODEL_ERROR_LINF, true)?;
         Ok(())
     }
 
@@ -128,10 +129,10 @@ impl Objective for Linf {
         // With a model error: one Petersen multiplier for the decrease block
         // (the output-peak block has no A, B), the disturbance rows after
         // the state's (and the dead zone's).
-        let robust = lmis.var(names::MODEL_ERROR_LINF);
+        let robust = model_error_multipliers(lmis, names::MODEL_ERROR_LINF);
         let w_rows = n + ctx.sector.as_ref().map_or(0, |_| model.m);
         let fam = Family {
-            name: if robust.is_some() {
+            name: if ctx.model_error.is_some() {
                 "robust linf".into()
             } else {
                 "linf".into()
@@ -142,7 +143,7 @@ impl Objective for Linf {
                     scalar_times_identity(xi, xi_fixed, q)?.scale(-1.0)?,
                 );
                 let block = ctx.with_sector(i, j, ctx.upsilon(i, j, phi)?, Some(w))?;
-                ctx.with_model_error_by(robust, j, block, Some(w_rows))
+                ctx.with_model_error_by(&robust, j, block, Some(w_rows))
             }),
         };
         lmis.impose(&fam)?;
