@@ -281,6 +281,12 @@ pub fn unary(f: Unary, x: &Affine, noise: &mut Noise) -> Form {
                 let (a, ea) = sinc_value(lo);
                 let (b, eb) = sinc_value(hi);
                 Affine::interval(a.min(b) - ea.max(eb), a.max(b) + ea.max(eb), noise)
+            } else if lo > -PI && hi < PI {
+                // Straddles 0 within (-pi, pi): sinc decreases in |x| there,
+                // its maximum is sinc(0) = 1.
+                let (a, ea) = sinc_value(lo);
+                let (b, eb) = sinc_value(hi);
+                Affine::interval(a.min(b) - ea.max(eb), 1.0, noise)
             } else {
                 Affine::interval(SINC_MIN, 1.0, noise)
             };
