@@ -42,15 +42,19 @@ pub fn region_json(region: &StateBox) -> Vec<Option<(f64, f64)>> {
         .collect()
 }
 
-/// The region in words: `x1 in [-1, 1], x2 unbounded`.
+/// The region in words: `x1 in [-1, 1], w[2] in [-0.1, 0.1]` (unbounded
+/// components left out; a vector state's components named `w[k]`, 1-based).
 pub fn region_words(model: &TsModel, region: &StateBox) -> String {
-    model
-        .spec
-        .states
-        .iter()
+    let names = model.spec.states.iter().flat_map(|s| {
+        (0..s.len).map(move |k| match s.is_vector {
+            true => format!("{}[{}]", s.name, k + 1),
+            false => s.name.clone(),
+        })
+    });
+    names
         .zip(region)
         .filter(|(_, (lo, hi))| lo.is_finite() || hi.is_finite())
-        .map(|(s, (lo, hi))| format!("{} in [{lo:.6}, {hi:.6}]", s.name))
+        .map(|(name, (lo, hi))| format!("{name} in [{lo:.6}, {hi:.6}]"))
         .collect::<Vec<_>>()
         .join(", ")
 }
