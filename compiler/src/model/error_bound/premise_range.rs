@@ -64,6 +64,7 @@ fn within(v: (f64, f64), (lo, hi): (f64, f64)) -> bool {
 /// Enclosures of the premise values `z` over the box `bx`.
 fn enclose(builder: &Builder, z: &[Id], bx: &[(f64, f64)]) -> Vec<Form> {
     let mut noise = Noise::new(bx.len() as u32);
+    noise.tight_ranges = true;
     let inputs: Vec<Form> = bx
         .iter()
         .enumerate()
