@@ -112,6 +112,21 @@ pub fn compile(
     // The request's region, else the spec's `plant region`, else the default.
     let explicit = request.region.or(model.spec.plant_region.as_ref());
     let r0 = explicit.cloned().unwrap_or_else(|| default_region(model));
+    // A robust re-design would trade a gain the spec minimizes for a claim
+    // the spec did not ask for: only with an explicit region.
+    if let (None, Some(what)) = (explicit, minimized_gain(model)) {
+        let mut c = nominal();
+        c.report.plant = without_claim(
+            model,
+            &r0,
+            None,
+            None,
+            format!(
+                "no plant claim: the spec minimizes the {what}, and a design robust to the model error would trade it for the claim; write `plant region ..;` to ask for that design (docs/language.md, \"The plant claim\"); the certificate covers the rules' blend"
+            ),
+        );
+        return c;
+    }
     let shrink_note = |s: f64| {
         (s < 1.0).then(|| {
             format!(
@@ -233,6 +248,23 @@ pub fn compile(
             c
         }
     }
+}
+
+/// The disturbance gain the spec minimizes (H-inf or L-inf with no bound),
+/// named for the report's note; `None` when it minimizes none.
+fn minimized_gain(model: &TsModel) -> Option<&'static str> {
+    use tsf_lang::spec::{Objective, Target};
+    model.spec.objectives.iter().find_map(|o| match &o.node {
+        Objective::Hinf {
+            target: Target::Optimize,
+            ..
+        } => Some("H-infinity gain"),
+        Objective::Linf {
+            target: Target::Optimize,
+            ..
+        } => Some("L-infinity (peak-to-peak) gain"),
+        _ => None,
+    })
 }
 
 /// The claim the nominal design `c` makes when its decrease conditions absorb
