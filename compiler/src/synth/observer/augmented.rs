@@ -35,6 +35,9 @@ pub struct AugmentedDesign {
     pub values: Vec<(String, DMatrix<f64>)>,
     /// Reductions applied to the solved problem.
     pub reductions: Vec<Reduction>,
+    /// The certified H-inf gain from (w, v) to the objective's output, with
+    /// an H-inf objective ([`super::hinf`]).
+    pub hinf_gamma: Option<f64>,
 }
 
 /// The augmented problem and what the certificate needs of it.
@@ -70,7 +73,29 @@ pub fn closed_loop(
     g
 }
 
-/// Builds the augmented analysis problem for the gains `f`, `l`.
+/// The blocks of G_ij: state-state, state-error, error-error.
+pub struct Split {
+    /// A_i + B_i F_j.
+    pub xx: DMatrix<f64>,
+    /// -B_i F_j.
+    pub xe: DMatrix<f64>,
+    /// A_i - L_i C.
+    pub ee: DMatrix<f64>,
+}
+
+impl Split {
+    /// The blocks of `g` (2n x 2n).
+    pub fn of(g: &DMatrix<f64>, n: usize) -> Split {
+        Split {
+            xx: g.view((0, 0), (n, n)).into_owned(),
+            xe: g.view((0, n), (n, n)).into_owned(),
+            ee: g.view((n, n), (n, n)).into_owned(),
+        }
+    }
+}
+
+/// Builds the augmented analysis problem for the gains `f`, `l` (with the
+/// spec's H-inf objective, its augmented block too: [`super::hinf`]).
 pub fn problem(
     model: &TsModel,
     f: &[DMatrix<f64>],
@@ -89,12 +114,11 @@ pub fn problem(
     let fam = Family {
         name: "augmented".into(),
         q: Box::new(|i, j| {
-            let g = closed_loop(model, f, l, c, i, j);
-            let (gxx, gxe, gee) = (
-                g.view((0, 0), (n, n)).into_owned(),
-                g.view((0, n), (n, n)).into_owned(),
-                g.view((n, n), (n, n)).into_owned(),
-            );
+            let Split {
+                xx: gxx,
+                xe: gxe,
+                ee: gee,
+            } = Split::of(&closed_loop(model, f, l, c, i, j), n);
             let xx = Expr::var(p1)
                 .right_mul(&gxx)?
                 .he()?
@@ -108,6 +132,9 @@ pub fn problem(
         }),
     };
     relaxer.impose(&mut problem, &fam)?;
+    if let Some(h) = super::hinf::objective(model) {
+        super::hinf::impose(&mut problem, &mut relaxer, model, (f, l), c, (p1, pe), h)?;
+    }
     Ok(AugmentedProblem {
         problem,
         p1,
@@ -132,7 +159,12 @@ pub fn solve(
     if sol.status != SolveStatus::Solved {
         return Err(SynthError::Infeasible {
             message: format!(
-                "the observer-based loop is not certified: the augmented (x, e) conditions at decay rate {alpha} are {} for the controller and observer gains",
+                "the observer-based loop is not certified: the augmented (x, e) conditions at decay rate {alpha}{} are {} for the controller and observer gains",
+                match super::hinf::objective(model) {
+                    Some((_, _, Some(g))) => format!(" with the H-inf gain from (w, v) at most {g}"),
+                    Some((_, _, None)) => " with an H-inf block".into(),
+                    None => String::new(),
+                },
                 sol.status.describe()
             ),
             achievable: vec![
@@ -158,6 +190,11 @@ pub fn solve(
             .ok_or_else(|| SynthError::Internal(format!("internal error: no value of {name}")))
     };
     let (p1, pe) = (get(P1)?, get(PE)?);
+    let hinf_gamma = super::hinf::objective(model).map(|(_, _, fixed)| match fixed {
+        Some(gamma) => Ok(gamma),
+        None => get(super::hinf::G_AUG).map(|g| g[(0, 0)].max(0.0).sqrt()),
+    });
+    let hinf_gamma = hinf_gamma.transpose()?;
     let n = model.n;
     let mut p = DMatrix::zeros(2 * n, 2 * n);
     p.view_mut((0, 0), (n, n)).copy_from(&p1);
@@ -167,5 +204,6 @@ pub fn solve(
         p,
         values,
         reductions: built.reductions,
+        hinf_gamma,
     })
 }

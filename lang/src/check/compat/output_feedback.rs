@@ -3,7 +3,7 @@
 //! premises on measured states (every state component a premise reads lies
 //! in the row space of C); for `static_output` a C of full row rank; for
 //! `observer_based` the objectives the augmented loop's certificate covers
-//! (stability, decay rate). Neither is combined with a trigger, modes, an
+//! (stability, decay rate, H-inf). Neither is combined with a trigger, modes, an
 //! adaptive block, a fuzzy Lyapunov function, given gains or a plant region.
 
 use crate::ast::ItemKind;
@@ -43,11 +43,14 @@ impl Checker<'_> {
         if kind == ControlKind::ObserverBased {
             for o in &spec.objectives {
                 let k = o.node.kind();
-                if !matches!(k, ObjectiveKind::Stability | ObjectiveKind::DecayRate) {
+                if !matches!(
+                    k,
+                    ObjectiveKind::Stability | ObjectiveKind::DecayRate | ObjectiveKind::Hinf
+                ) {
                     self.err(
                         Diagnostic::error(o.span, format!("`objective {}` is not covered for `control observer_based`", k.keyword()))
                             .with_secondary(at, "the observer-based controller is declared here")
-                            .with_help("the augmented loop (x, e) is certified for stability and a decay rate in this build (docs/limits.md); use `control static_output;` or state feedback for the other objectives"),
+                            .with_help("the augmented loop (x, e) is certified for stability, a decay rate and an H-inf gain in this build (docs/limits.md); use `control static_output;` or state feedback for the other objectives"),
                     );
                 }
             }
