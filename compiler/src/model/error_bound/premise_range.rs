@@ -122,14 +122,13 @@ pub fn check(
     PremiseRange::Inside { boxes }
 }
 
+/// A sub-box: per state, `[lo, hi]`.
+type SubBox = Vec<(f64, f64)>;
+
 /// The halves of the sub-box `bx` of `region`, split at the midpoint of its
 /// widest component relative to the region's width, among the states
 /// `reads` marks (ties: the first); `None` when each of those is a point.
-fn bisect(
-    bx: &[(f64, f64)],
-    region: &[(f64, f64)],
-    reads: &[bool],
-) -> Option<(Vec<(f64, f64)>, Vec<(f64, f64)>)> {
+fn bisect(bx: &[(f64, f64)], region: &[(f64, f64)], reads: &[bool]) -> Option<(SubBox, SubBox)> {
     let (k, _) = (0..bx.len())
         .filter(|&k| reads[k] && bx[k].1 > bx[k].0)
         .map(|k| (k, (bx[k].1 - bx[k].0) / (region[k].1 - region[k].0)))
