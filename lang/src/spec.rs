@@ -532,11 +532,16 @@ pub enum Trigger {
 
 /// One `region z = lo .. hi;` of an aperiodic trigger: every component of
 /// premise `z` stays in `[lo, hi]` on the certified set (lo < 0 < hi, inside
-/// the premise's range).
+/// the premise's range). When `z` names a state rather than a premise
+/// variable, the box bounds that state's components and tsfc encloses the
+/// premises that read it (docs/language.md).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RegionBound {
-    /// The premise variable.
+    /// The premise variable (or the state, when [`RegionBound::state`] is set).
     pub premise: String,
+    /// `Some((offset, len))` when the name is a state and no premise
+    /// variable: its components x[offset .. offset + len] are bounded.
+    pub state: Option<(usize, usize)>,
     /// Bounds of each of its components (for `region z = auto;`: the seed
     /// box, the premise's range times [`crate::limits::REGION_AUTO_SEED`]).
     pub range: (f64, f64),

@@ -33,6 +33,7 @@ mod mixed_trigger;
 mod model_consistency;
 mod monte_carlo;
 mod newcomer;
+mod nonlinear_region;
 mod objectives;
 mod observer;
 mod observer_code;

@@ -10,6 +10,10 @@
 //! images themselves when they are fewer). The LMIs imposed at those vertices
 //! then hold for every such x. The certificate keeps the states it speaks of
 //! inside the box by the LMIs E(P, c) inside |c_k x| <= b_k (premises linear in x).
+//! A `region` naming a state bounds that state instead (faces |x_k| <= b_k),
+//! and the premises it reads are enclosed over the state box ([`states`]).
+
+pub mod states;
 
 use super::premise::TermSpec;
 use super::TsModel;
@@ -25,7 +29,7 @@ pub const MAX_REGION_VERTICES: usize = 64;
 /// Relative outward widening of every membership bound (rounding of exp and products).
 const WIDEN: f64 = 1e-12;
 /// The help of a premise not linear in the state.
-const LINEAR_HELP: &str = "bound premises that are states (or linear combinations of states)";
+const LINEAR_HELP: &str = "bound premises that are states (or linear combinations of states), or bound the states a nonlinear premise reads (`region theta = lo .. hi;`, theta a state)";
 /// Singular values below this fraction of the largest span no direction.
 const RANK_TOL: f64 = 1e-10;
 
@@ -55,6 +59,10 @@ pub struct PremiseBox {
     pub h_vertices: Vec<Vec<f64>>,
     /// Their number (for the report).
     pub h_vertex_count: usize,
+    /// With `region` settings on states: the premise components enclosed
+    /// over the state box (absent when every setting names a premise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub enclosure: Option<states::PremiseEnclosure>,
 }
 
 /// Why the `region` settings give no premise box: a spec error, which the
@@ -64,6 +72,9 @@ pub struct PremiseBox {
 pub struct RegionError {
     /// The premise variable at fault, if one is.
     pub premise: Option<String>,
+    /// The name of the `region` setting at fault when it is not the
+    /// premise's (a state box the premise is enclosed over).
+    pub setting: Option<String>,
     /// What is wrong.
     pub message: String,
     /// What to do about it.
@@ -82,13 +93,14 @@ pub fn diagnose(model: &TsModel) -> Option<Diagnostic> {
     let first = model.spec.trigger_region.first()?;
     let e = checked(model).err()?;
     let at = e
-        .premise
+        .setting
         .as_ref()
+        .or(e.premise.as_ref())
         .and_then(|p| model.spec.trigger_region.iter().find(|b| &b.premise == p))
         .unwrap_or(first);
     let d = Diagnostic::error(at.span, e.message);
     let d = match &e.premise {
-        Some(p) if *p != at.premise => d.with_label(format!(
+        Some(p) if *p != at.premise && e.setting.is_none() => d.with_label(format!(
             "premise `{p}` is not bounded here, but every premise must be linear in the state"
         )),
         _ => d,
@@ -102,6 +114,7 @@ struct Checked {
     z: Vec<(f64, f64)>,
     faces: Vec<Face>,
     h_bounds: Vec<(f64, f64)>,
+    enclosure: Option<states::PremiseEnclosure>,
 }
 
 /// [`Checked`] for `model`, or why the settings give no box.
@@ -113,12 +126,16 @@ fn checked(model: &TsModel) -> Result<Option<Checked>, RegionError> {
     if model.r() > MAX_REGION_RULES {
         return Err(RegionError {
             premise: None,
+            setting: None,
             message: format!(
                 "{} rules, at most {MAX_REGION_RULES} with `region` (the membership polytope has up to r 2^(r-1) vertices)",
                 model.r()
             ),
             help: "leave out `region` (the certificate then holds on the whole premise range), or use fewer rules".into(),
         });
+    }
+    if bounds.iter().any(|b| b.state.is_some()) {
+        return states::checked(model).map(Some);
     }
     let c = premise_matrix(model)?;
     let mut z: Vec<(f64, f64)> = Vec::new();
@@ -136,12 +153,24 @@ fn checked(model: &TsModel) -> Result<Option<Checked>, RegionError> {
             }
         }
     }
-    let h_bounds = membership_bounds(&model.terms, &z).map_err(|message| RegionError {
+    let h_bounds = box_memberships(model, &z)?;
+    Ok(Some(Checked {
+        z,
+        faces,
+        h_bounds,
+        enclosure: None,
+    }))
+}
+
+/// [`membership_bounds`] of `model`'s rules on the premise box `z`, or the
+/// region's error.
+fn box_memberships(model: &TsModel, z: &[(f64, f64)]) -> Result<Vec<(f64, f64)>, RegionError> {
+    membership_bounds(&model.terms, z).map_err(|message| RegionError {
         premise: None,
+        setting: None,
         message,
         help: "shrink the region or widen the premise sets".into(),
-    })?;
-    Ok(Some(Checked { z, faces, h_bounds }))
+    })
 }
 
 /// The premise box of `model`'s `region` settings (`None` without any), with
@@ -149,7 +178,13 @@ fn checked(model: &TsModel) -> Result<Option<Checked>, RegionError> {
 /// linear in the state, no rule fires on the box, or the problem is too large
 /// (the model stage reports these first, [`diagnose`]).
 pub fn premise_box(model: &TsModel) -> Result<Option<PremiseBox>, String> {
-    let Some(Checked { z, faces, h_bounds }) = checked(model).map_err(|e| e.to_string())? else {
+    let Some(Checked {
+        z,
+        faces,
+        h_bounds,
+        enclosure,
+    }) = checked(model).map_err(|e| e.to_string())?
+    else {
         return Ok(None);
     };
     let h_vertices = polytope_vertices(&h_bounds);
@@ -159,6 +194,7 @@ pub fn premise_box(model: &TsModel) -> Result<Option<PremiseBox>, String> {
         h_vertex_count: h_vertices.len(),
         h_bounds,
         h_vertices,
+        enclosure,
     }))
 }
 
@@ -216,10 +252,20 @@ pub fn continuous_model(model: &TsModel) -> Result<Option<(TsModel, PremiseBox)>
 /// C of z = C x, checked: z(0) = 0 and z(x) = C x at two further states (a
 /// premise such as sin(x1) has no box in state coordinates).
 pub(crate) fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, RegionError> {
+    linear_rows(model, |_| true)
+}
+
+/// C of z = C x, the rows `linear` marks (premise components) checked as
+/// [`premise_matrix`] checks every row; the others are not checked.
+fn linear_rows(
+    model: &TsModel,
+    linear: impl Fn(usize) -> bool,
+) -> Result<DMatrix<f64>, RegionError> {
     let n = model.n;
     let z = |x: &[f64]| {
         super::premise_values(&model.spec, x).map_err(|d| RegionError {
             premise: None,
+            setting: None,
             message: d.message,
             help: LINEAR_HELP.into(),
         })
@@ -242,7 +288,7 @@ pub(crate) fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, RegionErro
         let got = DVector::from_vec(z(x)?);
         let want = &c * DVector::from_column_slice(x);
         let scale = 1.0 + want.amax();
-        if let Some(k) = (0..p).find(|&k| (got[k] - want[k]).abs() > 1e-9 * scale) {
+        if let Some(k) = (0..p).find(|&k| linear(k) && (got[k] - want[k]).abs() > 1e-9 * scale) {
             let name = model
                 .premises
                 .slots
@@ -252,6 +298,7 @@ pub(crate) fn premise_matrix(model: &TsModel) -> Result<DMatrix<f64>, RegionErro
             return Err(RegionError {
                 message: format!("premise variable `{name}` is not linear in the state, so the premise box has no faces in state coordinates"),
                 premise: Some(name),
+                setting: None,
                 help: LINEAR_HELP.into(),
             });
         }

@@ -76,10 +76,11 @@ impl Checker<'_> {
     /// `region z = lo .. hi;` (lo < 0 < hi; the premise is checked by
     /// [`Checker::trigger_region`] once premises are known), at most once per premise.
     fn region_setting(&mut self, s: &Setting, seen: &[RegionBound]) -> Option<RegionBound> {
-        let hint = "write `region z = lo .. hi;` with z a premise variable and lo < 0 < hi: the event-triggered certificate then holds on the states reached from rest, kept inside that premise box";
+        let hint = "write `region z = lo .. hi;` with z a premise variable (or a state the premises read) and lo < 0 < hi: the event-triggered certificate then holds on the states reached from rest, kept inside that box";
         let Some(premise) = &s.qualifier else {
             self.err(
-                Diagnostic::error(s.span, "`region` names a premise variable").with_help(hint),
+                Diagnostic::error(s.span, "`region` names a premise variable or a state")
+                    .with_help(hint),
             );
             return None;
         };
@@ -100,6 +101,7 @@ impl Checker<'_> {
                 // ([`Checker::trigger_region`]).
                 return Some(RegionBound {
                     premise: premise.node.clone(),
+                    state: None,
                     range: (-1.0, 1.0),
                     auto: true,
                     span: s.span,
@@ -142,6 +144,7 @@ impl Checker<'_> {
         }
         Some(RegionBound {
             premise: premise.node.clone(),
+            state: None,
             range: (lo, hi),
             auto: false,
             span: s.span,
@@ -149,7 +152,9 @@ impl Checker<'_> {
     }
 
     /// The `region` bounds checked against the premises: each names a premise
-    /// variable and lies inside its range.
+    /// variable and lies inside its range, or names a state (no premise
+    /// variable of that name) whose box the model stage encloses the premises
+    /// on (`compiler/src/model/region/states.rs`).
     pub(super) fn trigger_region(
         &mut self,
         bounds: &[RegionBound],
@@ -158,20 +163,42 @@ impl Checker<'_> {
         let mut out = Vec::new();
         for b in bounds {
             let Some(p) = premises.iter().find(|p| p.name == b.premise) else {
+                if let Some(s) = self.states.iter().find(|s| s.name == b.premise) {
+                    if b.auto {
+                        self.err(
+                            Diagnostic::error(
+                                b.span,
+                                format!("`region {} = auto` needs a premise variable, and `{}` is a state", b.premise, b.premise),
+                            )
+                            .with_help("write the state's box (`region x = lo .. hi;`), or `auto` on a premise variable with a range"),
+                        );
+                        continue;
+                    }
+                    out.push(RegionBound {
+                        state: Some((s.offset, s.len)),
+                        ..b.clone()
+                    });
+                    continue;
+                }
                 let names: Vec<&str> = premises.iter().map(|p| p.name.as_str()).collect();
+                let states: Vec<&str> = self.states.iter().map(|s| s.name.as_str()).collect();
                 self.err(
                     Diagnostic::error(
                         b.span,
                         format!(
-                            "`region {}`: no premise variable `{}`",
+                            "`region {}`: no premise variable or state `{}`",
                             b.premise, b.premise
                         ),
                     )
-                    .with_help(if names.is_empty() {
-                        "the spec has no premise variable".to_string()
-                    } else {
-                        format!("premise variables: {}", names.join(", "))
-                    }),
+                    .with_help(format!(
+                        "premise variables: {}; states: {}",
+                        if names.is_empty() {
+                            "none".into()
+                        } else {
+                            names.join(", ")
+                        },
+                        states.join(", ")
+                    )),
                 );
                 continue;
             };

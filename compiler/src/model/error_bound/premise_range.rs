@@ -109,23 +109,81 @@ pub fn check(
                 }
             }
         }
-        let axis = (0..bx.len())
-            .filter(|&k| reads[k] && bx[k].1 > bx[k].0)
-            .map(|k| (k, (bx[k].1 - bx[k].0) / (region[k].1 - region[k].0)))
-            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)));
-        let Some((k, _)) = axis else {
-            // A point of the states read whose enclosure still leaves: no proof.
-            return PremiseRange::Unproven { bx };
-        };
         if boxes + queue.len() + 2 > MAX_PREMISE_BOXES {
             return PremiseRange::Unproven { bx };
         }
-        let mid = 0.5 * bx[k].0 + 0.5 * bx[k].1;
-        let (mut left, mut right) = (bx.clone(), bx);
-        left[k].1 = mid;
-        right[k].0 = mid;
+        let Some((left, right)) = bisect(&bx, region, &reads) else {
+            // A point of the states read whose enclosure still leaves: no proof.
+            return PremiseRange::Unproven { bx };
+        };
         queue.push_back(left);
         queue.push_back(right);
     }
     PremiseRange::Inside { boxes }
+}
+
+/// A sub-box: per state, `[lo, hi]`.
+type SubBox = Vec<(f64, f64)>;
+
+/// The halves of the sub-box `bx` of `region`, split at the midpoint of its
+/// widest component relative to the region's width, among the states
+/// `reads` marks (ties: the first); `None` when each of those is a point.
+fn bisect(bx: &[(f64, f64)], region: &[(f64, f64)], reads: &[bool]) -> Option<(SubBox, SubBox)> {
+    let (k, _) = (0..bx.len())
+        .filter(|&k| reads[k] && bx[k].1 > bx[k].0)
+        .map(|k| (k, (bx[k].1 - bx[k].0) / (region[k].1 - region[k].0)))
+        .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))?;
+    let mid = 0.5 * bx[k].0 + 0.5 * bx[k].1;
+    let (mut left, mut right) = (bx.to_vec(), bx.to_vec());
+    left[k].1 = mid;
+    right[k].0 = mid;
+    Some((left, right))
+}
+
+/// An enclosure of each premise value over a box: the hull of its affine
+/// enclosures over a cover of the box by sub-boxes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hull {
+    /// Per premise value: `[lo, hi]` holding z(x) for every state x of the
+    /// box, or `None` when some sub-box's enclosure is unbounded.
+    pub ranges: Vec<Option<(f64, f64)>>,
+    /// Sub-boxes of the cover.
+    pub boxes: usize,
+}
+
+/// The hull of the enclosures of the premise values `z` (outputs of
+/// `builder`) over `region`, which every sub-box is bisected ([`bisect`],
+/// whole rounds, so the cover is uniform in the states read) until another
+/// round would pass [`MAX_PREMISE_BOXES`] sub-boxes or none splits. Sound:
+/// the sub-boxes cover the region, and each enclosure holds z on its sub-box.
+pub fn hull(builder: &Builder, z: &[Id], region: &[(f64, f64)]) -> Hull {
+    let reads = affine::depends_on(builder, z);
+    let mut cover = vec![region.to_vec()];
+    while 2 * cover.len() <= MAX_PREMISE_BOXES {
+        let split: Vec<_> = cover
+            .iter()
+            .filter_map(|bx| bisect(bx, region, &reads))
+            .collect();
+        if split.len() < cover.len() {
+            break;
+        }
+        cover = split.into_iter().flat_map(|(l, r)| [l, r]).collect();
+    }
+    let mut ranges: Vec<Option<(f64, f64)>> =
+        vec![Some((f64::INFINITY, f64::NEG_INFINITY)); z.len()];
+    for bx in &cover {
+        for (r, f) in ranges.iter_mut().zip(enclose(builder, z, bx)) {
+            *r = match (*r, f) {
+                (Some((lo, hi)), Ok(f)) => {
+                    let (a, b) = f.range();
+                    Some((lo.min(a), hi.max(b)))
+                }
+                _ => None,
+            };
+        }
+    }
+    Hull {
+        ranges,
+        boxes: cover.len(),
+    }
 }
