@@ -71,17 +71,29 @@ section_sum() {
     arm-none-eabi-size -A "$1" | awk -v p="$2" '$1 == p || index($1, p ".") == 1 { s += $2 } END { print s + 0 }'
 }
 
+# The precisions audited for $1: the adaptive law is generated in double only (docs/limits.md).
+precisions_of() {
+    if grep -q '^adaptive {' "$1"; then echo f64; else echo "f64 f32"; fi
+}
+
+# Compiles one (spec, precision) build directory $1 (holding the spec copy): the log, the
+# generated files and the exit code (file `code`). The compiles run side by side
+# (AUDIT_JOBS, default: the number of cores): each solve is single-threaded.
+compile_build() {
+    local code=0
+    "$tsfc" compile "$1"/*.tsf --out "$1/gen" > "$1/compile.log" 2>&1 || code=$?
+    echo "$code" > "$1/code"
+}
+export -f compile_build
+export tsfc
+
 status=0
 rows=()
 declare -A misra_count
+builds=()
 for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
     name=$(basename "$spec" .tsf)
-    precisions="f64 f32"
-    if grep -q '^adaptive {' "$spec"; then
-        # The adaptive law is generated in double only (docs/limits.md).
-        precisions=f64
-    fi
-    for precision in $precisions; do
+    for precision in $(precisions_of "$spec"); do
         dir="$work/$name-$precision"
         mkdir -p "$dir"
         src="$dir/$name.tsf"
@@ -90,8 +102,17 @@ for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
         else
             { cat "$spec"; echo "precision $precision;"; } > "$src"
         fi
-        code=0
-        "$tsfc" compile "$src" --out "$dir/gen" > "$dir/compile.log" 2>&1 || code=$?
+        builds+=("$dir")
+    done
+done
+printf '%s\n' "${builds[@]}" | xargs -P "${AUDIT_JOBS:-$(nproc)}" -I{} bash -c 'compile_build "$1"' _ {}
+
+for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
+    name=$(basename "$spec" .tsf)
+    precisions=$(precisions_of "$spec")
+    for precision in $precisions; do
+        dir="$work/$name-$precision"
+        code=$(cat "$dir/code")
         if [ "$code" = 3 ] && [ "$precision" = f32 ] && grep -q 'certificate refused in stored precision f32' "$dir/compile.log"; then
             # An honest finding, not a tool failure: the design's certificate does not survive
             # rounding to f32, so tsfc emits no f32 code for it (the f64 build is audited).

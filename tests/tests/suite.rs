@@ -42,6 +42,7 @@ mod plots;
 mod region;
 mod relaxation_map;
 mod review;
+mod robust_claim;
 mod rust_codegen;
 mod sampled_loop;
 mod schema;

@@ -12,6 +12,7 @@
 //! the largest region that certifies in the message.
 
 use crate::driver::compile::{compile as compile_model, Compiled, Status};
+use crate::model::error_bound::premise_range::{PremiseRange, MAX_PREMISE_BOXES};
 use crate::model::error_bound::{self, BoundLimits};
 use crate::model::plant_error::{default_region, nominal_slack, scaled, PlantError, StateBox};
 use crate::model::TsModel;
@@ -54,14 +55,34 @@ pub fn production_bound() -> Option<ErrorBound<'static>> {
 /// blend, hence the bound, is not defined) is no region for a claim.
 fn rigorous(model: &TsModel, region: &StateBox) -> Result<PlantError, Diagnostic> {
     let b = error_bound::bound(model, &model.spec, region, &BoundLimits::default())?;
-    if b.outside_premise {
-        return Err(Diagnostic::error(
+    let leaves = |why: String| {
+        Err(Diagnostic::error(
             model.spec.controller.span,
             format!(
-                "the region {} reaches states whose premise values leave their declared ranges",
+                "the region {} reaches states whose premise values leave their declared ranges ({why})",
                 region_words(model, region)
             ),
-        ));
+        ))
+    };
+    match &b.premise {
+        PremiseRange::Inside { .. } => {}
+        PremiseRange::Leaves { premise, x, z } => {
+            let slot = model
+                .premises
+                .slots
+                .iter()
+                .find(|s| (s.first..s.first + s.dim).contains(premise));
+            let name = slot.map_or("a premise", |s| s.name.as_str());
+            let (lo, hi) = slot.map_or((f64::NAN, f64::NAN), |s| s.range);
+            return leaves(format!(
+                "`{name}` = {z:.6e} at x = {x:?}, outside its range {lo} .. {hi}"
+            ));
+        }
+        PremiseRange::Unproven { .. } => {
+            return leaves(format!(
+                "not proved inside after {MAX_PREMISE_BOXES} sub-boxes"
+            ))
+        }
     }
     Ok(PlantError {
         a: b.a_norm,
@@ -91,6 +112,21 @@ pub fn compile(
     // The request's region, else the spec's `plant region`, else the default.
     let explicit = request.region.or(model.spec.plant_region.as_ref());
     let r0 = explicit.cloned().unwrap_or_else(|| default_region(model));
+    // A robust re-design would trade a gain the spec minimizes for a claim
+    // the spec did not ask for: only with an explicit region.
+    if let (None, Some(what)) = (explicit, minimized_gain(model)) {
+        let mut c = nominal();
+        c.report.plant = without_claim(
+            model,
+            &r0,
+            None,
+            None,
+            format!(
+                "no plant claim: the spec minimizes the {what}, and a design robust to the model error would trade it for the claim; write `plant region ..;` to ask for that design (docs/language.md, \"The plant claim\"); the certificate covers the rules' blend"
+            ),
+        );
+        return c;
+    }
     let shrink_note = |s: f64| {
         (s < 1.0).then(|| {
             format!(
@@ -109,7 +145,7 @@ pub fn compile(
         };
         // The nominal design first: when its decrease conditions absorb the
         // error (no saturation term), it ships unchanged; else a robust design.
-        if model.spec.saturation.is_none() {
+        if model.spec.saturation.is_none() && !disturbance_bounds(model) {
             let c = nominal_once.get_or_init(nominal);
             if let Some(sec) = absorbed(model, c, &region, &pe, shrink_note(s)) {
                 let mut c = compile_model(model, info.clone(), settings, front);
@@ -127,7 +163,7 @@ pub fn compile(
                     region: &region,
                     bound: &pe,
                     p: &d.p,
-                    alpha: c.report.objectives.decay_rate.unwrap_or(0.0),
+                    objectives: &c.report.objectives,
                     saturation_level: model.spec.saturation.as_ref().map(|_| 1.0),
                     note: shrink_note(s),
                 },
@@ -151,21 +187,11 @@ pub fn compile(
             }
         }
     };
+    // The first failure (its compile, or none when the bound itself failed,
+    // e.g. a premise leaving its range) and why: the region is shrunk either way.
     let (first, why) = match attempt(1.0) {
         Ok(c) => return c,
-        Err((Some(c), why)) => (c, why),
-        Err((None, why)) => {
-            let mut c = nominal();
-            let p = c.outcome.as_ref().ok().map(|(d, _)| d.p.clone());
-            c.report.plant = without_claim(
-                model,
-                &r0,
-                None,
-                p.as_ref(),
-                format!("no plant claim: {why}"),
-            );
-            return c;
-        }
+        Err(failed) => failed,
     };
     let (mut lo, mut hi, mut best) = (0.0f64, 1.0f64, None);
     for _ in 0..SHRINK_STEPS {
@@ -187,8 +213,12 @@ pub fn compile(
             "no region certifies down to scale 2^-{SHRINK_STEPS} of it ({SHRINK_STEPS} bisection steps)"
         ),
     };
-    let mut failed = first;
     if explicit.is_some() {
+        let mut failed = first.unwrap_or_else(|| {
+            let mut c = nominal();
+            c.report.plant = without_claim(model, &r0, None, None, why.clone());
+            c
+        });
         let message = format!("plant claim refused: {why}; {largest}");
         failed.status = Status::Refused;
         failed.report.status = "refused";
@@ -220,6 +250,23 @@ pub fn compile(
     }
 }
 
+/// The disturbance gain the spec minimizes (H-inf or L-inf with no bound),
+/// named for the report's note; `None` when it minimizes none.
+fn minimized_gain(model: &TsModel) -> Option<&'static str> {
+    use tsf_lang::spec::{Objective, Target};
+    model.spec.objectives.iter().find_map(|o| match &o.node {
+        Objective::Hinf {
+            target: Target::Optimize,
+            ..
+        } => Some("H-infinity gain"),
+        Objective::Linf {
+            target: Target::Optimize,
+            ..
+        } => Some("L-infinity (peak-to-peak) gain"),
+        _ => None,
+    })
+}
+
 /// The claim the nominal design `c` makes when its decrease conditions absorb
 /// the error `pe` on `region` ([`nominal_slack`]; no saturation term).
 fn absorbed(
@@ -243,9 +290,21 @@ fn absorbed(
             region,
             bound: pe,
             p: &d.p,
-            alpha,
+            objectives: &c.report.objectives,
             saturation_level: None,
             note: Some(note),
         },
     )
+}
+
+/// Whether the spec bounds a disturbance's effect (H-inf, L-inf): their
+/// blocks are not in the nominal margin check, so only a robust design
+/// carries them to the plant.
+fn disturbance_bounds(model: &TsModel) -> bool {
+    model.spec.objectives.iter().any(|o| {
+        matches!(
+            o.node,
+            tsf_lang::spec::Objective::Hinf { .. } | tsf_lang::spec::Objective::Linf { .. }
+        )
+    })
 }

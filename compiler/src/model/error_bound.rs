@@ -18,6 +18,7 @@
 //! recorded as a lower bound ([`ModelErrorBound::sampled_max`]).
 
 mod blend;
+pub mod premise_range;
 
 use super::consistency::{normalized_weights, StateGraph};
 use super::premise::runtime_terms;
@@ -25,6 +26,7 @@ use super::TsModel;
 use crate::tape::affine;
 use blend::{Outcome, Problem};
 use nalgebra::DMatrix;
+use premise_range::PremiseRange;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use tsf_lang::spec::{ModelMatrix, Spec};
@@ -82,10 +84,10 @@ pub struct ModelErrorBound {
     /// Largest `||A - A_h||_2`, `||B - B_h||_2` found at the sub-boxes'
     /// centres (float evaluation): a lower bound of the true maximum.
     pub sampled_max: (f64, f64),
-    /// `true` when some sub-box centre has a premise value outside its
-    /// declared range: such states are not covered (the blend is not
-    /// defined there).
-    pub outside_premise: bool,
+    /// Whether every premise value of every state of the box is proved in
+    /// its declared range ([`premise_range::check`]); where it is not, the
+    /// blend is not defined and the bound covers only the states in range.
+    pub premise: PremiseRange,
     /// `true` when a function's argument was clipped to its domain
     /// (`sqrt` of a range reaching below 0): the bound holds where the
     /// plant's expressions are real.
@@ -203,6 +205,7 @@ pub fn bound(
             "the model-error bound needs finite bounds of state component {k}, which the premises or A(x), B(x) read"
         ))
     })?;
+    let premise = premise_range::check(&graph.builder, &graph.outputs[..graph.nz], &ranges, region);
     let sampler = graph
         .builder
         .clone()
@@ -290,7 +293,7 @@ pub fn bound(
     finish(
         &problem,
         live,
-        (boxes, clipped),
+        (boxes, clipped, premise),
         converged,
         with_d,
         sample,
@@ -327,7 +330,7 @@ fn pinned(region: &StateBox, deps: &[bool]) -> Result<StateBox, usize> {
 fn finish(
     problem: &Problem,
     live: Vec<&Leaf>,
-    (boxes, clipped): (usize, bool),
+    (boxes, clipped, premise): (usize, bool, PremiseRange),
     converged: bool,
     with_d: bool,
     sample: Sampler,
@@ -373,7 +376,7 @@ fn finish(
         boxes,
         converged,
         sampled_max: (sample.max[0], sample.max[1]),
-        outside_premise: sample.outside,
+        premise,
         clipped,
     })
 }
@@ -388,8 +391,6 @@ struct Sampler<'a> {
     h: Vec<f64>,
     /// Largest spectral norm per target.
     max: Vec<f64>,
-    /// A centre had a premise value outside its range.
-    outside: bool,
 }
 
 impl<'a> Sampler<'a> {
@@ -400,7 +401,6 @@ impl<'a> Sampler<'a> {
             out: vec![0.0; problem.outputs.len()],
             h: vec![0.0; problem.terms.len()],
             max: vec![0.0; problem.targets.len()],
-            outside: false,
             tape,
         }
     }
@@ -415,10 +415,6 @@ impl<'a> Sampler<'a> {
         self.tape.read(&self.regs, &mut self.out);
         let z = &self.out[..problem.nz];
         if !normalized_weights(z, &problem.ranges, &self.rules, &mut self.h) {
-            self.outside |= z
-                .iter()
-                .zip(&problem.ranges)
-                .any(|(v, (lo, hi))| !(v >= lo && v <= hi));
             return;
         }
         let mut at = problem.nz;

@@ -6,6 +6,7 @@
 
 use crate::model::plant_error::{extents, level_inside, PlantError, StateBox};
 use crate::model::TsModel;
+use crate::report::objectives::Objectives;
 use nalgebra::DMatrix;
 use serde::Serialize;
 use tsf_lang::spec::{Lyapunov, Objective, Trigger};
@@ -41,22 +42,26 @@ pub fn region_json(region: &StateBox) -> Vec<Option<(f64, f64)>> {
         .collect()
 }
 
-/// The region in words: `x1 in [-1, 1], x2 unbounded`.
+/// The region in words: `x1 in [-1, 1], w[2] in [-0.1, 0.1]` (unbounded
+/// components left out; a vector state's components named `w[k]`, 1-based).
 pub fn region_words(model: &TsModel, region: &StateBox) -> String {
-    model
-        .spec
-        .states
-        .iter()
+    let names = model.spec.states.iter().flat_map(|s| {
+        (0..s.len).map(move |k| match s.is_vector {
+            true => format!("{}[{}]", s.name, k + 1),
+            false => s.name.clone(),
+        })
+    });
+    names
         .zip(region)
         .filter(|(_, (lo, hi))| lo.is_finite() || hi.is_finite())
-        .map(|(s, (lo, hi))| format!("{} in [{lo:.6}, {hi:.6}]", s.name))
+        .map(|(name, (lo, hi))| format!("{name} in [{lo:.6}, {hi:.6}]"))
         .collect::<Vec<_>>()
         .join(", ")
 }
 
 /// What the robust conditions do not cover in this spec (`None`: covered):
 /// they are built for the continuous PDC loop with a quadratic V, stability,
-/// decay rate, input and output bounds and the saturation region.
+/// decay rate, H-inf, L-inf, input and output bounds and the saturation region.
 pub fn not_covered(model: &TsModel) -> Option<String> {
     let spec = &model.spec;
     if spec.adaptive.is_some() {
@@ -92,8 +97,6 @@ pub fn not_covered(model: &TsModel) -> Option<String> {
         );
     }
     spec.objectives.iter().find_map(|o| match &o.node {
-        Objective::Hinf { .. } => Some("the H-inf objective".to_string()),
-        Objective::Linf { .. } => Some("the L-inf objective".to_string()),
         Objective::FiniteTime(_) => Some("finite-time boundedness".to_string()),
         _ => None,
     })
@@ -136,8 +139,8 @@ pub struct Claimed<'a> {
     pub bound: &'a PlantError,
     /// P.
     pub p: &'a DMatrix<f64>,
-    /// The certified decay rate (0: stability).
-    pub alpha: f64,
+    /// The certified decay rate (0: stability) and bounds.
+    pub objectives: &'a Objectives,
     /// The saturation objective's level of E(P, level), if any.
     pub saturation_level: Option<f64>,
     /// How R was found (shrunk from a larger one), if worth saying.
@@ -170,14 +173,21 @@ pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
     } else {
         "B(x) u"
     };
-    let rate = if c.alpha > 0.0 {
-        format!("decays at rate >= {}", c.alpha)
-    } else {
-        "converges to 0 (V = x' P x decreases)".to_string()
+    let o = c.objectives;
+    let rate = match o.decay_rate.filter(|a| *a > 0.0) {
+        Some(alpha) => format!("decays at rate >= {alpha}"),
+        None => "converges to 0 (V = x' P x decreases)".to_string(),
+    };
+    let with_w = if model.q > 0 { " and w = 0" } else { "" };
+    let d = match c.bound.d {
+        Some(d) => format!(", ||D(x) - D_h(x)|| <= {d:.6e}"),
+        None => String::new(),
     };
     let claim = format!(
-        "for every x(0) in {set} the plant x' = A(x) x + {input} with this controller (continuous loop) {rate}, with ||A(x) - A_h(x)|| <= {:.6e} and ||B(x) - B_h(x)|| <= {:.6e} on the region",
-        c.bound.a, c.bound.b
+        "for every x(0) in {set}{with_w} the plant x' = A(x) x + {input} with this controller (continuous loop) {rate}{}, with ||A(x) - A_h(x)|| <= {:.6e} and ||B(x) - B_h(x)|| <= {:.6e}{d} on the region",
+        performance(o, level),
+        c.bound.a,
+        c.bound.b
     );
     Some(PlantSection {
         region: region_json(c.region),
@@ -189,6 +199,40 @@ pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
         note: c.note.clone(),
         truth_plant: truth_plant(model),
     })
+}
+
+/// The bounds the robust conditions carry to the plant, as a clause of the
+/// claim: input and output norms on E(P, min(c, 1)) (their blocks bound u, y
+/// on E(P, 1), and the set is invariant inside the region); from x(0) = 0,
+/// H-inf for disturbance energies gamma^2 ||w||_2^2 <= c (V <= gamma^2
+/// ||w||_2^2 keeps the state in E(P, c)) and L-inf for amplitudes
+/// xi ||w||_inf^2 / phi <= c (V <= xi ||w||_inf^2 / phi).
+fn performance(o: &Objectives, c: f64) -> String {
+    let mut parts = Vec::new();
+    let inner = c.min(1.0);
+    if let Some(mu) = o.input_norm_bound {
+        parts.push(format!(
+            "||u(t)|| <= {mu} from every x(0) in E(P, {inner:.6e})"
+        ));
+    }
+    if let Some(l) = o.output_norm_bound {
+        parts.push(format!(
+            "||y(t)|| <= {l} from every x(0) in E(P, {inner:.6e})"
+        ));
+    }
+    if let Some(g) = o.hinf_gamma {
+        parts.push(format!(
+            "from x(0) = 0, ||z||_2 < {g} ||w||_2 for every disturbance with ||w||_2 <= {:.6e} (the state stays in E(P, c))",
+            c.sqrt() / g
+        ));
+    }
+    if let (Some(g), Some(xi), Some(phi)) = (o.linf_gamma, o.linf_xi, o.linf_phi) {
+        parts.push(format!(
+            "from x(0) = 0, ||y||_inf < {g} ||w||_inf for every disturbance with ||w||_inf <= {:.6e} (the state stays in E(P, c))",
+            (c * phi / xi).sqrt()
+        ));
+    }
+    parts.iter().map(|p| format!("; {p}")).collect()
 }
 
 /// The default section of a compile without a model-error bound.

@@ -6,7 +6,9 @@
 //! problem). When no objective contains the Lyapunov decrease, plain
 //! stability is imposed.
 
-use super::objective::{BuildError, Ctx, GainTerm, Lmis, ModelError, Objective};
+use super::objective::{
+    declare_model_error, BuildError, Ctx, GainTerm, Lmis, ModelError, Objective,
+};
 use super::objectives::{self, Decay};
 use super::plan::Plan;
 use super::reduction::Reduction;
@@ -109,11 +111,21 @@ pub fn build(
     for o in plan.ordered(objectives::DECLARE_ORDER) {
         o.declare(model, &mut lmis)?;
     }
+    let implied = plan
+        .objectives()
+        .any(|o| o.implies_stability() || o.decay_rate().is_some());
+    // The decrease block's multiplier (the H-inf and L-inf blocks declare
+    // their own); the model error is carried by the context either way.
+    let decrease = !implied || plan.objectives().any(|o| o.decay_rate().is_some());
     let model_error = match &model.plant_error {
         Some(e) if !e.is_zero() => Some(ModelError {
-            eps: lmis.scalar(names::MODEL_ERROR)?,
+            eps: match decrease {
+                true => declare_model_error(model, &mut lmis, names::MODEL_ERROR, false)?,
+                false => Default::default(),
+            },
             a2: e.a * e.a,
             b2: e.b * e.b,
+            d2: e.d.map_or(0.0, |d| d * d),
         }),
         _ => None,
     };
@@ -126,9 +138,6 @@ pub fn build(
         sector: lmis.sector.clone(),
     };
     lmis.strict("X > 0", Expr::var(x))?;
-    let implied = plan
-        .objectives()
-        .any(|o| o.implies_stability() || o.decay_rate().is_some());
     if !implied {
         Decay::stability().impose(&ctx, &mut lmis)?;
     }

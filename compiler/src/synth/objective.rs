@@ -245,6 +245,18 @@ impl GainTerm {
     }
 }
 
+/// The n x n block `e` in the top-left corner of a k x k zero matrix.
+fn pad_square(e: Expr, k: usize) -> Result<Expr, LmiError> {
+    let n = e.shape().0;
+    if k == n {
+        return Ok(e);
+    }
+    Expr::blocks(vec![
+        vec![Some(e), None],
+        vec![None, Some(Expr::zeros(k - n, k - n))],
+    ])
+}
+
 /// Read-only context of the conditions: model, plan and the shared variables.
 pub struct Ctx<'a> {
     /// The model.
@@ -261,63 +273,150 @@ pub struct Ctx<'a> {
     pub model_error: Option<ModelError>,
 }
 
-/// The model error as norm-bounded uncertainty in the decrease condition:
-/// ||dA|| <= a, ||dB|| <= b, with the S-procedure multiplier `eps`
-/// (Petersen 1987; Tanaka & Wang 2001, ch. 8).
+/// The model error as norm-bounded uncertainty: ||dA|| <= a, ||dB|| <= b
+/// (and ||dD|| <= d in the blocks of a disturbance), with the S-procedure
+/// multipliers of the decrease block (Petersen 1987; Tanaka & Wang 2001,
+/// ch. 8); the H-inf and L-inf blocks declare their own
+/// ([`declare_model_error`]).
 #[derive(Debug, Clone, Copy)]
 pub struct ModelError {
-    /// The multiplier eps > 0 (a decision variable).
-    pub eps: Var,
+    /// The multipliers of the decrease block (none when the plan imposes no
+    /// decrease block of its own).
+    pub eps: Multipliers,
     /// a^2.
     pub a2: f64,
     /// b^2.
     pub b2: f64,
+    /// d^2 (0 when D is not state-dependent or the spec has no disturbance).
+    pub d2: f64,
+}
+
+/// One block's multipliers eps > 0, one per uncertain term (declared only
+/// where its bound is nonzero): separate multipliers bound
+/// He(dA X) + He(dB M_j) by 2 a ||X|| + 2 b ||M_j|| at best, where one
+/// common multiplier gives 2 sqrt(a^2 + b^2) sqrt(||X||^2 + ||M_j||^2).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Multipliers {
+    /// Of dA X.
+    pub a: Option<Var>,
+    /// Of dB M_j.
+    pub b: Option<Var>,
+    /// Of dD w.
+    pub d: Option<Var>,
+}
+
+/// Declares the model-error multipliers `{prefix}_a`, `_b` (and `_d` with
+/// `with_d`) of one block for the nonzero bounds of the model's error (none
+/// without one: the nominal problem, bit for bit), and returns them.
+pub fn declare_model_error(
+    model: &TsModel,
+    lmis: &mut Lmis<'_>,
+    prefix: &str,
+    with_d: bool,
+) -> Result<Multipliers, LmiError> {
+    let Some(e) = model.plant_error.as_ref().filter(|e| !e.is_zero()) else {
+        return Ok(Multipliers::default());
+    };
+    let mut one = |bound: f64, tag: &str| -> Result<Option<Var>, LmiError> {
+        match bound > 0.0 {
+            true => lmis.scalar(&format!("{prefix}_{tag}")).map(Some),
+            false => Ok(None),
+        }
+    };
+    Ok(Multipliers {
+        a: one(e.a, "a")?,
+        b: one(e.b, "b")?,
+        d: match with_d {
+            true => one(e.d.unwrap_or(0.0), "d")?,
+            false => None,
+        },
+    })
+}
+
+/// The multipliers [`declare_model_error`] declared under `prefix`.
+pub fn model_error_multipliers(lmis: &Lmis<'_>, prefix: &str) -> Multipliers {
+    Multipliers {
+        a: lmis.var(&format!("{prefix}_a")),
+        b: lmis.var(&format!("{prefix}_b")),
+        d: lmis.var(&format!("{prefix}_d")),
+    }
 }
 
 impl Ctx<'_> {
-    /// Q_ij of the decrease with the model error (Petersen's lemma): in
-    /// X = P^{-1} coordinates He(dA X + dB M_j) <= eps (a^2 + b^2) I +
-    /// eps^{-1} (X X + M_j' M_j) for every ||dA|| <= a, ||dB|| <= b (and with
-    /// saturation, |sat(u)| <= |u| bounds dB sat(u) the same way), so
-    /// `q` (state block first) becomes, by a Schur complement,
-    /// [[q + eps (a^2 + b^2) I, X, M_j'], [*, -eps I, 0], [*, *, -eps I]]
-    /// (a column left out when its bound is 0). Unchanged without a model error.
+    /// Q_ij of the decrease with the model error (Petersen's lemma), with the
+    /// decrease block's multipliers ([`Ctx::with_model_error_by`]).
     pub fn with_model_error(&self, j: usize, q: Expr) -> Result<Expr, LmiError> {
+        let eps = self.model_error.map(|me| me.eps).unwrap_or_default();
+        self.with_model_error_by(&eps, j, q, None)
+    }
+
+    /// A block `q` (state rows first) with the model error as norm-bounded
+    /// uncertainty under the multipliers `eps` (Petersen's lemma): in
+    /// X = P^{-1} coordinates He(dA X) <= eps_a a^2 I + eps_a^{-1} X X and
+    /// He(dB M_j) <= eps_b b^2 I + eps_b^{-1} M_j' M_j for every ||dA|| <= a,
+    /// ||dB|| <= b (and with saturation, |sat(u)| <= |u| bounds dB sat(u) the
+    /// same way), so `q` becomes, by a Schur complement,
+    /// [[q + (eps_a a^2 + eps_b b^2) I, X, M_j'], [*, -eps_a I, 0], [*, *, -eps_b I]]
+    /// (a column left out when its bound is 0). With `w_rows` (the first
+    /// row of the disturbance block in `q`) and ||dD|| <= d, the term
+    /// He(e_x dD e_w') <= eps_d d^2 e_x e_x' + eps_d^{-1} e_w e_w' adds
+    /// eps_d d^2 to the state diagonal and the column e_w. Unchanged without
+    /// a model error.
+    pub fn with_model_error_by(
+        &self,
+        eps: &Multipliers,
+        j: usize,
+        q: Expr,
+        w_rows: Option<usize>,
+    ) -> Result<Expr, LmiError> {
         let Some(me) = self.model_error else {
             return Ok(q);
         };
         let (n, m) = (self.model.n, self.model.m);
         let k = q.shape().0;
-        let pad = |e: Expr| -> Result<Expr, LmiError> {
+        let pad = |e: Expr, at: usize| -> Result<Expr, LmiError> {
             let (h, w) = e.shape();
-            if h == k {
+            if at == 0 && h == k {
                 return Ok(e);
             }
-            Expr::blocks(vec![vec![Some(e)], vec![Some(Expr::zeros(k - h, w))]])
+            let mut rows = Vec::new();
+            if at > 0 {
+                rows.push(vec![Some(Expr::zeros(at, w))]);
+            }
+            rows.push(vec![Some(e)]);
+            if k > at + h {
+                rows.push(vec![Some(Expr::zeros(k - at - h, w))]);
+            }
+            Expr::blocks(rows)
         };
-        let diag = Expr::scaled(me.eps, &(DMatrix::identity(n, n) * (me.a2 + me.b2)))?;
-        let diag = if k == n {
-            diag
-        } else {
-            Expr::blocks(vec![
-                vec![Some(diag), None],
-                vec![None, Some(Expr::zeros(k - n, k - n))],
-            ])?
-        };
-        let mut grid: Vec<Vec<Option<Expr>>> = vec![vec![Some(q.add(diag)?)]];
-        let mut cols = Vec::new();
-        if me.a2 > 0.0 {
-            cols.push((pad(Expr::var(self.x))?, n));
+        // (multiplier, bound^2, column, its width)
+        let mut terms = Vec::new();
+        if let (Some(v), true) = (eps.a, me.a2 > 0.0) {
+            terms.push((v, me.a2, pad(Expr::var(self.x), 0)?, n));
         }
-        if me.b2 > 0.0 {
-            cols.push((pad(self.m[j].expr(self.x, m, n)?.transpose())?, m));
+        if let (Some(v), true) = (eps.b, me.b2 > 0.0) {
+            let col = pad(self.m[j].expr(self.x, m, n)?.transpose(), 0)?;
+            terms.push((v, me.b2, col, m));
         }
-        let size = cols.len() + 1;
+        if let (Some(v), Some(at), true) = (eps.d, w_rows, me.d2 > 0.0) {
+            let q_w = self.model.q;
+            terms.push((v, me.d2, pad(Expr::identity(q_w), at)?, q_w));
+        }
+        if terms.is_empty() {
+            return Ok(q);
+        }
+        let mut top = q;
+        for (v, bound2, _, _) in &terms {
+            let diag = Expr::scaled(*v, &(DMatrix::identity(n, n) * *bound2))?;
+            top = top.add(pad_square(diag, k)?)?;
+        }
+        let size = terms.len() + 1;
+        let mut grid: Vec<Vec<Option<Expr>>> = vec![vec![Some(top)]];
         grid[0].resize(size, None);
-        for (c, (col, width)) in cols.into_iter().enumerate() {
+        for (c, (v, _, col, width)) in terms.into_iter().enumerate() {
             grid[0][c + 1] = Some(col);
             let mut row = vec![None; size];
-            row[c + 1] = Some(Expr::scaled(me.eps, &(-DMatrix::identity(width, width)))?);
+            row[c + 1] = Some(Expr::scaled(v, &(-DMatrix::identity(width, width)))?);
             grid.push(row);
         }
         Expr::sym_blocks(grid)

@@ -22,8 +22,13 @@ pub mod names {
     pub const LOOP_GAMMA: &str = "gamma_tr";
     /// xi of the sampled loop's L-inf bound.
     pub const LOOP_XI: &str = "xi_tr";
-    /// The S-procedure multiplier of the model error (robust conditions).
+    /// The prefix of the model-error multipliers of the decrease block
+    /// (`eps_model_a`, `eps_model_b`: robust conditions).
     pub const MODEL_ERROR: &str = "eps_model";
+    /// The prefix of the model-error multipliers of the H-inf block.
+    pub const MODEL_ERROR_HINF: &str = "eps_model_hinf";
+    /// The prefix of the model-error multipliers of the L-inf decrease block.
+    pub const MODEL_ERROR_LINF: &str = "eps_model_linf";
 
     /// M_j = F_j X of rule `j` (0-based).
     pub fn gain_product(j: usize) -> String {

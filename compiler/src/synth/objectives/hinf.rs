@@ -21,10 +21,13 @@
 use crate::model::TsModel;
 use crate::synth::achieved::{Achieved, Quantity};
 use crate::synth::blocks::{scalar_times_identity, Channel};
-use crate::synth::objective::Sector;
-use crate::synth::objective::{bound_value, scalar, Bound, BuildError, Ctx, Lmis, Objective};
+use crate::synth::objective::{
+    bound_value, declare_model_error, model_error_multipliers, scalar, Bound, BuildError, Ctx,
+    Lmis, Objective, Sector,
+};
 use crate::synth::reduction::Values;
 use crate::synth::relaxation::Family;
+use crate::synth::solved::names;
 use nalgebra::DMatrix;
 use tsf_lang::spec::ObjectiveKind;
 use tsf_lmi::LmiError;
@@ -69,10 +72,11 @@ impl Objective for Hinf {
         true
     }
 
-    fn declare(&self, _model: &TsModel, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
+    fn declare(&self, model: &TsModel, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
         if !matches!(self.target, Bound::Fixed(_)) {
             lmis.scalar(G)?;
         }
+        declare_model_error(model, lmis, names::MODEL_ERROR_HINF, true)?;
         Ok(())
     }
 
@@ -85,8 +89,16 @@ impl Objective for Hinf {
             Bound::Fixed(gamma) => gamma * gamma,
             _ => 0.0,
         };
+        // With a model error: one Petersen multiplier for this block, the
+        // disturbance rows after the state's (and the dead zone's).
+        let robust = model_error_multipliers(lmis, names::MODEL_ERROR_HINF);
+        let w_rows = model.n + ctx.sector.as_ref().map_or(0, |_| model.m);
         let fam = Family {
-            name: "hinf".into(),
+            name: if ctx.model_error.is_some() {
+                "robust hinf".into()
+            } else {
+                "hinf".into()
+            },
             q: Box::new(|i, j| {
                 let mut rows = vec![
                     vec![
@@ -104,7 +116,7 @@ impl Objective for Hinf {
                 if let Some(sector) = &ctx.sector {
                     dead_zone(ctx, &ch, sector, (i, j), &mut rows)?;
                 }
-                Expr::sym_blocks(rows)
+                ctx.with_model_error_by(&robust, j, Expr::sym_blocks(rows)?, Some(w_rows))
             }),
         };
         lmis.impose(&fam)?;

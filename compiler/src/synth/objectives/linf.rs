@@ -8,9 +8,13 @@
 use crate::model::TsModel;
 use crate::synth::achieved::{Achieved, Quantity};
 use crate::synth::blocks::{scalar_times_identity, Channel};
-use crate::synth::objective::{bound_value, scalar, Bound, BuildError, Ctx, Lmis, Objective};
+use crate::synth::objective::{
+    bound_value, declare_model_error, model_error_multipliers, scalar, Bound, BuildError, Ctx,
+    Lmis, Objective,
+};
 use crate::synth::reduction::Values;
 use crate::synth::relaxation::Family;
+use crate::synth::solved::names;
 use tsf_lang::spec::ObjectiveKind;
 use tsf_lmi::{Expr, Relation};
 
@@ -100,13 +104,14 @@ impl Objective for Linf {
         })
     }
 
-    fn declare(&self, _model: &TsModel, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
+    fn declare(&self, model: &TsModel, lmis: &mut Lmis<'_>) -> Result<(), BuildError> {
         if !matches!(self.target, Bound::Fixed(_)) {
             lmis.scalar(GAMMA)?;
         }
         if self.xi.is_none() {
             lmis.scalar(XI)?;
         }
+        declare_model_error(model, lmis, names::MODEL_ERROR_LINF, true)?;
         Ok(())
     }
 
@@ -121,14 +126,24 @@ impl Objective for Linf {
             _ => 0.0,
         };
         let phi = self.phi;
+        // With a model error: one Petersen multiplier for the decrease block
+        // (the output-peak block has no A, B), the disturbance rows after
+        // the state's (and the dead zone's).
+        let robust = model_error_multipliers(lmis, names::MODEL_ERROR_LINF);
+        let w_rows = n + ctx.sector.as_ref().map_or(0, |_| model.m);
         let fam = Family {
-            name: "linf".into(),
+            name: if ctx.model_error.is_some() {
+                "robust linf".into()
+            } else {
+                "linf".into()
+            },
             q: Box::new(|i, j| {
                 let w = (
                     Expr::constant(&ch.d[i])?,
                     scalar_times_identity(xi, xi_fixed, q)?.scale(-1.0)?,
                 );
-                ctx.with_sector(i, j, ctx.upsilon(i, j, phi)?, Some(w))
+                let block = ctx.with_sector(i, j, ctx.upsilon(i, j, phi)?, Some(w))?;
+                ctx.with_model_error_by(&robust, j, block, Some(w_rows))
             }),
         };
         lmis.impose(&fam)?;

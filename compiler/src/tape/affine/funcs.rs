@@ -276,11 +276,22 @@ pub fn unary(f: Unary, x: &Affine, noise: &mut Noise) -> Form {
                 slope_err,
                 m2: 1.0 / 3.0 + EPS,
             };
-            let i = if lo > 0.0 && hi < PI || hi < 0.0 && lo > -PI {
+            // With `tight_ranges` (a range check, not a correlated bound):
+            // the narrowest interval of the straddling and touching cases.
+            let tight = noise.tight_ranges;
+            let i = if (lo > 0.0 || tight && lo == 0.0) && hi < PI
+                || (hi < 0.0 || tight && hi == 0.0) && lo > -PI
+            {
                 // Monotone on either side of 0 within (-pi, pi).
                 let (a, ea) = sinc_value(lo);
                 let (b, eb) = sinc_value(hi);
                 Affine::interval(a.min(b) - ea.max(eb), a.max(b) + ea.max(eb), noise)
+            } else if tight && lo > -PI && hi < PI {
+                // Straddles 0 within (-pi, pi): sinc decreases in |x| there,
+                // its maximum is sinc(0) = 1.
+                let (a, ea) = sinc_value(lo);
+                let (b, eb) = sinc_value(hi);
+                Affine::interval(a.min(b) - ea.max(eb), 1.0, noise)
             } else {
                 Affine::interval(SINC_MIN, 1.0, noise)
             };

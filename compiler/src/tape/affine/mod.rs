@@ -46,6 +46,9 @@ pub struct Noise {
     /// was clipped to it (`sqrt` of a range reaching below 0): the enclosure
     /// then holds where the expression is real.
     pub clipped: bool,
+    /// Prefer the narrowest range over correlation where a function has
+    /// both (sinc near 0): for range checks, whose result is an interval.
+    pub tight_ranges: bool,
 }
 
 impl Noise {
@@ -55,6 +58,7 @@ impl Noise {
             next: first,
             first,
             clipped: false,
+            tight_ranges: false,
         }
     }
 
