@@ -16,8 +16,8 @@
 use super::degree_rounding::{gamma, normalized_weight_error, weight_relative_error};
 use super::{loop_margins, margins_of, summarize, Values};
 use crate::model::TsModel;
-use crate::synth::solved::Solved;
 use crate::synth::build::Built;
+use crate::synth::solved::Solved;
 use crate::synth::{build, Design, SynthError};
 use nalgebra::DMatrix;
 use serde::Serialize;
