@@ -191,7 +191,8 @@ pub(super) fn check(
                     },
                     (None, None) => continue,
                 };
-                suspicious |= exact.iter().any(|v| !v.is_finite());
+                // (The compiled outputs were all tested above.)
+                suspicious |= env.is_some() && exact.iter().any(|v| !v.is_finite());
                 let rel = blend_distance(&h, locals, exact, shape, &mut blend) / scales[k];
                 for (row, &i) in worst.profile.iter_mut().zip(&idx) {
                     row[i] = row[i].max(rel);
