@@ -301,8 +301,13 @@ fn compile(
         Ok(f) => f,
         Err(e) => return fail(tsfc::Error::usage(format!("error: {}", e.message))),
     };
-    eprint!("{}", front.render(color));
+    // The blend-versus-A(x) warning waits for the plant claim: a claim bounds
+    // that error rigorously and replaces it (docs/language.md, "The plant claim").
+    let mismatch = tsfc::model::is_mismatch_warning;
+    eprint!("{}", front.render_only(color, |d| !mismatch(d)));
+    let held = front.render_only(color, mismatch);
     if front.checked.model.is_none() {
+        eprint!("{held}");
         return ExitCode::from(exit::SPEC);
     }
     let spec_emit = front
@@ -312,6 +317,7 @@ fn compile(
         .map_or_else(Vec::new, |m| m.spec.emit.clone());
     let targets = emit_targets(emit.as_deref(), &spec_emit);
     if let Some(done) = adaptive::compile(&front, out, &targets) {
+        eprint!("{held}");
         return print_adaptive(done);
     }
     let run = match front.compile(&tsfc::synth::Settings::default()) {
@@ -358,10 +364,21 @@ fn compile(
         eprintln!("error: cannot write the outputs: {e}");
         return ExitCode::from(exit::IO);
     }
+    if run.compiled.report.plant.claim.is_none() {
+        eprint!("{held}");
+    }
     eprint!(
         "{}",
         tsfc::driver::summary::summary(&run.model, &run.compiled, &report_path)
     );
+    if let (Some(_), Some(c)) = (&run.compiled.report.plant.claim, &run.model.consistency) {
+        if !held.is_empty() {
+            eprintln!(
+                "  note                 {}; the plant claim bounds it on its region",
+                c.sentence()
+            );
+        }
+    }
     for (path, _) in files.iter().skip(1) {
         eprintln!("  wrote                {}", path.display());
     }

@@ -14,6 +14,7 @@ use crate::util::error::Error;
 use crate::util::hash::sha256_hex;
 use std::path::Path;
 use tsf_lang::spec::Emit;
+use tsf_lang::Diagnostic;
 
 /// A spec read and checked.
 #[derive(Debug)]
@@ -60,12 +61,22 @@ impl Front {
 
     /// The diagnostics, rendered for a terminal.
     pub fn render(&self, color: bool) -> String {
-        tsf_lang::diag::render(
-            &self.source.name,
-            &self.source.text,
-            &self.checked.diagnostics,
-            color,
-        )
+        self.render_only(color, |_| true)
+    }
+
+    /// The diagnostics `keep` selects, rendered.
+    pub fn render_only(&self, color: bool, keep: impl Fn(&Diagnostic) -> bool) -> String {
+        let kept: Vec<Diagnostic> = self
+            .checked
+            .diagnostics
+            .iter()
+            .filter(|d| keep(d))
+            .cloned()
+            .collect();
+        if kept.is_empty() {
+            return String::new();
+        }
+        tsf_lang::diag::render(&self.source.name, &self.source.text, &kept, color)
     }
 
     /// Synthesizes, certifies and reports (a spec with errors is a spec error
@@ -95,7 +106,21 @@ impl Front {
             bound: crate::driver::plant::production_bound(),
             region: None,
         };
-        let compiled = crate::driver::plant::compile(&model, info, settings, front_times, request);
+        let mut compiled =
+            crate::driver::plant::compile(&model, info, settings, front_times, request);
+        // Without a plant claim, the sampled mismatch is the plant section's note.
+        if let (None, Some(c)) = (&compiled.report.plant.claim, &model.consistency) {
+            let said = compiled.report.plant.note.as_ref();
+            if c.worst > crate::model::MISMATCH_TOLERANCE
+                && !said.is_some_and(|n| n.contains("on a grid of"))
+            {
+                let note = &mut compiled.report.plant.note;
+                *note = Some(match note.take() {
+                    Some(n) => format!("{n}; {}", c.sentence()),
+                    None => c.sentence(),
+                });
+            }
+        }
         Ok(Run {
             source,
             model,

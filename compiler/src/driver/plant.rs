@@ -214,21 +214,12 @@ pub fn compile(
         ),
     };
     if explicit.is_some() {
-        let mut failed = first.unwrap_or_else(|| {
+        let failed = first.unwrap_or_else(|| {
             let mut c = nominal();
             c.report.plant = without_claim(model, &r0, None, None, why.clone());
             c
         });
-        let message = format!("plant claim refused: {why}; {largest}");
-        failed.status = Status::Refused;
-        failed.report.status = "refused";
-        failed.report.schema = schema_id("failed-report");
-        failed.report.diagnosis = Some(Diagnosis {
-            message: message.clone(),
-            achievable: Vec::new(),
-        });
-        failed.report.plant.note = Some(message);
-        return failed;
+        return refused(failed, format!("plant claim refused: {why}; {largest}"));
     }
     match best {
         Some(c) => c,
@@ -248,6 +239,20 @@ pub fn compile(
             c
         }
     }
+}
+
+/// `failed` as the refusal of an explicit region: status, failed-report
+/// schema, and `message` as its diagnosis and plant note.
+fn refused(mut failed: Compiled, message: String) -> Compiled {
+    failed.status = Status::Refused;
+    failed.report.status = "refused";
+    failed.report.schema = schema_id("failed-report");
+    failed.report.diagnosis = Some(Diagnosis {
+        message: message.clone(),
+        achievable: Vec::new(),
+    });
+    failed.report.plant.note = Some(message);
+    failed
 }
 
 /// The disturbance gain the spec minimizes (H-inf or L-inf with no bound),

@@ -22,6 +22,15 @@ use tsf_runtime::{Rule, Term};
 /// `||sum_i h_i M_i - M(x)||_F / max_i ||M_i||_F` over the grid, M = A, B.
 pub const MISMATCH_TOLERANCE: f64 = 0.25;
 
+/// How the mismatch warning begins (so the driver can recognize it: the
+/// plant claim takes its place when one is made).
+const MISMATCH_HEADLINE: &str = "the rules blend a model that differs from";
+
+/// Whether `d` is the model stage's mismatch warning.
+pub fn is_mismatch_warning(d: &Diagnostic) -> bool {
+    !d.is_error() && d.message.starts_with(MISMATCH_HEADLINE)
+}
+
 /// Most states evaluated (the grid per varying component shrinks to fit).
 pub const MAX_POINTS: usize = 20_000;
 
@@ -48,6 +57,25 @@ pub struct Consistency {
     /// mismatch over the compared states with x_k at that value (the maximum
     /// over the other components; 0 where no state was compared).
     pub profile: Vec<Vec<f64>>,
+}
+
+impl Consistency {
+    /// One sentence of the worst sampled mismatch, e.g. "the rules' blend
+    /// differs from A(x) by 32% at x = [-1, 0] (the largest on a grid of 441 states)".
+    pub fn sentence(&self) -> String {
+        let x = self
+            .at
+            .iter()
+            .map(|v| format!("{v:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!(
+            "the rules' blend differs from {}(x) by {:.0}% at x = [{x}] (the largest on a grid of {} states)",
+            self.matrix,
+            100.0 * self.worst,
+            self.points
+        )
+    }
 }
 
 /// Grid bounds: from the smallest to the largest operating-point coordinate,
@@ -421,7 +449,7 @@ fn warning(
     let mut d = Diagnostic::warning(
         span,
         format!(
-            "the rules blend a model that differs from {}(x) by {:.0}% at x = [{x}]; the certificate covers the blended model, not {}(x)",
+            "{MISMATCH_HEADLINE} {}(x) by {:.0}% at x = [{x}]; the certificate covers the blended model, not {}(x)",
             c.matrix,
             100.0 * c.worst,
             c.matrix

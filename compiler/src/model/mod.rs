@@ -14,7 +14,7 @@ pub mod plant_error;
 mod premise;
 pub mod region;
 
-pub use consistency::{Consistency, MISMATCH_TOLERANCE};
+pub use consistency::{is_mismatch_warning, Consistency, MISMATCH_TOLERANCE};
 pub use coverage::{check_coverage, Coverage};
 pub use premise::{membership, premise_values, rule_weight, PremiseLayout, PremiseSlot, TermSpec};
 
