@@ -308,7 +308,14 @@ mod tests {
 
     #[test]
     fn packed_keys_keep_the_order_and_the_keys() {
-        let keys = [(0, 0, 0), (0, 0, 7), (1, 0, 3), (1, 1, 0), (5, 2, 1 << 40), (5, 3, 0)];
+        let keys = [
+            (0, 0, 0),
+            (0, 0, 7),
+            (1, 0, 3),
+            (1, 1, 0),
+            (5, 2, 1 << 40),
+            (5, 3, 0),
+        ];
         for w in keys.windows(2) {
             assert!(super::pack(w[0].0, w[0].1, w[0].2) < super::pack(w[1].0, w[1].1, w[1].2));
         }
