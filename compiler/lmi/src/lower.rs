@@ -86,6 +86,21 @@ fn merge<K: Ord + Copy, V: Copy>(mut items: Vec<(K, V)>, add: impl Fn(V, V) -> V
     out
 }
 
+/// The key `(col, row, unknown)` as one integer of the same order (`col`
+/// and `row` below 2^32).
+fn pack(col: usize, row: usize, unknown: usize) -> u128 {
+    ((col as u128) << 96) | ((row as u128) << 64) | unknown as u128
+}
+
+/// The key [`pack`] packed.
+fn unpack(k: u128) -> (usize, usize, usize) {
+    (
+        (k >> 96) as usize,
+        ((k >> 64) & 0xffff_ffff) as usize,
+        (k & u128::from(u64::MAX)) as usize,
+    )
+}
+
 /// Lowers `sign · expr ⪰ margin · I`, checking symmetry coefficient by coefficient.
 pub(crate) fn lower_lmi(
     name: &str,
@@ -102,7 +117,21 @@ pub(crate) fn lower_lmi(
         let halves = [if i <= j { c } else { 0.0 }, if i >= j { c } else { 0.0 }];
         items.push(((i.max(j), i.min(j), u), halves));
     });
-    let merged = merge(items, |x, y| [x[0] + y[0], x[1] + y[1]]);
+    let add = |x: [f64; 2], y: [f64; 2]| [x[0] + y[0], x[1] + y[1]];
+    let merged = if u32::try_from(n).is_ok() {
+        // The same order, keys and sums with the key packed into one
+        // integer (cheaper to compare and move while sorting).
+        let packed = items
+            .into_iter()
+            .map(|((j, i, u), h)| (pack(j, i, u), h))
+            .collect();
+        merge(packed, add)
+            .into_iter()
+            .map(|(k, h)| (unpack(k), h))
+            .collect()
+    } else {
+        merge(items, add)
+    };
 
     let c0 = expr.constant_part();
     let upper_pairs = (0..n).flat_map(|j| (0..=j).map(move |i| (i, j)));
@@ -275,6 +304,24 @@ mod tests {
         assert_eq!(program.p.nnz(), 0);
         let rows: usize = program.cones.iter().map(|c| c.dim()).sum();
         assert_eq!(rows, program.b.len());
+    }
+
+    #[test]
+    fn packed_keys_keep_the_order_and_the_keys() {
+        let keys = [
+            (0, 0, 0),
+            (0, 0, 7),
+            (1, 0, 3),
+            (1, 1, 0),
+            (5, 2, 1 << 40),
+            (5, 3, 0),
+        ];
+        for w in keys.windows(2) {
+            assert!(super::pack(w[0].0, w[0].1, w[0].2) < super::pack(w[1].0, w[1].1, w[1].2));
+        }
+        for k in keys {
+            assert_eq!(super::unpack(super::pack(k.0, k.1, k.2)), k);
+        }
     }
 
     #[test]

@@ -160,7 +160,7 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
     lmis.extend(output::margins(model, design)?);
     let mut cert = summarize(lmis);
     if cert.ok {
-        let stored = stored::check(model, design)?;
+        let stored = stored::check(model, design, &built)?;
         if !stored.certified {
             cert.ok = false;
             cert.worst = stored.worst_lmi.clone();

@@ -16,6 +16,7 @@
 use super::degree_rounding::{gamma, normalized_weight_error, weight_relative_error};
 use super::{loop_margins, margins_of, summarize, Values};
 use crate::model::TsModel;
+use crate::synth::build::Built;
 use crate::synth::solved::Solved;
 use crate::synth::{build, Design, SynthError};
 use nalgebra::DMatrix;
@@ -154,8 +155,14 @@ fn stored_model(model: &TsModel, precision: Precision) -> TsModel {
 }
 
 /// Re-checks every LMI of the certificate of `design` with the stored
-/// quantities, and the membership bound.
-pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthError> {
+/// quantities, and the membership bound. `certified` is the problem the
+/// certificate built from `model` and the design's plan: in f64 every stored
+/// quantity equals the solved one, so it is the same problem and is reused.
+pub fn check(
+    model: &TsModel,
+    design: &Design,
+    certified: &Built,
+) -> Result<StoredPrecision, SynthError> {
     let precision = model.spec.precision;
     let gains: Vec<DMatrix<f64>> = design
         .gains
@@ -174,13 +181,20 @@ pub fn check(model: &TsModel, design: &Design) -> Result<StoredPrecision, SynthE
     if let Some(s) = plan.saturation_mut() {
         s.levels = s.levels.iter().map(|v| stored(*v, precision)).collect();
     }
-    let built = build(
-        &stored_model,
-        &plan,
-        model.spec.relaxation.node,
-        design.eps,
-        false,
-    )?;
+    let rebuilt;
+    let built = match precision {
+        Precision::F64 => certified,
+        Precision::F32 => {
+            rebuilt = build(
+                &stored_model,
+                &plan,
+                model.spec.relaxation.node,
+                design.eps,
+                false,
+            )?;
+            &rebuilt
+        }
+    };
     let x_value = std::cell::RefCell::new(None);
     let substitute_gains = |values: &mut Values| {
         let x = values.x().cloned();

@@ -8,7 +8,7 @@
 //! where a premise or A(x), B(x) is not finite is an error (`finite.rs`).
 
 use super::finite;
-use super::premise::{premise_values, rule_weight, PremiseLayout, TermSpec};
+use super::premise::{premise_values, runtime_terms, PremiseLayout, TermSpec};
 use super::LocalModel;
 use crate::tape::lower::{Lowerer, Scope, Unsupported};
 use crate::tape::{Builder, Id, Registers, Tape};
@@ -16,6 +16,7 @@ use nalgebra::DMatrix;
 use tsf_lang::eval::Mode;
 use tsf_lang::spec::{ModelMatrix, Spec};
 use tsf_lang::Diagnostic;
+use tsf_runtime::{Rule, Term};
 
 /// Relative mismatch above which the model stage warns (25 %): the worst
 /// `||sum_i h_i M_i - M(x)||_F / max_i ||M_i||_F` over the grid, M = A, B.
@@ -174,6 +175,7 @@ pub(super) fn check(
                 .fold(f64::MIN_POSITIVE, f64::max)
         })
         .collect();
+    let terms = runtime_terms(terms);
     let mut x = vec![0.0; grid.len()];
     let mut h = vec![0.0; rules.len()];
     let mut blend = Vec::new();
@@ -187,12 +189,12 @@ pub(super) fn check(
         // faults: a division by 0) is diagnosed by the interpreter.
         let (fired, mut suspicious) = match (fast, &compiled) {
             (true, Some(c)) => (
-                normalized_weights(c.premises(), &ranges, terms, &mut h),
+                normalized_weights(c.premises(), &ranges, &terms, &mut h),
                 c.out.iter().any(|v| !v.is_finite()),
             ),
             _ => match premise_values(spec, &x) {
                 Ok(z) => (
-                    normalized_weights(&z, &ranges, terms, &mut h),
+                    normalized_weights(&z, &ranges, &terms, &mut h),
                     z.iter().any(|v| !v.is_finite()),
                 ),
                 Err(_) => (false, true),
@@ -217,7 +219,8 @@ pub(super) fn check(
                     },
                     (None, None) => continue,
                 };
-                suspicious |= exact.iter().any(|v| !v.is_finite());
+                // (The compiled outputs were all tested above.)
+                suspicious |= env.is_some() && exact.iter().any(|v| !v.is_finite());
                 let rel = blend_distance(&h, locals, exact, shape, &mut blend) / scales[k];
                 for (row, &i) in worst.profile.iter_mut().zip(&idx) {
                     row[i] = row[i].max(rel);
@@ -374,7 +377,13 @@ fn blend_distance(
 ) -> f64 {
     blend.clear();
     blend.resize(exact.len(), 0.0);
-    for (hi, l) in h.iter().zip(locals).filter(|(_, l)| l.shape() == shape) {
+    // A rule of weight 0 adds 0 * v: at most a -0 becomes +0, whose
+    // squared difference is the same, so it is left out.
+    for (hi, l) in h
+        .iter()
+        .zip(locals)
+        .filter(|(hi, l)| **hi != 0.0 && l.shape() == shape)
+    {
         for (b, v) in blend.iter_mut().zip(l.as_slice()) {
             *b += hi * v;
         }
@@ -387,12 +396,13 @@ fn blend_distance(
         .sqrt()
 }
 
-/// Normalized rule weights at premise values `z` into `h`: `true` if the
-/// values lie in the declared ranges and some rule fires.
+/// Normalized rule weights at premise values `z` into `h` (`terms`: each
+/// rule's, from [`runtime_terms`]): `true` if the values lie in the declared
+/// ranges and some rule fires.
 pub(super) fn normalized_weights(
     z: &[f64],
     ranges: &[(f64, f64)],
-    terms: &[Vec<TermSpec>],
+    terms: &[Vec<Term<'_, f64>>],
     h: &mut [f64],
 ) -> bool {
     let inside = z.len() == ranges.len()
@@ -404,7 +414,7 @@ pub(super) fn normalized_weights(
     }
     let mut total = 0.0;
     for (w, t) in h.iter_mut().zip(terms) {
-        *w = rule_weight(t, z);
+        *w = Rule::new(t).weight(z);
         total += *w;
     }
     if !(total > 0.0 && total.is_finite()) {

@@ -21,6 +21,7 @@ mod blend;
 pub mod premise_range;
 
 use super::consistency::{normalized_weights, StateGraph};
+use super::premise::runtime_terms;
 use super::TsModel;
 use crate::tape::affine;
 use blend::{Outcome, Problem};
@@ -381,8 +382,10 @@ fn finish(
 }
 
 /// The float model error at sub-box centres (a lower bound of the maximum).
-struct Sampler {
+struct Sampler<'a> {
     tape: crate::tape::Tape,
+    /// The rules' terms in the runtime's form.
+    rules: Vec<Vec<tsf_runtime::Term<'a, f64>>>,
     regs: Box<crate::tape::Registers>,
     out: Vec<f64>,
     h: Vec<f64>,
@@ -390,9 +393,10 @@ struct Sampler {
     max: Vec<f64>,
 }
 
-impl Sampler {
-    fn new(problem: &Problem, tape: crate::tape::Tape) -> Self {
+impl<'a> Sampler<'a> {
+    fn new(problem: &Problem<'a>, tape: crate::tape::Tape) -> Self {
         Sampler {
+            rules: runtime_terms(problem.terms),
             regs: tape.registers(),
             out: vec![0.0; problem.outputs.len()],
             h: vec![0.0; problem.terms.len()],
@@ -410,7 +414,7 @@ impl Sampler {
         }
         self.tape.read(&self.regs, &mut self.out);
         let z = &self.out[..problem.nz];
-        if !normalized_weights(z, &problem.ranges, problem.terms, &mut self.h) {
+        if !normalized_weights(z, &problem.ranges, &self.rules, &mut self.h) {
             return;
         }
         let mut at = problem.nz;

@@ -113,6 +113,15 @@ pub fn rule_weight(terms: &[TermSpec], z: &[f64]) -> f64 {
     Rule::new(&rt).weight(z)
 }
 
+/// Every rule's terms in the runtime's form, converted once for loops over
+/// many states ([`rule_weight`] converts them at each call).
+pub fn runtime_terms(terms: &[Vec<TermSpec>]) -> Vec<Vec<Term<'_, f64>>> {
+    terms
+        .iter()
+        .map(|t| t.iter().map(TermSpec::runtime).collect())
+        .collect()
+}
+
 /// Lays out z and fixes each premise's range and `about` width.
 pub(super) fn layout(spec: &Spec, diags: &mut Vec<Diagnostic>) -> PremiseLayout {
     let mut slots = Vec::new();
