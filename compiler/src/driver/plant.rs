@@ -16,7 +16,9 @@ use crate::model::error_bound::premise_range::{PremiseRange, MAX_PREMISE_BOXES};
 use crate::model::error_bound::{self, BoundLimits};
 use crate::model::plant_error::{default_region, nominal_slack, scaled, PlantError, StateBox};
 use crate::model::TsModel;
-use crate::report::plant::{not_covered, region_words, with_claim, without_claim, Claimed};
+use crate::report::plant::{
+    not_covered, region_words, with_claim, without_claim, Claimed, SampledClaim,
+};
 use crate::report::{schema_id, Diagnosis, SpecInfo};
 use crate::synth::Settings;
 use std::time::Duration;
@@ -145,7 +147,11 @@ pub fn compile(
         };
         // The nominal design first: when its decrease conditions absorb the
         // error (no saturation term), it ships unchanged; else a robust design.
-        if model.spec.saturation.is_none() && !disturbance_bounds(model) {
+        let continuous = matches!(
+            model.spec.trigger.as_ref().map(|t| &t.node),
+            None | Some(tsf_lang::spec::Trigger::Continuous)
+        );
+        if continuous && model.spec.saturation.is_none() && !disturbance_bounds(model) {
             let c = nominal_once.get_or_init(nominal);
             if let Some(sec) = absorbed(model, c, &region, &pe, shrink_note(s)) {
                 let mut c = compile_model(model, info.clone(), settings, front);
@@ -166,6 +172,7 @@ pub fn compile(
                     objectives: &c.report.objectives,
                     saturation_level: model.spec.saturation.as_ref().map(|_| 1.0),
                     note: shrink_note(s),
+                    sampled: sampled_claim(d),
                 },
             ),
             _ => None,
@@ -250,6 +257,38 @@ pub fn compile(
     }
 }
 
+/// The sampled or event-triggered loop's certificate as the claim reads it
+/// (`None` for the continuous loop).
+fn sampled_claim(d: &crate::synth::Design) -> Option<SampledClaim<'_>> {
+    use crate::synth::loops::LoopDesign;
+    let words = |(lo, hi): (f64, f64)| match lo == hi {
+        true => format!("sampled every {hi} s, zero-order hold"),
+        false => format!("sampled at any intervals in [{lo}, {hi}] s, zero-order hold"),
+    };
+    match &d.loop_design {
+        LoopDesign::EverySample(s) => Some(SampledClaim {
+            p: &s.p,
+            level: match s.plan.levels.is_empty() {
+                true => f64::INFINITY,
+                false => s.plan.region_level(),
+            },
+            law: words(s.plan.sampling),
+            linf: None,
+        }),
+        LoopDesign::Event(t) => Some(SampledClaim {
+            p: &t.p,
+            level: t.level(),
+            law: format!(
+                "{}, event-triggered with threshold nu(t_k) <= {}",
+                words(t.plan.sampling),
+                t.plan.nu
+            ),
+            linf: Some((t.gamma, t.xi, t.plan.phi)),
+        }),
+        _ => None,
+    }
+}
+
 /// The disturbance gain the spec minimizes (H-inf or L-inf with no bound),
 /// named for the report's note; `None` when it minimizes none.
 fn minimized_gain(model: &TsModel) -> Option<&'static str> {
@@ -293,6 +332,7 @@ fn absorbed(
             objectives: &c.report.objectives,
             saturation_level: None,
             note: Some(note),
+            sampled: None,
         },
     )
 }

@@ -21,6 +21,7 @@ mod design;
 mod diagnose;
 pub mod experimental;
 pub mod given;
+pub mod loop_error;
 pub mod loops;
 pub mod lyapunov;
 pub mod markov;

@@ -27,6 +27,7 @@ use super::objective::BuildError;
 use super::reduction::Reduction;
 use super::search::Runner;
 use super::solved::{names, Solved as _};
+use super::loop_error::{robust_block, LoopMultipliers};
 use super::vertices::{self, PlantVertex};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -130,6 +131,9 @@ pub(super) struct LoopVars<'a> {
     pub gains: Vec<Factor<'a>>,
     /// G_j per controller rule.
     pub sector: Vec<Factor<'a>>,
+    /// The model-error multipliers of Lambda_1 and Lambda_2 (declared by
+    /// [`impose`] when the plan carries a model error).
+    pub robust: [LoopMultipliers; 2],
 }
 
 impl<'a> LoopVars<'a> {
@@ -246,6 +250,32 @@ fn lambda(
         let etau = pick(q, at, k);
         xi_block = xi_block.sub(Expr::scaled(xi, &(etau.transpose() * &etau))?)?;
     }
+    // With a model error the gains must be known (N_b is data).
+    let robust = match (plan.model_error.is_zero(), f) {
+        (true, _) => None,
+        (false, Factor::Val(f)) => Some(Selectors {
+            ex: &ex,
+            phi: &phi_c + b * f * &xk,
+            sat_u: match lay.dz {
+                Some(at) => f * &xk - pick(m, at, k),
+                None => f * &xk,
+            },
+            tau: lay.tau.map(|(at, q)| pick(q, at, k)),
+        }),
+        (false, Factor::Var(_)) => {
+            return Err(LmiError::Variable {
+                what: "the loop's model-error blocks need known gains (not the co-design's gain step)".into(),
+            })
+        }
+    };
+    if let (Some(sel), 1) = (&robust, r) {
+        let y_phi = v.y.between(&id_n, &sel.phi)?.scale(h.sqrt())?;
+        let top = Expr::sym_blocks(vec![
+            vec![Some(xi_block), Some(y_phi.transpose())],
+            vec![None, Some(v.y.expr()?.scale(-1.0)?)],
+        ])?;
+        return robust_lambda(plan, v, top, sel, h, r);
+    }
     if r == 1 {
         if let Factor::Val(f) = f {
             let phi_m = &phi_c + b * f * &xk;
@@ -265,10 +295,62 @@ fn lambda(
         .add(Expr::product(&es.transpose(), v.l[1], &id_n)?)?
         .scale(h.sqrt())?;
     let (_, h_max) = plan.sampling;
-    Expr::sym_blocks(vec![
+    let top = Expr::sym_blocks(vec![
         vec![Some(xi_block), Some(col)],
         vec![None, Some(v.y.expr()?.scale(-(-plan.phi * h_max).exp())?)],
-    ])
+    ])?;
+    match &robust {
+        Some(sel) => robust_lambda(plan, v, top, sel, h, r),
+        None => Ok(top),
+    }
+}
+
+/// What the model-error terms of one pair read ([`robust_lambda`]).
+struct Selectors<'m> {
+    /// E_x: x(t) in psi.
+    ex: &'m DMatrix<f64>,
+    /// Phi of the pair (x' = Phi psi for the blend).
+    phi: DMatrix<f64>,
+    /// N_b = F_j x(t_k) - E_dz: the held, saturated input sat(u).
+    sat_u: DMatrix<f64>,
+    /// N_d = E_tau, with the L-inf channel.
+    tau: Option<DMatrix<f64>>,
+}
+
+/// Lambda_{ij r}(h) with the model error ([`super::loop_error`]): `top` is
+/// the block with the r = 1 term as its Schur complement [Xi, sqrt(h) Phi' Y;
+/// *, -Y] (r = 2: as in [`lambda`]), both of size k + n; one column G' per
+/// uncertain term with G' = [E_x' P; sqrt(h) Y] (r = 1) or [E_x' P; 0]
+/// (r = 2) and Ñ_t = [N_t, 0]: N_a = E_x, N_b = F_j x(t_k) - E_dz, N_d = E_tau.
+fn robust_lambda(
+    plan: &TriggerPlan,
+    v: &LoopVars<'_>,
+    top: Expr,
+    sel: &Selectors<'_>,
+    h: f64,
+    r: u8,
+) -> Result<Expr, LmiError> {
+    let (n, k) = sel.ex.shape();
+    let id_n = DMatrix::identity(n, n);
+    let lower = match r {
+        1 => v.y.expr()?.scale(h.sqrt())?,
+        _ => Expr::zeros(n, n),
+    };
+    let left = Expr::blocks(vec![
+        vec![Some(v.p.between(&sel.ex.transpose(), &id_n)?)],
+        vec![Some(lower)],
+    ])?;
+    let pad = |nt: &DMatrix<f64>| -> DMatrix<f64> {
+        let mut full = DMatrix::zeros(nt.nrows(), k + n);
+        full.columns_mut(0, k).copy_from(nt);
+        full
+    };
+    let right = [
+        Some(pad(sel.ex)),
+        Some(pad(&sel.sat_u)),
+        sel.tau.as_ref().map(pad),
+    ];
+    robust_block(top, left, right, &v.robust[usize::from(r - 1)], &plan.model_error)
 }
 
 /// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are
@@ -315,6 +397,7 @@ fn declare_trigger_step<'a>(
         xi: None,
         gains,
         sector,
+        robust: Default::default(),
     })
 }
 
@@ -349,6 +432,12 @@ pub(super) fn impose(
         (None, None)
     };
     vars.xi = xi;
+    if !plan.model_error.is_zero() {
+        vars.robust = [
+            plan.model_error.declare(&mut problem, 1)?,
+            plan.model_error.declare(&mut problem, 2)?,
+        ];
+    }
     let mut reductions = Vec::new();
     let mut nonstrict = Vec::new();
     for (name, f) in [
@@ -671,6 +760,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         c: out.c.clone(),
         g: out.g.columns(sig.offset, sig.len).into_owned(),
         region,
+        model_error: super::loop_error::LoopError::of(model),
     };
     // A region's vertex sets, checked before any SDP (too many is a refusal).
     vertices::describe(model, &plan).map_err(|e| match e {
@@ -731,6 +821,10 @@ pub fn scaled_plan(plan: &TriggerPlan, sigma: f64) -> TriggerPlan {
     let root = sigma.sqrt();
     TriggerPlan {
         d: plan.d.iter().map(|d| d * root).collect(),
+        model_error: super::loop_error::LoopError {
+            d: plan.model_error.d * root,
+            ..plan.model_error
+        },
         levels: plan.levels.iter().map(|u| u * root).collect(),
         c: &plan.c / root,
         region: plan.region.as_ref().map(|r| {

@@ -379,11 +379,23 @@ impl Cx {
             }
             Rule::plant_decl => ItemKind::PlantRegion(
                 it.map(|b| {
-                    let mut parts = b.into_inner();
+                    let mut parts = b.into_inner().peekable();
                     let name = self.ident(next(&mut parts, span)?);
+                    let index = match parts.next_if(|p| p.as_rule() == Rule::plant_index) {
+                        Some(i) => {
+                            let num = next(&mut i.into_inner(), span)?;
+                            Some(Spanned::new(self.number(&num)?, self.span(&num)))
+                        }
+                        None => None,
+                    };
                     let lo = self.expr(next(&mut parts, span)?)?;
                     let hi = self.expr(next(&mut parts, span)?)?;
-                    Ok((name, lo, hi))
+                    Ok(PlantBound {
+                        name,
+                        index,
+                        lo,
+                        hi,
+                    })
                 })
                 .collect::<PResult<_>>()?,
             ),
