@@ -13,10 +13,13 @@ use tsfc::report::SpecInfo;
 use tsfc::synth::loops::LoopDesign;
 use tsfc::synth::Settings;
 
-/// The textbook spec (rules at x1 = -2, 0, 2) sampled every 10 ms.
-fn sampled_textbook() -> TsModel {
+/// The textbook spec (rules at x1 = -r, 0, r; shipped with r = 2) sampled
+/// every 10 ms.
+fn sampled_textbook(r: f64) -> TsModel {
     let text = std::fs::read_to_string(common::spec_path("textbook_operating_points.tsf"))
         .expect("spec");
+    assert!(text.contains("const r = 2;"));
+    let text = text.replace("const r = 2;", &format!("const r = {r};"));
     common::model_of(
         "sampled.tsf",
         &format!("{text}trigger periodic {{ every = 0.01; }}\n"),
@@ -63,7 +66,8 @@ fn loop_values(c: &Compiled) -> Vec<(String, nalgebra::DMatrix<f64>)> {
 
 #[test]
 fn robust_sampled_blocks_are_nominal_at_zero_and_infeasible_for_a_large_error() {
-    let mut model = sampled_textbook();
+    // Rules at x1 = -0.5, 0, 0.5: the nominal gains certify every pair.
+    let mut model = sampled_textbook(0.5);
     let base = run(&model, PlantRequest::default());
     assert_eq!(base.status, Status::Certified, "{:?}", base.report.diagnosis);
     model.plant_error = Some(known(0.0));
@@ -102,7 +106,7 @@ fn robust_sampled_blocks_are_nominal_at_zero_and_infeasible_for_a_large_error() 
 
 #[test]
 fn a_sampled_loop_gets_a_plant_claim_on_a_shrunk_region() {
-    let model = sampled_textbook();
+    let model = sampled_textbook(2.0);
     let c = run(
         &model,
         PlantRequest {

@@ -300,3 +300,39 @@ fn the_interval_check_refuses_a_combination_that_is_not_definite() {
     let s = s_matrix(&z, &f);
     assert!(interval_cholesky_succeeds(&s).is_none());
 }
+
+#[test]
+fn no_region_carries_the_regional_claim_because_the_blend_at_rest_is_off() {
+    // At rest the rules' blend A_h(0) (R1 weighs 0.63; the others' q-rows carry
+    // sqrt(1 - 3 * 0.56^2) = 0.24) differs from A(0) = A_1 (rule R1 sits at the
+    // origin). Every region contains the origin, so every error bound is at
+    // least ||A(0) - A_h(0)||; the robust conditions must hold for every
+    // ||dA|| <= a, and a real rank-one dA of norm sigma_min(A_h(0) + B K)
+    // makes the closed loop singular (an eigenvalue at 0): no P, no
+    // multipliers satisfy them (continuous or sampled: at psi = [x; x; 0; 0; 0]
+    // Lambda_1 contains 2 x' P (A_h + B K + dA) x) once a >= sigma_min.
+    let model = crate::common::shipped("xu2020_regional.tsf");
+    let r1 = &model.rules[0];
+    assert_eq!(r1.at.as_deref(), Some(&[0.0; 6][..]), "R1 at the origin");
+    let mut h = vec![0.0; model.rules.len()];
+    assert!(tsfc::sim::adaptive::strengths(&model, &[0.0; 6], &mut h).expect("h"));
+    let a_h = model
+        .rules
+        .iter()
+        .zip(&h)
+        .fold(DMatrix::zeros(6, 6), |s, (r, hi)| s + &r.a * *hi);
+    let at_rest = (&r1.a - &a_h).singular_values().max();
+    let j = DMatrix::from_fn(3, 3, |r, c| J[r][c]);
+    let mut k = DMatrix::zeros(3, 6);
+    k.view_mut((0, 0), (3, 3)).copy_from(&(&j * -KW));
+    k.view_mut((0, 3), (3, 3)).copy_from(&(&j * -KQ));
+    let closed = &a_h + &r1.b * &k;
+    let radius = closed.singular_values().min();
+    println!("xu at rest: ||A(0) - A_h(0)|| = {at_rest:.6}, sigma_min(A_h(0) + B K) = {radius:.6}, h(0) = {h:.4?}");
+    assert!(at_rest > 1.2 * radius, "{at_rest} vs {radius}");
+    // The true plant at rest is stable with the gain: the obstacle is the
+    // unstructured bound of the blend's error, not the loop.
+    let true_loop = &r1.a + &r1.b * &k;
+    let eig = true_loop.complex_eigenvalues();
+    assert!(eig.iter().all(|e| e.re < 0.0), "{eig:?}");
+}
