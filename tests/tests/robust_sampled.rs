@@ -16,8 +16,8 @@ use tsfc::synth::Settings;
 /// The textbook spec (rules at x1 = -r, 0, r; shipped with r = 2) sampled
 /// every 10 ms.
 fn sampled_textbook(r: f64) -> TsModel {
-    let text = std::fs::read_to_string(common::spec_path("textbook_operating_points.tsf"))
-        .expect("spec");
+    let text =
+        std::fs::read_to_string(common::spec_path("textbook_operating_points.tsf")).expect("spec");
     assert!(text.contains("const r = 2;"));
     let text = text.replace("const r = 2;", &format!("const r = {r};"));
     common::model_of(
@@ -51,7 +51,13 @@ fn run(model: &TsModel, request: PlantRequest<'_>) -> Compiled {
         path: "sampled.tsf".into(),
         sha256: String::new(),
     };
-    let c = compile(model, info, &Settings::default(), Default::default(), request);
+    let c = compile(
+        model,
+        info,
+        &Settings::default(),
+        Default::default(),
+        request,
+    );
     common::schema::report_json(&c.report);
     c
 }
@@ -69,14 +75,24 @@ fn robust_sampled_blocks_are_nominal_at_zero_and_infeasible_for_a_large_error() 
     // Rules at x1 = -0.5, 0, 0.5: the nominal gains certify every pair.
     let mut model = sampled_textbook(0.5);
     let base = run(&model, PlantRequest::default());
-    assert_eq!(base.status, Status::Certified, "{:?}", base.report.diagnosis);
+    assert_eq!(
+        base.status,
+        Status::Certified,
+        "{:?}",
+        base.report.diagnosis
+    );
     model.plant_error = Some(known(0.0));
     let zero = run(&model, PlantRequest::default());
     assert_eq!(zero.status, Status::Certified);
     assert_eq!(loop_values(&zero), loop_values(&base), "bit for bit at 0");
     model.plant_error = Some(known(0.05));
     let small = run(&model, PlantRequest::default());
-    assert_eq!(small.status, Status::Certified, "{:?}", small.report.diagnosis);
+    assert_eq!(
+        small.status,
+        Status::Certified,
+        "{:?}",
+        small.report.diagnosis
+    );
     let values = loop_values(&small);
     for r in [1, 2] {
         let name = format!("trigger robust r={r} eps_a");
@@ -98,7 +114,12 @@ fn robust_sampled_blocks_are_nominal_at_zero_and_infeasible_for_a_large_error() 
             .max()
             .unwrap_or(0)
     };
-    assert!(size(&small) > size(&base), "{} vs {}", size(&small), size(&base));
+    assert!(
+        size(&small) > size(&base),
+        "{} vs {}",
+        size(&small),
+        size(&base)
+    );
     model.plant_error = Some(known(50.0));
     let large = run(&model, PlantRequest::default());
     assert_ne!(large.status, Status::Certified);
@@ -130,7 +151,10 @@ fn a_sampled_loop_gets_a_plant_claim_on_a_shrunk_region() {
     assert_eq!(p[0][0], s.p[(0, 0)]);
     let level = plant.level.expect("level");
     let extents = plant.extents.as_ref().expect("extents");
-    assert!(extents[0] <= hi.min(-lo) * (1.0 + 1e-12), "{extents:?} inside x1's bound");
+    assert!(
+        extents[0] <= hi.min(-lo) * (1.0 + 1e-12),
+        "{extents:?} inside x1's bound"
+    );
     assert!(level > 0.0);
 }
 
@@ -145,7 +169,14 @@ fn a_vector_state_s_plant_region_reaches_the_driver() {
     let inf = (f64::NEG_INFINITY, f64::INFINITY);
     assert_eq!(
         region,
-        &vec![(-0.01, 0.01), (-0.01, 0.01), (-0.01, 0.01), inf, inf, (-0.02, 0.03)]
+        &vec![
+            (-0.01, 0.01),
+            (-0.01, 0.01),
+            (-0.01, 0.01),
+            inf,
+            inf,
+            (-0.02, 0.03)
+        ]
     );
     let words = tsfc::report::plant::region_words(&model, region);
     assert_eq!(

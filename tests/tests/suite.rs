@@ -57,5 +57,5 @@ mod sweep;
 mod synthesis;
 mod tidy;
 mod transmit;
-mod xu_infeasible;
 mod xu_paper_evidence;
+mod xu_plant_claim;

@@ -76,7 +76,8 @@ pub fn not_covered(model: &TsModel) -> Option<String> {
         let law = crate::synth::loops::law_of(model).name();
         if !matches!(
             (&t.node, law),
-            (Trigger::Continuous, _) | (_, "every sample" | "jittered" | "event trigger (two-step)")
+            (Trigger::Continuous, _)
+                | (_, "every sample" | "jittered" | "event trigger (two-step)")
         ) {
             return Some(format!("the {law} loop (the robust conditions cover the continuous loop, the sampled loops that transmit every sample and the two-step event trigger)"));
         }

@@ -23,11 +23,11 @@ use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
 pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
+use super::loop_error::{robust_block, LoopMultipliers};
 use super::objective::BuildError;
 use super::reduction::Reduction;
 use super::search::Runner;
 use super::solved::{names, Solved as _};
-use super::loop_error::{robust_block, LoopMultipliers};
 use super::vertices::{self, PlantVertex};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -251,23 +251,24 @@ fn lambda(
         xi_block = xi_block.sub(Expr::scaled(xi, &(etau.transpose() * &etau))?)?;
     }
     // With a model error the gains must be known (N_b is data).
-    let robust = match (plan.model_error.is_zero(), f) {
-        (true, _) => None,
-        (false, Factor::Val(f)) => Some(Selectors {
-            ex: &ex,
-            phi: &phi_c + b * f * &xk,
-            sat_u: match lay.dz {
-                Some(at) => f * &xk - pick(m, at, k),
-                None => f * &xk,
-            },
-            tau: lay.tau.map(|(at, q)| pick(q, at, k)),
-        }),
-        (false, Factor::Var(_)) => {
-            return Err(LmiError::Variable {
-                what: "the loop's model-error blocks need known gains (not the co-design's gain step)".into(),
-            })
-        }
-    };
+    let robust =
+        match (plan.model_error.is_zero(), f) {
+            (true, _) => None,
+            (false, Factor::Val(f)) => Some(Selectors {
+                ex: &ex,
+                phi: &phi_c + b * f * &xk,
+                sat_u: match lay.dz {
+                    Some(at) => f * &xk - pick(m, at, k),
+                    None => f * &xk,
+                },
+                tau: lay.tau.map(|(at, q)| pick(q, at, k)),
+            }),
+            (false, Factor::Var(_)) => return Err(LmiError::Variable {
+                what:
+                    "the loop's model-error blocks need known gains (not the co-design's gain step)"
+                        .into(),
+            }),
+        };
     if let (Some(sel), 1) = (&robust, r) {
         let y_phi = v.y.between(&id_n, &sel.phi)?.scale(h.sqrt())?;
         let top = Expr::sym_blocks(vec![
@@ -350,7 +351,13 @@ fn robust_lambda(
         Some(pad(&sel.sat_u)),
         sel.tau.as_ref().map(pad),
     ];
-    robust_block(top, left, right, &v.robust[usize::from(r - 1)], &plan.model_error)
+    robust_block(
+        top,
+        left,
+        right,
+        &v.robust[usize::from(r - 1)],
+        &plan.model_error,
+    )
 }
 
 /// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are

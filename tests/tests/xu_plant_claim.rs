@@ -1,35 +1,32 @@
-//! Why no plant claim of the shipped Xu & Huang gains contains the paper's
-//! x(0) (issue 34): a certificate of infeasibility, re-checked in interval
-//! arithmetic (docs/language.md, "The plant claim", Xu & Huang).
+//! Why no plant claim of the regional Xu & Huang spec contains the paper's
+//! x(0) (issue 34), checked with exact arithmetic where it is a proof
+//! (docs/language.md, "The plant claim").
 //!
-//! The loop: the spacecraft of specs/xu2020_regional.tsf (its declared plant,
-//! A(x) x + B sat(u), which is the `dynamics` block: Euler's equation and the
-//! quaternion kinematics), the shipped gain u = -J (0.36 w + 0.0648 q)
-//! evaluated continuously, the actuator saturating at 2 N m. The states x_k:
-//! the simulated trajectory of that loop from the paper's x(0) (RK4, 10 ms,
-//! one state per second for 120 s). The question: is there P > 0 with
-//! 2 x_k' P f(x_k) <= 0 for every k, i.e. a quadratic V = x' P x that does not
-//! increase at any of those states? Clarabel finds multipliers lambda_k >= 0
-//! with M = sum_k lambda_k (x_k f_k' + f_k x_k') positive definite; then for
-//! every P > 0, sum_k lambda_k 2 x_k' P f_k = <P, M> > 0, so some k has
-//! 2 x_k' P f_k > 0: no such P exists (Farkas' lemma for the cone of PSD
-//! matrices). The test re-checks M > 0 with every f_k enclosed in interval
-//! arithmetic with outward rounding (each f64 operation widened by one ulp)
-//! and an interval Cholesky factorization of M.
+//! 1. No region at all carries the claim by the norm-bounded route: at rest
+//!    the rules' blend differs from A(0) by more than the stability radius
+//!    sigma_min(A_h(0) + B K) of the blended closed loop, so some admissible
+//!    dA makes it singular and the robust conditions (continuous or sampled)
+//!    have no solution, for any P and multipliers, on any region (every
+//!    region contains the origin).
+//! 2. The regional certificate keeps E(P, c) where the actuator is linear
+//!    (G = 0), and x(0) is far outside it.
+//! 3. Quadratic V is not the obstacle: the test the issue proposes, "is there
+//!    P > 0 with 2 x_k' P f(x_k) <= 0 at sampled states x_k" for the declared
+//!    plant A(x) x + B sat(u) with the shipped gain u = -J (0.36 w + 0.0648 q)
+//!    (the continuous loop, actuator saturating at 2 N m), has a solution for
+//!    the states of the simulated trajectory from x(0) (RK4, 10 ms, one per
+//!    second for 120 s) and the 3^6 grid of the smallest box symmetric about
+//!    0 that holds it: Clarabel finds P, and the test re-checks P > 0 and
+//!    every <P, S_k> <= 0 (S_k = z_k f_k' + f_k z_k') in interval arithmetic
+//!    with outward rounding (each f64 operation widened by one ulp, an
+//!    interval Cholesky factorization). So no Farkas certificate of
+//!    infeasibility exists for those states: a nonnegative combination
+//!    sum lambda_k S_k that is positive definite would give <P, M> > 0.
+//!    This is a statement about finitely many states, not a certificate of the
+//!    continuum (which would need the region of a claim and its bound).
 //!
-//! What it proves: no quadratic V (in x = [w; q], any P > 0) is non-increasing
-//! at all of these states along the continuous saturated loop of the
-//! declared plant with these gains. A certified set E(P, c) that contains
-//! x(0) and is invariant, with V decreasing on it, contains the trajectory
-//! from x(0), so no such certificate exists, to the accuracy of the
-//! simulation that placed the states on the trajectory (the infeasibility
-//! itself is exact for the listed states). What it does not prove: anything
-//! about other gains, about non-quadratic functions (a fuzzy or
-//! quaternion-based V), or about the sampled loop's looped functional, whose
-//! V1 may rise between samples (its LMIs at psi = [x; x; 0; 0; 0] give the
-//! continuous decrease of V1 only where the actuator is linear, which the
-//! regional certificate requires anyway and x(0) violates: |u_s(x(0))| is
-//! above 2 N m, checked below).
+//! The coordinates z = [J w; q] (angular momentum, quaternion vector) avoid
+//! J^-1; a quadratic V in z is one in x (z = diag(J, I) x).
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use tsf_lmi::{Expr, Problem, Relation, SolveSettings};
@@ -117,9 +114,7 @@ fn z_and_rate(x: &[f64; 6]) -> ([Iv; 6], [Iv; 6]) {
     let w = [Iv::pt(x[0]), Iv::pt(x[1]), Iv::pt(x[2])];
     let q = [Iv::pt(x[3]), Iv::pt(x[4]), Iv::pt(x[5])];
     let jv = |v: &[Iv; 3]| -> [Iv; 3] {
-        std::array::from_fn(|r| {
-            (0..3).fold(Iv::pt(0.0), |s, c| s.add(Iv::pt(J[r][c]).mul(v[c])))
-        })
+        std::array::from_fn(|r| (0..3).fold(Iv::pt(0.0), |s, c| s.add(Iv::pt(J[r][c]).mul(v[c]))))
     };
     let cross = |a: &[Iv; 3], b: &[Iv; 3]| -> [Iv; 3] {
         std::array::from_fn(|r| {
@@ -129,8 +124,7 @@ fn z_and_rate(x: &[f64; 6]) -> ([Iv; 6], [Iv; 6]) {
     };
     let p = jv(&w);
     // u = -J (KW w + KQ q), saturated per axis.
-    let inner: [Iv; 3] =
-        std::array::from_fn(|r| Iv::pt(KW).mul(w[r]).add(Iv::pt(KQ).mul(q[r])));
+    let inner: [Iv; 3] = std::array::from_fn(|r| Iv::pt(KW).mul(w[r]).add(Iv::pt(KQ).mul(q[r])));
     let ju = jv(&inner);
     let u: [Iv; 3] = std::array::from_fn(|r| Iv::pt(0.0).sub(ju[r]).sat(U_BAR));
     // p' = -w x (J w) + sat(u); q' = 0.5 (sqrt(1 - q'q) w + q x w).
@@ -172,7 +166,9 @@ fn trajectory(seconds: usize) -> Vec<[f64; 6]> {
             let k2 = field(&step(&x, &k1, dt / 2.0));
             let k3 = field(&step(&x, &k2, dt / 2.0));
             let k4 = field(&step(&x, &k3, dt));
-            x = std::array::from_fn(|i| x[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+            x = std::array::from_fn(|i| {
+                x[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            });
         }
         out.push(x);
     }
@@ -190,35 +186,56 @@ fn mid(m: &[Vec<Iv>]) -> DMatrix<f64> {
     DMatrix::from_fn(6, 6, |r, c| 0.5 * (m[r][c].lo + m[r][c].hi))
 }
 
-/// Multipliers lambda_k >= 0 with sum_k lambda_k S_k >= I, found by Clarabel
-/// on the midpoints of the S_k (`None` when the SDP finds none).
-fn multipliers(s: &[Vec<Vec<Iv>>]) -> Option<Vec<f64>> {
+/// P >= I with 2 z_k' P f_k <= -ALPHA |z_k|^2 at every state, found by
+/// Clarabel on the midpoints of the S_k (`None` when it finds none).
+fn decreasing_p(s: &[Vec<Vec<Iv>>], z: &[[Iv; 6]]) -> Option<DMatrix<f64>> {
     let mut problem = Problem::new();
-    let lambdas: Vec<_> = (0..s.len())
-        .map(|k| problem.scalar(&format!("lambda{k}")).expect("var"))
-        .collect();
-    let mut sum = Expr::constant(&DMatrix::zeros(6, 6)).expect("zero");
-    let mut total = Expr::constant(&DMatrix::zeros(1, 1)).expect("zero");
-    for (k, (l, sk)) in lambdas.iter().zip(s).enumerate() {
-        sum = sum.add(Expr::scaled(*l, &mid(sk)).expect("term")).expect("sum");
-        total = total.add(Expr::var(*l)).expect("sum");
+    let p = problem.symmetric("P", 6).expect("P");
+    let id = DMatrix::identity(6, 6);
+    let shifted = Expr::var(p)
+        .sub(Expr::constant(&id).expect("I"))
+        .expect("P - I");
+    problem.psd("P >= I", shifted, 0.0).expect("psd");
+    for (k, (sk, zk)) in s.iter().zip(z).enumerate() {
+        let e = Expr::product(&id, p, &mid(sk))
+            .and_then(Expr::trace)
+            .expect("<P, S_k>");
+        let norm2: f64 = zk.iter().map(|v| v.hi.abs().max(v.lo.abs()).powi(2)).sum();
         problem
-            .add_scalar(&format!("lambda{k} >= 0"), Expr::var(*l), Relation::Ge, 0.0)
-            .expect("lambda >= 0");
+            .add_scalar(&format!("decrease {k}"), e, Relation::Le, -ALPHA * norm2)
+            .expect("decrease");
     }
-    let shifted = sum
-        .sub(Expr::constant(&DMatrix::identity(6, 6)).expect("I"))
-        .expect("M - I");
-    problem.psd("M >= I", shifted, 0.0).expect("psd");
-    problem.minimize(total).expect("objective");
-    let sol = problem.solve(&SolveSettings::default()).expect("solver runs");
-    let values = sol.assignment().ok()?;
-    Some(
-        lambdas
-            .iter()
-            .map(|l| values.value(*l).expect("value")[(0, 0)].max(0.0))
-            .collect(),
-    )
+    problem
+        .minimize(Expr::var(p).trace().expect("tr"))
+        .expect("objective");
+    let sol = problem
+        .solve(&SolveSettings::default())
+        .expect("solver runs");
+    sol.value(p).ok().cloned()
+}
+
+/// The decrease margin asked of the SDP, so that the exact re-check of
+/// "<= 0" has room for the solver's tolerance.
+const ALPHA: f64 = 1e-6;
+
+/// The grid of `per` points per axis on the smallest box symmetric about 0
+/// holding `states` (E(P, c) is symmetric: an ellipsoid holding x holds -x).
+fn symmetric_grid(states: &[[f64; 6]], per: usize) -> Vec<[f64; 6]> {
+    let mut top = [0.0f64; 6];
+    for x in states {
+        for i in 0..6 {
+            top[i] = top[i].max(x[i].abs());
+        }
+    }
+    (0..per.pow(6))
+        .map(|mut k| {
+            std::array::from_fn(|i| {
+                let t = (k % per) as f64 / (per - 1) as f64;
+                k /= per;
+                top[i] * (2.0 * t - 1.0)
+            })
+        })
+        .collect()
 }
 
 /// Whether every symmetric matrix in the interval matrix `m` is positive
@@ -264,32 +281,47 @@ fn the_paper_s_x0_is_outside_the_linear_region_of_the_shipped_gain() {
 }
 
 #[test]
-fn no_quadratic_v_decreases_along_the_xu_trajectory_from_the_paper_s_x0() {
-    let states = trajectory(120);
-    let s: Vec<_> = states
+fn a_quadratic_v_decreases_at_every_sampled_state_so_no_farkas_certificate_exists() {
+    let path = trajectory(120);
+    let mut states = path.clone();
+    // The origin is left out (V' = 0 there for every P).
+    states.extend(
+        symmetric_grid(&path, 3)
+            .into_iter()
+            .filter(|x| x.iter().any(|v| *v != 0.0)),
+    );
+    let (z, s): (Vec<_>, Vec<_>) = states
         .iter()
         .map(|x| {
             let (z, f) = z_and_rate(x);
-            s_matrix(&z, &f)
+            (z, s_matrix(&z, &f))
         })
+        .unzip();
+    let p = decreasing_p(&s, &z).expect("Clarabel finds P");
+    // Exact re-check: P > 0 (interval Cholesky) and <P, S_k> <= 0 for every k,
+    // with S_k enclosed and the products and sums rounded outward.
+    let p_iv: Vec<Vec<Iv>> = (0..6)
+        .map(|r| (0..6).map(|c| Iv::pt(p[(r, c)])).collect())
         .collect();
-    let lambda = multipliers(&s).expect("Clarabel finds the multipliers");
-    // M = sum lambda_k S_k in interval arithmetic (lambda_k exact as stored).
-    let mut m = vec![vec![Iv::pt(0.0); 6]; 6];
-    for (l, sk) in lambda.iter().zip(&s) {
+    assert!(interval_cholesky_succeeds(&p_iv).is_some(), "P > 0");
+    let mut worst = f64::NEG_INFINITY;
+    for sk in &s {
+        let mut dot = Iv::pt(0.0);
         for r in 0..6 {
             for c in 0..6 {
-                m[r][c] = m[r][c].add(Iv::pt(*l).mul(sk[r][c]));
+                dot = dot.add(Iv::pt(p[(r, c)]).mul(sk[r][c]));
             }
         }
+        worst = worst.max(dot.hi);
     }
-    let pivot = interval_cholesky_succeeds(&m);
-    let used = lambda.iter().filter(|l| **l > 1e-9).count();
     println!(
-        "xu infeasibility: {} states, {used} with lambda > 1e-9, smallest Cholesky pivot {pivot:?}",
-        states.len()
+        "xu quadratic V: {} states ({} on the trajectory, {} on the symmetric box grid), max 2 z' P f <= {worst:.3e}, P diagonal {:?}",
+        states.len(),
+        path.len(),
+        states.len() - path.len(),
+        p.diagonal().as_slice()
     );
-    assert!(pivot.is_some_and(|p| p > 0.0), "M is positive definite");
+    assert!(worst <= 0.0, "V non-increasing at every state: {worst}");
 }
 
 #[test]
