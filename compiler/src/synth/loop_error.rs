@@ -44,6 +44,8 @@
 //! lies in the vertices' hull plus the ball the multipliers cover, wherever
 //! the bound holds (the plant claim keeps E(P, c) inside its region).
 
+use super::trigger::{LoopVars, TriggerPlan};
+use nalgebra::DMatrix;
 use tsf_lmi::{Expr, LmiError, Problem, Var};
 
 /// The bounds of the model error the loop's blocks carry (all 0: the nominal
@@ -101,7 +103,7 @@ impl LoopError {
 pub fn robust_block(
     block: Expr,
     left: Expr,
-    right: [Option<nalgebra::DMatrix<f64>>; 3],
+    right: [Option<DMatrix<f64>>; 3],
     eps: &LoopMultipliers,
     err: &LoopError,
 ) -> Result<Expr, LmiError> {
@@ -127,9 +129,63 @@ pub fn robust_block(
             c += 1;
             grid[0][c] = Some(left.clone());
             let mut row = vec![None; size];
-            row[c] = Some(Expr::scaled(*e, &(-nalgebra::DMatrix::identity(n, n)))?);
+            row[c] = Some(Expr::scaled(*e, &(-DMatrix::identity(n, n)))?);
             grid.push(row);
         }
     }
     Expr::sym_blocks(grid)
+}
+
+/// What the model-error terms of one pair read ([`robust_lambda`]).
+pub(super) struct Selectors<'m> {
+    /// E_x: x(t) in psi.
+    pub(super) ex: &'m DMatrix<f64>,
+    /// Phi of the pair (x' = Phi psi for the blend).
+    pub(super) phi: DMatrix<f64>,
+    /// N_b = F_j x(t_k) - E_dz: the held, saturated input sat(u).
+    pub(super) sat_u: DMatrix<f64>,
+    /// N_d = E_tau, with the L-inf channel.
+    pub(super) tau: Option<DMatrix<f64>>,
+}
+
+/// Lambda_{ij r}(h) with the model error ([`super::loop_error`]): `top` is
+/// the block with the r = 1 term as its Schur complement [Xi, sqrt(h) Phi' Y;
+/// *, -Y] (r = 2: as in the nominal Lambda_2), both of size k + n; one column G' per
+/// uncertain term with G' = [E_x' P; sqrt(h) Y] (r = 1) or [E_x' P; 0]
+/// (r = 2) and Ñ_t = [N_t, 0]: N_a = E_x, N_b = F_j x(t_k) - E_dz, N_d = E_tau.
+pub(super) fn robust_lambda(
+    plan: &TriggerPlan,
+    v: &LoopVars<'_>,
+    top: Expr,
+    sel: &Selectors<'_>,
+    h: f64,
+    r: u8,
+) -> Result<Expr, LmiError> {
+    let (n, k) = sel.ex.shape();
+    let id_n = DMatrix::identity(n, n);
+    let lower = match r {
+        1 => v.y.expr()?.scale(h.sqrt())?,
+        _ => Expr::zeros(n, n),
+    };
+    let left = Expr::blocks(vec![
+        vec![Some(v.p.between(&sel.ex.transpose(), &id_n)?)],
+        vec![Some(lower)],
+    ])?;
+    let pad = |nt: &DMatrix<f64>| -> DMatrix<f64> {
+        let mut full = DMatrix::zeros(nt.nrows(), k + n);
+        full.columns_mut(0, k).copy_from(nt);
+        full
+    };
+    let right = [
+        Some(pad(sel.ex)),
+        Some(pad(&sel.sat_u)),
+        sel.tau.as_ref().map(pad),
+    ];
+    robust_block(
+        top,
+        left,
+        right,
+        &v.robust[usize::from(r - 1)],
+        &plan.model_error,
+    )
 }

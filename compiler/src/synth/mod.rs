@@ -42,6 +42,7 @@ pub mod signal_trigger;
 pub mod solved;
 pub mod transmissions;
 pub mod trigger;
+mod trigger_scale;
 pub mod vertices;
 
 pub use crate::util::matrix::rows;

@@ -23,11 +23,13 @@ use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
 pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
-use super::loop_error::{robust_block, LoopMultipliers};
+use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
 use super::objective::BuildError;
 use super::reduction::Reduction;
 use super::search::Runner;
 use super::solved::{names, Solved as _};
+use super::trigger_scale::unscale_values;
+pub use super::trigger_scale::{lyapunov_scale, scaled_plan};
 use super::vertices::{self, PlantVertex};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -76,7 +78,11 @@ pub(super) enum Factor<'a> {
 
 impl Factor<'_> {
     /// `left * self * right`.
-    fn between(self, left: &DMatrix<f64>, right: &DMatrix<f64>) -> Result<Expr, LmiError> {
+    pub(super) fn between(
+        self,
+        left: &DMatrix<f64>,
+        right: &DMatrix<f64>,
+    ) -> Result<Expr, LmiError> {
         match self {
             Factor::Var(v) => Expr::product(left, v, right),
             Factor::Val(m) => Expr::constant(&(left * m * right)),
@@ -84,7 +90,7 @@ impl Factor<'_> {
     }
 
     /// `self` as an expression.
-    fn expr(self) -> Result<Expr, LmiError> {
+    pub(super) fn expr(self) -> Result<Expr, LmiError> {
         match self {
             Factor::Var(v) => Ok(Expr::var(v)),
             Factor::Val(m) => Expr::constant(m),
@@ -304,60 +310,6 @@ fn lambda(
         Some(sel) => robust_lambda(plan, v, top, sel, h, r),
         None => Ok(top),
     }
-}
-
-/// What the model-error terms of one pair read ([`robust_lambda`]).
-struct Selectors<'m> {
-    /// E_x: x(t) in psi.
-    ex: &'m DMatrix<f64>,
-    /// Phi of the pair (x' = Phi psi for the blend).
-    phi: DMatrix<f64>,
-    /// N_b = F_j x(t_k) - E_dz: the held, saturated input sat(u).
-    sat_u: DMatrix<f64>,
-    /// N_d = E_tau, with the L-inf channel.
-    tau: Option<DMatrix<f64>>,
-}
-
-/// Lambda_{ij r}(h) with the model error ([`super::loop_error`]): `top` is
-/// the block with the r = 1 term as its Schur complement [Xi, sqrt(h) Phi' Y;
-/// *, -Y] (r = 2: as in [`lambda`]), both of size k + n; one column G' per
-/// uncertain term with G' = [E_x' P; sqrt(h) Y] (r = 1) or [E_x' P; 0]
-/// (r = 2) and Ñ_t = [N_t, 0]: N_a = E_x, N_b = F_j x(t_k) - E_dz, N_d = E_tau.
-fn robust_lambda(
-    plan: &TriggerPlan,
-    v: &LoopVars<'_>,
-    top: Expr,
-    sel: &Selectors<'_>,
-    h: f64,
-    r: u8,
-) -> Result<Expr, LmiError> {
-    let (n, k) = sel.ex.shape();
-    let id_n = DMatrix::identity(n, n);
-    let lower = match r {
-        1 => v.y.expr()?.scale(h.sqrt())?,
-        _ => Expr::zeros(n, n),
-    };
-    let left = Expr::blocks(vec![
-        vec![Some(v.p.between(&sel.ex.transpose(), &id_n)?)],
-        vec![Some(lower)],
-    ])?;
-    let pad = |nt: &DMatrix<f64>| -> DMatrix<f64> {
-        let mut full = DMatrix::zeros(nt.nrows(), k + n);
-        full.columns_mut(0, k).copy_from(nt);
-        full
-    };
-    let right = [
-        Some(pad(sel.ex)),
-        Some(pad(&sel.sat_u)),
-        sel.tau.as_ref().map(pad),
-    ];
-    robust_block(
-        top,
-        left,
-        right,
-        &v.robust[usize::from(r - 1)],
-        &plan.model_error,
-    )
 }
 
 /// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are
@@ -782,76 +734,6 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
 /// & Huang, 3 of 30 iterations saved); feasibility keeps the solver's tolerance
 /// and the certificate re-checks every LMI with its margin.
 const TRIGGER_GAP_TOL: f64 = 1e-7;
-
-/// Largest scale [`lyapunov_scale`] returns.
-const MAX_LYAPUNOV_SCALE: f64 = 1e12;
-
-/// The scale sigma >= 1 of the trigger step's Lyapunov unknowns: the linear
-/// region forces P >= (c / u_bar_s^2) r' r for every row r = (F_j - G_j)_s
-/// (c the region level), so with large gains P, Y, L1, L2, Upsilon, T are of
-/// that size while xi and gamma stay near 1; the SDP is then badly scaled and
-/// the solver crawls. 1 without a linear region or with initial sets.
-pub fn lyapunov_scale(plan: &TriggerPlan) -> f64 {
-    if !plan.contain.is_empty() || joint_level(plan).is_some() {
-        return 1.0;
-    }
-    let level = plan.region_level();
-    let mut sigma = 1.0f64;
-    for (f, g) in plan.gains.iter().zip(&plan.sector) {
-        for (s, ub) in plan.levels.iter().enumerate() {
-            let row = (f - g).row(s).norm_squared();
-            sigma = sigma.max(level * row / (ub * ub));
-        }
-    }
-    if sigma.is_finite() {
-        sigma.min(MAX_LYAPUNOV_SCALE)
-    } else {
-        1.0
-    }
-}
-
-/// The trigger problem for P = sigma P~ (and Y, L1, L2, Upsilon, T alike; xi
-/// and gamma unchanged), exact: Lambda_{ij r}(h) of `plan` equals, by the
-/// congruence diag(sqrt(sigma) I, I_tau, sqrt(sigma) I), sigma times that of
-/// the returned plan with the disturbance columns D_i scaled by sqrt(sigma);
-/// the region LMI [P, r'; r, u_bar^2 / c] is [P~, r'; r, sigma u_bar^2 / c]
-/// by diag(sigma^-1/2, sigma^1/2), so u_bar is scaled by sqrt(sigma); the peak
-/// LMI [phi P, 0, C'; *, (gamma - xi) I, G'; *, *, gamma I] takes C / sqrt(sigma)
-/// by diag(sigma^-1/2 I, I, I). Each congruence maps a margin eps of the scaled
-/// problem to a margin of at least eps (sigma >= 1), and the certificate
-/// re-checks the unscaled values against `plan` anyway. Initial sets are not
-/// scaled ([`lyapunov_scale`] is 1 with them).
-pub fn scaled_plan(plan: &TriggerPlan, sigma: f64) -> TriggerPlan {
-    if sigma == 1.0 {
-        return plan.clone();
-    }
-    let root = sigma.sqrt();
-    TriggerPlan {
-        d: plan.d.iter().map(|d| d * root).collect(),
-        model_error: super::loop_error::LoopError {
-            d: plan.model_error.d * root,
-            ..plan.model_error
-        },
-        levels: plan.levels.iter().map(|u| u * root).collect(),
-        c: &plan.c / root,
-        region: plan.region.as_ref().map(|r| {
-            let mut r = r.clone();
-            r.faces.iter_mut().for_each(|f| f.bound *= root);
-            r
-        }),
-        ..plan.clone()
-    }
-}
-
-/// The values of a problem solved for [`scaled_plan`] in the units of the
-/// original plan: every unknown but gamma and xi times sigma.
-fn unscale_values(values: &mut [(String, DMatrix<f64>)], sigma: f64) {
-    for (name, v) in values.iter_mut() {
-        if name != names::LOOP_GAMMA && name != names::LOOP_XI {
-            *v *= sigma;
-        }
-    }
-}
 
 /// xi of the event-triggered loop may be up to this multiple of step 1's xi
 /// or gamma, the larger (the region level is computed with the bound).
