@@ -246,10 +246,9 @@ fn interval_cholesky_succeeds(m: &[Vec<Iv>]) -> Option<f64> {
     let mut l = vec![vec![Iv::pt(0.0); n]; n];
     let mut smallest = f64::INFINITY;
     for j in 0..n {
-        let mut d = m[j][j];
-        for k in 0..j {
-            d = d.sub(l[j][k].mul(l[j][k]));
-        }
+        let d = l[j][..j]
+            .iter()
+            .fold(m[j][j], |d, ljk| d.sub(ljk.mul(*ljk)));
         if d.lo <= 0.0 {
             return None;
         }
@@ -257,10 +256,10 @@ fn interval_cholesky_succeeds(m: &[Vec<Iv>]) -> Option<f64> {
         let root = d.sqrt();
         l[j][j] = root;
         for i in j + 1..n {
-            let mut s = m[i][j];
-            for k in 0..j {
-                s = s.sub(l[i][k].mul(l[j][k]));
-            }
+            let s = l[i][..j]
+                .iter()
+                .zip(&l[j][..j])
+                .fold(m[i][j], |s, (lik, ljk)| s.sub(lik.mul(*ljk)));
             l[i][j] = s.div(root);
         }
     }
