@@ -147,11 +147,7 @@ pub fn compile(
         };
         // The nominal design first: when its decrease conditions absorb the
         // error (no saturation term), it ships unchanged; else a robust design.
-        let continuous = matches!(
-            model.spec.trigger.as_ref().map(|t| &t.node),
-            None | Some(tsf_lang::spec::Trigger::Continuous)
-        );
-        if continuous && model.spec.saturation.is_none() && !disturbance_bounds(model) {
+        if margin_check_applies(model) {
             let c = nominal_once.get_or_init(nominal);
             if let Some(sec) = absorbed(model, c, &region, &pe, shrink_note(s)) {
                 let mut c = compile_model(model, info.clone(), settings, front);
@@ -162,22 +158,7 @@ pub fn compile(
         let mut robust = model.clone();
         robust.plant_error = Some(pe.clone());
         let mut c = compile_model(&robust, info.clone(), settings, front);
-        let section = match (&c.status, &c.outcome) {
-            (Status::Certified, Ok((d, _))) => with_claim(
-                model,
-                &Claimed {
-                    region: &region,
-                    bound: &pe,
-                    p: &d.p,
-                    objectives: &c.report.objectives,
-                    saturation_level: model.spec.saturation.as_ref().map(|_| 1.0),
-                    note: shrink_note(s),
-                    sampled: sampled_claim(d),
-                },
-            ),
-            _ => None,
-        };
-        match section {
+        match robust_section(model, &c, &region, &pe, shrink_note(s)) {
             Some(sec) => {
                 c.report.plant = sec;
                 Ok(c)
@@ -255,6 +236,41 @@ pub fn compile(
             c
         }
     }
+}
+
+/// Whether the nominal design's margin check ([`absorbed`]) can carry the
+/// claim: the continuous loop, no saturation term, no disturbance bound.
+fn margin_check_applies(model: &TsModel) -> bool {
+    let continuous = matches!(
+        model.spec.trigger.as_ref().map(|t| &t.node),
+        None | Some(tsf_lang::spec::Trigger::Continuous)
+    );
+    continuous && model.spec.saturation.is_none() && !disturbance_bounds(model)
+}
+
+/// The claim of the robust compile `c` on `region` (`None`: not certified).
+fn robust_section(
+    model: &TsModel,
+    c: &Compiled,
+    region: &StateBox,
+    pe: &PlantError,
+    note: Option<String>,
+) -> Option<crate::report::plant::PlantSection> {
+    let (Status::Certified, Ok((d, _))) = (&c.status, &c.outcome) else {
+        return None;
+    };
+    with_claim(
+        model,
+        &Claimed {
+            region,
+            bound: pe,
+            p: &d.p,
+            objectives: &c.report.objectives,
+            saturation_level: model.spec.saturation.as_ref().map(|_| 1.0),
+            note,
+            sampled: sampled_claim(d),
+        },
+    )
 }
 
 /// The sampled or event-triggered loop's certificate as the claim reads it
