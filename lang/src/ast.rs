@@ -90,6 +90,20 @@ pub struct NamedArg {
     pub value: Expr,
 }
 
+/// One bound of `plant region`: `x = lo .. hi` (every component of a
+/// vector state) or `x[k] = lo .. hi` (its component k, 0-based).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlantBound {
+    /// The state's name.
+    pub name: Ident,
+    /// The component index as written (0-based), if any.
+    pub index: Option<Spanned<f64>>,
+    /// The lower bound.
+    pub lo: Expr,
+    /// The upper bound.
+    pub hi: Expr,
+}
+
 /// One target of `emit`: `c` or `c(style = table)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EmitTarget {
@@ -350,7 +364,7 @@ pub enum ItemKind {
     /// `lyapunov kind[(args)];`
     Lyapunov(Ident, Vec<NamedArg>),
     /// `plant region x1 = lo .. hi, ..;`: the region of the plant claim.
-    PlantRegion(Vec<(Ident, Expr, Expr)>),
+    PlantRegion(Vec<PlantBound>),
     /// `measure name = expr [noise <= e];`: a measured output y = C x.
     Measure {
         /// The output's name.

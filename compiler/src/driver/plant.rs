@@ -16,7 +16,9 @@ use crate::model::error_bound::premise_range::{PremiseRange, MAX_PREMISE_BOXES};
 use crate::model::error_bound::{self, BoundLimits};
 use crate::model::plant_error::{default_region, nominal_slack, scaled, PlantError, StateBox};
 use crate::model::TsModel;
-use crate::report::plant::{not_covered, region_words, with_claim, without_claim, Claimed};
+use crate::report::plant::{
+    not_covered, region_words, with_claim, without_claim, Claimed, SampledClaim,
+};
 use crate::report::{schema_id, Diagnosis, SpecInfo};
 use crate::synth::Settings;
 use std::time::Duration;
@@ -145,7 +147,7 @@ pub fn compile(
         };
         // The nominal design first: when its decrease conditions absorb the
         // error (no saturation term), it ships unchanged; else a robust design.
-        if model.spec.saturation.is_none() && !disturbance_bounds(model) {
+        if margin_check_applies(model) {
             let c = nominal_once.get_or_init(nominal);
             if let Some(sec) = absorbed(model, c, &region, &pe, shrink_note(s)) {
                 let mut c = compile_model(model, info.clone(), settings, front);
@@ -156,21 +158,7 @@ pub fn compile(
         let mut robust = model.clone();
         robust.plant_error = Some(pe.clone());
         let mut c = compile_model(&robust, info.clone(), settings, front);
-        let section = match (&c.status, &c.outcome) {
-            (Status::Certified, Ok((d, _))) => with_claim(
-                model,
-                &Claimed {
-                    region: &region,
-                    bound: &pe,
-                    p: &d.p,
-                    objectives: &c.report.objectives,
-                    saturation_level: model.spec.saturation.as_ref().map(|_| 1.0),
-                    note: shrink_note(s),
-                },
-            ),
-            _ => None,
-        };
-        match section {
+        match robust_section(model, &c, &region, &pe, shrink_note(s)) {
             Some(sec) => {
                 c.report.plant = sec;
                 Ok(c)
@@ -255,6 +243,77 @@ fn refused(mut failed: Compiled, message: String) -> Compiled {
     failed
 }
 
+/// Whether the nominal design's margin check ([`absorbed`]) can carry the
+/// claim: the continuous loop, no saturation term, no disturbance bound.
+fn margin_check_applies(model: &TsModel) -> bool {
+    continuous_loop(model) && model.spec.saturation.is_none() && !disturbance_bounds(model)
+}
+
+/// Whether the loop is continuous (`trigger continuous` or none).
+fn continuous_loop(model: &TsModel) -> bool {
+    matches!(
+        model.spec.trigger.as_ref().map(|t| &t.node),
+        None | Some(tsf_lang::spec::Trigger::Continuous)
+    )
+}
+
+/// The claim of the robust compile `c` on `region` (`None`: not certified).
+fn robust_section(
+    model: &TsModel,
+    c: &Compiled,
+    region: &StateBox,
+    pe: &PlantError,
+    note: Option<String>,
+) -> Option<crate::report::plant::PlantSection> {
+    let (Status::Certified, Ok((d, _))) = (&c.status, &c.outcome) else {
+        return None;
+    };
+    with_claim(
+        model,
+        &Claimed {
+            region,
+            bound: pe,
+            p: &d.p,
+            objectives: &c.report.objectives,
+            saturation_level: model.spec.saturation.as_ref().map(|_| 1.0),
+            note,
+            sampled: sampled_claim(d),
+        },
+    )
+}
+
+/// The sampled or event-triggered loop's certificate as the claim reads it
+/// (`None` for the continuous loop).
+fn sampled_claim(d: &crate::synth::Design) -> Option<SampledClaim<'_>> {
+    use crate::synth::loops::LoopDesign;
+    let words = |(lo, hi): (f64, f64)| match lo == hi {
+        true => format!("sampled every {hi} s, zero-order hold"),
+        false => format!("sampled at any intervals in [{lo}, {hi}] s, zero-order hold"),
+    };
+    match &d.loop_design {
+        LoopDesign::EverySample(s) => Some(SampledClaim {
+            p: &s.p,
+            level: match s.plan.levels.is_empty() {
+                true => f64::INFINITY,
+                false => s.plan.region_level(),
+            },
+            law: words(s.plan.sampling),
+            linf: None,
+        }),
+        LoopDesign::Event(t) => Some(SampledClaim {
+            p: &t.p,
+            level: t.level(),
+            law: format!(
+                "{}, event-triggered with threshold nu(t_k) <= {}",
+                words(t.plan.sampling),
+                t.plan.nu
+            ),
+            linf: Some((t.gamma, t.xi, t.plan.phi)),
+        }),
+        _ => None,
+    }
+}
+
 /// The disturbance gain the spec minimizes (H-inf or L-inf with no bound),
 /// named for the report's note; `None` when it minimizes none.
 fn minimized_gain(model: &TsModel) -> Option<&'static str> {
@@ -298,6 +357,7 @@ fn absorbed(
             objectives: &c.report.objectives,
             saturation_level: None,
             note: Some(note),
+            sampled: None,
         },
     )
 }

@@ -43,15 +43,11 @@ pub fn region_json(region: &StateBox) -> Vec<Option<(f64, f64)>> {
 }
 
 /// The region in words: `x1 in [-1, 1], w[2] in [-0.1, 0.1]` (unbounded
-/// components left out; a vector state's components named `w[k]`, 1-based).
+/// components left out; a vector state's components named `w[k]`, 0-based
+/// as `plant region` writes them).
 pub fn region_words(model: &TsModel, region: &StateBox) -> String {
-    let names = model.spec.states.iter().flat_map(|s| {
-        (0..s.len).map(move |k| match s.is_vector {
-            true => format!("{}[{}]", s.name, k + 1),
-            false => s.name.clone(),
-        })
-    });
-    names
+    tsf_lang::spec::Signal::names_of(&model.spec.states)
+        .into_iter()
         .zip(region)
         .filter(|(_, (lo, hi))| lo.is_finite() || hi.is_finite())
         .map(|(name, (lo, hi))| format!("{name} in [{lo:.6}, {hi:.6}]"))
@@ -77,8 +73,13 @@ pub fn not_covered(model: &TsModel) -> Option<String> {
         ));
     }
     if let Some(t) = &spec.trigger {
-        if !matches!(t.node, Trigger::Continuous) {
-            return Some("a sampled or event-triggered loop (the robust conditions cover the continuous loop only)".into());
+        let law = crate::synth::loops::law_of(model).name();
+        if !matches!(
+            (&t.node, law),
+            (Trigger::Continuous, _)
+                | (_, "every sample" | "jittered" | "event trigger (two-step)")
+        ) {
+            return Some(format!("the {law} loop (the robust conditions cover the continuous loop, the sampled loops that transmit every sample and the two-step event trigger)"));
         }
     }
     if spec.periodic_design.is_some() {
@@ -145,16 +146,36 @@ pub struct Claimed<'a> {
     pub saturation_level: Option<f64>,
     /// How R was found (shrunk from a larger one), if worth saying.
     pub note: Option<String>,
+    /// The sampled or event-triggered loop's certificate, when the spec ships
+    /// one: its P and level replace the continuous design's.
+    pub sampled: Option<SampledClaim<'a>>,
+}
+
+/// What the robust certificate of a sampled or event-triggered loop says.
+pub struct SampledClaim<'a> {
+    /// P of the loop's functional (V1 = x' P x).
+    pub p: &'a DMatrix<f64>,
+    /// The loop's own level (E(P, c) inside its linear region and premise
+    /// box; infinite when it has none).
+    pub level: f64,
+    /// The loop in words ("sampled every 0.01 s (zero-order hold)").
+    pub law: String,
+    /// The L-inf bound of the loop (gamma, xi, phi), if it certifies one.
+    pub linf: Option<(f64, f64, f64)>,
 }
 
 /// The section of a claim: c the largest level with E(P, c) inside R (and
 /// inside the saturation region's E(P, level)); `None` when R does not
 /// contain the origin in its interior or P is singular.
 pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
-    let p_inv = c.p.clone().try_inverse()?;
+    let p = c.sampled.as_ref().map_or(c.p, |s| s.p);
+    let p_inv = p.clone().try_inverse()?;
     let mut level = level_inside(c.region, &p_inv)?;
     if let Some(s) = c.saturation_level {
         level = level.min(s);
+    }
+    if let Some(s) = &c.sampled {
+        level = level.min(s.level);
     }
     let set = if level.is_finite() {
         format!("E(P, c) = {{x' P x <= {level:.6e}}} (inside {})", {
@@ -183,16 +204,26 @@ pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
         Some(d) => format!(", ||D(x) - D_h(x)|| <= {d:.6e}"),
         None => String::new(),
     };
+    let (law, rate, performance) = match &c.sampled {
+        None => ("continuous loop".to_string(), rate, performance(o, level)),
+        Some(s) => (
+            s.law.clone(),
+            "is asymptotically stable".to_string(),
+            s.linf.map_or_else(String::new, |(g, xi, phi)| format!(
+                "; from x(0) = 0, ||y||_inf < {g} ||w||_inf for every disturbance with ||w||_inf <= {:.6e} (the state stays in E(P, c))",
+                (level * phi / xi).sqrt()
+            )),
+        ),
+    };
     let claim = format!(
-        "for every x(0) in {set}{with_w} the plant x' = A(x) x + {input} with this controller (continuous loop) {rate}{}, with ||A(x) - A_h(x)|| <= {:.6e} and ||B(x) - B_h(x)|| <= {:.6e}{d} on the region",
-        performance(o, level),
+        "for every x(0) in {set}{with_w} the plant x' = A(x) x + {input} with this controller ({law}) {rate}{performance}, with ||A(x) - A_h(x)|| <= {:.6e} and ||B(x) - B_h(x)|| <= {:.6e}{d} on the region",
         c.bound.a,
         c.bound.b
     );
     Some(PlantSection {
         region: region_json(c.region),
         error_bound: Some(c.bound.clone()),
-        p: Some(rows(c.p)),
+        p: Some(rows(p)),
         level: level.is_finite().then_some(level),
         extents: level.is_finite().then(|| extents(&p_inv, level)),
         claim: Some(claim),

@@ -151,6 +151,7 @@ fn gain_step_problem(
         xi: None,
         gains: vec![Factor::Var(f1); r],
         sector: vec![Factor::Var(g1); r],
+        robust: Default::default(),
     };
     let built = trigger::impose(problem, model, plan, vars, eps, true).map_err(internal)?;
     let mut problem = built.problem;

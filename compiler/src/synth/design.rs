@@ -397,6 +397,9 @@ pub struct TriggerPlan {
     /// LMIs are imposed at vertices of the blended model over the memberships
     /// the box allows, and E(P, c) is kept inside the box ([`crate::synth::vertices`]).
     pub region: Option<crate::model::region::PremiseBox>,
+    /// The model error the loop's blocks carry ([`crate::synth::loop_error`];
+    /// zero: the nominal blocks).
+    pub model_error: crate::synth::loop_error::LoopError,
 }
 
 impl TriggerPlan {

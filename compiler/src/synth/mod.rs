@@ -21,6 +21,7 @@ mod design;
 mod diagnose;
 pub mod experimental;
 pub mod given;
+pub mod loop_error;
 pub mod loops;
 pub mod lyapunov;
 pub mod markov;
@@ -41,6 +42,7 @@ pub mod signal_trigger;
 pub mod solved;
 pub mod transmissions;
 pub mod trigger;
+mod trigger_scale;
 pub mod vertices;
 
 pub use crate::util::matrix::rows;

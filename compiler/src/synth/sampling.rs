@@ -72,6 +72,7 @@ pub fn plan_for(model: &TsModel, design: &Design, sampling: (f64, f64)) -> Trigg
         c: DMatrix::zeros(0, model.n),
         g: DMatrix::zeros(0, 0),
         region: None,
+        model_error: super::loop_error::LoopError::of(model),
     }
 }
 

@@ -23,10 +23,13 @@ use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
 pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
+use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
 use super::objective::BuildError;
 use super::reduction::Reduction;
 use super::search::Runner;
 use super::solved::{names, Solved as _};
+use super::trigger_scale::unscale_values;
+pub use super::trigger_scale::{lyapunov_scale, scaled_plan};
 use super::vertices::{self, PlantVertex};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -75,7 +78,11 @@ pub(super) enum Factor<'a> {
 
 impl Factor<'_> {
     /// `left * self * right`.
-    fn between(self, left: &DMatrix<f64>, right: &DMatrix<f64>) -> Result<Expr, LmiError> {
+    pub(super) fn between(
+        self,
+        left: &DMatrix<f64>,
+        right: &DMatrix<f64>,
+    ) -> Result<Expr, LmiError> {
         match self {
             Factor::Var(v) => Expr::product(left, v, right),
             Factor::Val(m) => Expr::constant(&(left * m * right)),
@@ -83,7 +90,7 @@ impl Factor<'_> {
     }
 
     /// `self` as an expression.
-    fn expr(self) -> Result<Expr, LmiError> {
+    pub(super) fn expr(self) -> Result<Expr, LmiError> {
         match self {
             Factor::Var(v) => Ok(Expr::var(v)),
             Factor::Val(m) => Expr::constant(m),
@@ -130,6 +137,9 @@ pub(super) struct LoopVars<'a> {
     pub gains: Vec<Factor<'a>>,
     /// G_j per controller rule.
     pub sector: Vec<Factor<'a>>,
+    /// The model-error multipliers of Lambda_1 and Lambda_2 (declared by
+    /// [`impose`] when the plan carries a model error).
+    pub robust: [LoopMultipliers; 2],
 }
 
 impl<'a> LoopVars<'a> {
@@ -246,6 +256,33 @@ fn lambda(
         let etau = pick(q, at, k);
         xi_block = xi_block.sub(Expr::scaled(xi, &(etau.transpose() * &etau))?)?;
     }
+    // With a model error the gains must be known (N_b is data).
+    let robust =
+        match (plan.model_error.is_zero(), f) {
+            (true, _) => None,
+            (false, Factor::Val(f)) => Some(Selectors {
+                ex: &ex,
+                phi: &phi_c + b * f * &xk,
+                sat_u: match lay.dz {
+                    Some(at) => f * &xk - pick(m, at, k),
+                    None => f * &xk,
+                },
+                tau: lay.tau.map(|(at, q)| pick(q, at, k)),
+            }),
+            (false, Factor::Var(_)) => return Err(LmiError::Variable {
+                what:
+                    "the loop's model-error blocks need known gains (not the co-design's gain step)"
+                        .into(),
+            }),
+        };
+    if let (Some(sel), 1) = (&robust, r) {
+        let y_phi = v.y.between(&id_n, &sel.phi)?.scale(h.sqrt())?;
+        let top = Expr::sym_blocks(vec![
+            vec![Some(xi_block), Some(y_phi.transpose())],
+            vec![None, Some(v.y.expr()?.scale(-1.0)?)],
+        ])?;
+        return robust_lambda(plan, v, top, sel, h, r);
+    }
     if r == 1 {
         if let Factor::Val(f) = f {
             let phi_m = &phi_c + b * f * &xk;
@@ -265,10 +302,14 @@ fn lambda(
         .add(Expr::product(&es.transpose(), v.l[1], &id_n)?)?
         .scale(h.sqrt())?;
     let (_, h_max) = plan.sampling;
-    Expr::sym_blocks(vec![
+    let top = Expr::sym_blocks(vec![
         vec![Some(xi_block), Some(col)],
         vec![None, Some(v.y.expr()?.scale(-(-plan.phi * h_max).exp())?)],
-    ])
+    ])?;
+    match &robust {
+        Some(sel) => robust_lambda(plan, v, top, sel, h, r),
+        None => Ok(top),
+    }
 }
 
 /// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are
@@ -315,6 +356,7 @@ fn declare_trigger_step<'a>(
         xi: None,
         gains,
         sector,
+        robust: Default::default(),
     })
 }
 
@@ -349,6 +391,12 @@ pub(super) fn impose(
         (None, None)
     };
     vars.xi = xi;
+    if !plan.model_error.is_zero() {
+        vars.robust = [
+            plan.model_error.declare(&mut problem, 1)?,
+            plan.model_error.declare(&mut problem, 2)?,
+        ];
+    }
     let mut reductions = Vec::new();
     let mut nonstrict = Vec::new();
     for (name, f) in [
@@ -671,6 +719,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         c: out.c.clone(),
         g: out.g.columns(sig.offset, sig.len).into_owned(),
         region,
+        model_error: super::loop_error::LoopError::of(model),
     };
     // A region's vertex sets, checked before any SDP (too many is a refusal).
     vertices::describe(model, &plan).map_err(|e| match e {
@@ -685,72 +734,6 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
 /// & Huang, 3 of 30 iterations saved); feasibility keeps the solver's tolerance
 /// and the certificate re-checks every LMI with its margin.
 const TRIGGER_GAP_TOL: f64 = 1e-7;
-
-/// Largest scale [`lyapunov_scale`] returns.
-const MAX_LYAPUNOV_SCALE: f64 = 1e12;
-
-/// The scale sigma >= 1 of the trigger step's Lyapunov unknowns: the linear
-/// region forces P >= (c / u_bar_s^2) r' r for every row r = (F_j - G_j)_s
-/// (c the region level), so with large gains P, Y, L1, L2, Upsilon, T are of
-/// that size while xi and gamma stay near 1; the SDP is then badly scaled and
-/// the solver crawls. 1 without a linear region or with initial sets.
-pub fn lyapunov_scale(plan: &TriggerPlan) -> f64 {
-    if !plan.contain.is_empty() || joint_level(plan).is_some() {
-        return 1.0;
-    }
-    let level = plan.region_level();
-    let mut sigma = 1.0f64;
-    for (f, g) in plan.gains.iter().zip(&plan.sector) {
-        for (s, ub) in plan.levels.iter().enumerate() {
-            let row = (f - g).row(s).norm_squared();
-            sigma = sigma.max(level * row / (ub * ub));
-        }
-    }
-    if sigma.is_finite() {
-        sigma.min(MAX_LYAPUNOV_SCALE)
-    } else {
-        1.0
-    }
-}
-
-/// The trigger problem for P = sigma P~ (and Y, L1, L2, Upsilon, T alike; xi
-/// and gamma unchanged), exact: Lambda_{ij r}(h) of `plan` equals, by the
-/// congruence diag(sqrt(sigma) I, I_tau, sqrt(sigma) I), sigma times that of
-/// the returned plan with the disturbance columns D_i scaled by sqrt(sigma);
-/// the region LMI [P, r'; r, u_bar^2 / c] is [P~, r'; r, sigma u_bar^2 / c]
-/// by diag(sigma^-1/2, sigma^1/2), so u_bar is scaled by sqrt(sigma); the peak
-/// LMI [phi P, 0, C'; *, (gamma - xi) I, G'; *, *, gamma I] takes C / sqrt(sigma)
-/// by diag(sigma^-1/2 I, I, I). Each congruence maps a margin eps of the scaled
-/// problem to a margin of at least eps (sigma >= 1), and the certificate
-/// re-checks the unscaled values against `plan` anyway. Initial sets are not
-/// scaled ([`lyapunov_scale`] is 1 with them).
-pub fn scaled_plan(plan: &TriggerPlan, sigma: f64) -> TriggerPlan {
-    if sigma == 1.0 {
-        return plan.clone();
-    }
-    let root = sigma.sqrt();
-    TriggerPlan {
-        d: plan.d.iter().map(|d| d * root).collect(),
-        levels: plan.levels.iter().map(|u| u * root).collect(),
-        c: &plan.c / root,
-        region: plan.region.as_ref().map(|r| {
-            let mut r = r.clone();
-            r.faces.iter_mut().for_each(|f| f.bound *= root);
-            r
-        }),
-        ..plan.clone()
-    }
-}
-
-/// The values of a problem solved for [`scaled_plan`] in the units of the
-/// original plan: every unknown but gamma and xi times sigma.
-fn unscale_values(values: &mut [(String, DMatrix<f64>)], sigma: f64) {
-    for (name, v) in values.iter_mut() {
-        if name != names::LOOP_GAMMA && name != names::LOOP_XI {
-            *v *= sigma;
-        }
-    }
-}
 
 /// xi of the event-triggered loop may be up to this multiple of step 1's xi
 /// or gamma, the larger (the region level is computed with the bound).

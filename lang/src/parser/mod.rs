@@ -286,6 +286,27 @@ impl Cx {
         }
     }
 
+    /// `x = lo .. hi` or `x[k] = lo .. hi` of `plant region`.
+    fn plant_bound(&self, b: Pair<Rule>, span: Span) -> PResult<PlantBound> {
+        let mut parts = b.into_inner().peekable();
+        let name = self.ident(next(&mut parts, span)?);
+        let index = match parts.next_if(|p| p.as_rule() == Rule::plant_index) {
+            Some(i) => {
+                let num = next(&mut i.into_inner(), span)?;
+                Some(Spanned::new(self.number(&num)?, self.span(&num)))
+            }
+            None => None,
+        };
+        let lo = self.expr(next(&mut parts, span)?)?;
+        let hi = self.expr(next(&mut parts, span)?)?;
+        Ok(PlantBound {
+            name,
+            index,
+            lo,
+            hi,
+        })
+    }
+
     fn item(&self, item: Pair<Rule>) -> PResult<Item> {
         let span = self.span(&item);
         let inner = item.into_inner().next();
@@ -378,14 +399,8 @@ impl Cx {
                 ItemKind::Relaxation(name, it.map(|p| self.named_arg(p)).collect::<PResult<_>>()?)
             }
             Rule::plant_decl => ItemKind::PlantRegion(
-                it.map(|b| {
-                    let mut parts = b.into_inner();
-                    let name = self.ident(next(&mut parts, span)?);
-                    let lo = self.expr(next(&mut parts, span)?)?;
-                    let hi = self.expr(next(&mut parts, span)?)?;
-                    Ok((name, lo, hi))
-                })
-                .collect::<PResult<_>>()?,
+                it.map(|b| self.plant_bound(b, span))
+                    .collect::<PResult<_>>()?,
             ),
             Rule::measure_decl => {
                 let name = self.ident(next(&mut it, span)?);
