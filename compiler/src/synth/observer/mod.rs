@@ -18,6 +18,7 @@
 
 pub mod augmented;
 pub mod gains;
+pub mod sampled;
 pub mod static_output;
 
 use nalgebra::DMatrix;
