@@ -211,6 +211,9 @@ pub fn run(
         super::csv::header(*out, &names, &trace.input_names, false).map_err(write_err)?;
     }
     let mut lp = Loop::new(law.as_ref(), tables, o, opts, plan.seed, &xhat0);
+    if lp.noise == Noise::None {
+        lp.noise = spec_noise(&prepared.model.spec);
+    }
     let mut tally = Tally::new(n, tables.m, &plan.x0, opts.convergence_rel_tol);
     let region = Region::new(&prepared.model, tables);
     let mut progress = Progress::new(opts.progress, plan.t0, plan.t1);
@@ -304,6 +307,20 @@ pub fn run(
         u_max: tables.u_max.clone(),
         n,
     })
+}
+
+/// The spec's measurement noise: uniform within the smallest `noise <= e`
+/// bound of the `measure` rows when every row has one (seeded by the
+/// scenario's seed), else none.
+pub fn spec_noise(spec: &tsf_lang::Spec) -> Noise {
+    let Some(m) = &spec.measure else {
+        return Noise::None;
+    };
+    let bounds: Option<Vec<f64>> = m.noise.iter().copied().collect();
+    match bounds {
+        Some(b) if !b.is_empty() => Noise::Uniform(b.iter().copied().fold(f64::INFINITY, f64::min)),
+        _ => Noise::None,
+    }
 }
 
 /// The initial estimate of the scenario (default 0), checked, and the noise checked.

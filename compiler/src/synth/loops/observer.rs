@@ -45,8 +45,7 @@ impl LoopLaw for ObserverSampled {
         d: &mut Design,
         _: &Start,
     ) -> Result<LoopDesign, SynthError> {
-        let (Some(t), Some(OutputFeedback::Observer(o))) = (period(runner.model), &d.output)
-        else {
+        let (Some(t), Some(OutputFeedback::Observer(o))) = (period(runner.model), &d.output) else {
             return Err(SynthError::Internal(
                 "internal error: the sampled observer loop needs the observer design".into(),
             ));
@@ -54,7 +53,8 @@ impl LoopLaw for ObserverSampled {
         let alpha = d.plan.decay().map_or(0.0, |dec| dec.alpha);
         let o = o.clone();
         let s = runner.sampled_observer(d, &o, t, alpha)?;
-        d.notes.push(format!("sampled loop certified: {}", s.covers()));
+        d.notes
+            .push(format!("sampled loop certified: {}", s.covers()));
         Ok(LoopDesign::ObserverSampled(s))
     }
 }

@@ -217,7 +217,11 @@ impl SampledObserver {
     /// What it certifies, in words.
     pub fn covers(&self) -> String {
         let rate = if self.alpha > 0.0 {
-            format!("decays at rate {} (V(t) <= e^(-{} t) V(0))", self.alpha, 2.0 * self.alpha)
+            format!(
+                "decays at rate {} (V(t) <= e^(-{} t) V(0))",
+                self.alpha,
+                2.0 * self.alpha
+            )
         } else {
             "is asymptotically stable (the decay rate of the spec is not certified for the sampled loop)".into()
         };
@@ -298,8 +302,11 @@ impl Runner<'_> {
             return Ok(s);
         }
         let what = format!("the observer-based loop sampled every {period} s is not certified (the looped-functional conditions of the sampled loop, with the discrete observer at that period, are infeasible)");
-        let Some(lo) =
-            longest_scale(|s| Ok(self.observer_attempt(&aug, d, o, period * s, 0.0)?.is_some()))?
+        let Some(lo) = longest_scale(|s| {
+            Ok(self
+                .observer_attempt(&aug, d, o, period * s, 0.0)?
+                .is_some())
+        })?
         else {
             return Err(SynthError::Infeasible {
                 message: what,
