@@ -36,6 +36,7 @@ mod newcomer;
 mod objectives;
 mod observer;
 mod observer_code;
+mod observer_sampled;
 mod plant_claim;
 mod playground;
 mod plots;

@@ -314,8 +314,10 @@ impl Runner<'_> {
             });
         };
         let mut advice = round_down(period * lo);
+        let mut checked = "not re-certified";
         for _ in 0..4 {
             if self.observer_attempt(&aug, d, o, advice, 0.0)?.is_some() {
+                checked = "certified";
                 break;
             }
             advice = round_down(advice * 0.95);
@@ -323,7 +325,7 @@ impl Runner<'_> {
         Err(SynthError::Infeasible {
             message: what,
             achievable: vec![format!(
-                "the longest certified period is about {} s: write `trigger periodic {{ every = {advice}; }}` (certified)",
+                "the longest certified period is about {} s: write `trigger periodic {{ every = {advice}; }}` ({checked})",
                 about(period * lo)
             )],
         })
