@@ -769,8 +769,7 @@ impl Runner<'_> {
         self.solve_looped_on(model, plan, what, gap_tol)
     }
 
-    /// [`Runner::solve_looped`] for the loop of `model` (the augmented model
-    /// of a sampled observer loop, [`super::observer::sampled`]).
+    /// [`Runner::solve_looped`] for `model` (e.g. [`super::observer::sampled`]).
     pub(super) fn solve_looped_on(
         &mut self,
         model: &TsModel,

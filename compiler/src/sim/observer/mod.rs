@@ -168,9 +168,8 @@ pub fn run(
         return Err(SimError::unsupported("internal error: no observer tables"));
     };
     if prepared.model.spec.modes.is_some() {
-        return Err(SimError::unsupported(
-            "an observer-based controller with `modes` is not simulated (docs/limits.md)",
-        ));
+        let no = "an observer-based controller with `modes` is not simulated (docs/limits.md)";
+        return Err(SimError::unsupported(no));
     }
     let mut plant = Plant::new(truth, &prepared.source, opts.evaluator)?;
     let plan = plan(prepared, opts, plant.dim())?;
@@ -211,9 +210,7 @@ pub fn run(
         super::csv::header(*out, &names, &trace.input_names, false).map_err(write_err)?;
     }
     let mut lp = Loop::new(law.as_ref(), tables, o, opts, plan.seed, &xhat0);
-    if lp.noise == Noise::None {
-        lp.noise = spec_noise(&prepared.model.spec);
-    }
+    lp.noise = or_spec_noise(lp.noise, &prepared.model.spec);
     let mut tally = Tally::new(n, tables.m, &plan.x0, opts.convergence_rel_tol);
     let region = Region::new(&prepared.model, tables);
     let mut progress = Progress::new(opts.progress, plan.t0, plan.t1);
@@ -320,6 +317,14 @@ pub fn spec_noise(spec: &tsf_lang::Spec) -> Noise {
     match bounds {
         Some(b) if !b.is_empty() => Noise::Uniform(b.iter().copied().fold(f64::INFINITY, f64::min)),
         _ => Noise::None,
+    }
+}
+
+/// `noise`, or the spec's ([`spec_noise`]) when it is none.
+fn or_spec_noise(noise: Noise, spec: &tsf_lang::Spec) -> Noise {
+    match noise {
+        Noise::None => spec_noise(spec),
+        n => n,
     }
 }
 

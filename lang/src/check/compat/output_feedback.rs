@@ -191,7 +191,7 @@ mod tests {
         );
         assert!(at.starts_with("objective input_norm"), "{at}");
         let src = format!(
-            "{PENDULUM}measure y = th;\ncontrol static_output;\ntrigger aperiodic {{ sampling = 0.01 .. 0.02; }}\n"
+            "{PENDULUM}measure y = th;\ncontrol static_output;\ntrigger jittered {{ every = 0.01; jitter = 0.001; }}\n"
         );
         let (m, _) = only_error_of(&src);
         assert_eq!(
