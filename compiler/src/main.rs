@@ -344,7 +344,10 @@ fn compile(
         }
     };
     let mut files = vec![(report_path.clone(), json.into_bytes())];
-    let withheld = pipeline::withheld(&run.model);
+    let withheld = run
+        .certified()
+        .ok()
+        .and_then(|(d, _)| pipeline::withheld(&run.model, d));
     if certified && withheld.is_none() {
         match run.generate(&targets) {
             Ok(generated) => files.extend(

@@ -284,7 +284,7 @@ fn compile_writes_the_report_and_stops_before_code_for_output_feedback() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("code generation of observer controllers is not in this build"),
+        stderr.contains("its code and simulation need `trigger periodic { every = T; }`"),
         "{stderr}"
     );
     let report: Value = serde_json::from_slice(

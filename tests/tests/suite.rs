@@ -38,6 +38,7 @@ mod objectives;
 mod observer;
 mod observer_code;
 mod observer_hinf;
+mod observer_sampled;
 mod plant_claim;
 mod playground;
 mod plots;

@@ -169,10 +169,10 @@ impl Run {
     }
 
     /// The certified design's tables (what generated code and the simulator use).
-    /// An output-feedback design has none in this build ([`withheld`]).
+    /// Output-feedback designs [`withheld`] have none.
     pub fn tables(&self) -> Result<Tables, Error> {
         let (design, cert) = self.certified()?;
-        if let Some(why) = withheld(&self.model) {
+        if let Some(why) = withheld(&self.model, design) {
             return Err(Error::usage(format!("{}: {why}", self.name)));
         }
         tables::tables(&self.model, design, cert, &self.name, &self.sha256)
@@ -182,7 +182,7 @@ impl Run {
     /// The generated files of the certified design for `targets`.
     pub fn generate(&self, targets: &[Emit]) -> Result<Vec<GeneratedFile>, Error> {
         let (design, cert) = self.certified()?;
-        if let Some(why) = withheld(&self.model) {
+        if let Some(why) = withheld(&self.model, design) {
             return Err(Error::usage(format!("{}: {why}", self.name)));
         }
         let failed = |e: &dyn std::fmt::Display| {
@@ -202,17 +202,21 @@ impl Run {
     }
 }
 
-/// Why a certified design of `model` has no tables or code in this build:
-/// output-feedback controllers (`control observer_based`, `static_output`)
-/// are designed, certified and reported, but their generated code and
-/// simulation come with the observer runtime (exit 2, docs/limits.md).
-pub fn withheld(model: &TsModel) -> Option<String> {
+/// Why a certified design of `model` has no tables or code in this build
+/// (exit 2, docs/limits.md): an observer-based controller whose sampled loop
+/// is not certified (no `trigger periodic { every = T; }`: only the
+/// continuous augmented loop is), and static output feedback (the generated
+/// step reads the state, not y).
+pub fn withheld(model: &TsModel, design: &Design) -> Option<String> {
     use tsf_lang::spec::ControlKind;
     match model.spec.control.kind {
         ControlKind::StateFeedback => None,
-        k => Some(format!(
-            "code generation of observer controllers is not in this build (`control {}`: the design is certified and reported; no code or simulation is emitted)",
-            k.keyword()
-        )),
+        ControlKind::ObserverBased if design.loop_design.observer_sampled().is_some() => None,
+        ControlKind::ObserverBased => Some(
+            "an observer-based controller runs every period T: its code and simulation need `trigger periodic { every = T; }` (the certificate then covers the sampled loop; without it only the continuous loop is certified, and no code or simulation is emitted)".into(),
+        ),
+        ControlKind::StaticOutput => Some(
+            "code generation and simulation of `control static_output` are not in this build (the generated step reads the state, not y; the design is certified and reported)".into(),
+        ),
     }
 }

@@ -110,6 +110,9 @@ fn matrix(rows: &[Vec<f64>], r: usize, c: usize, what: &str) -> Result<DMatrix<f
 /// The simulator's design from a report of the spec read in `front`, or why
 /// it cannot be used (the same checks as [`prepare_reusing`]; nothing is compiled).
 pub fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepared, String> {
+    if model.spec.control.kind != tsf_lang::spec::ControlKind::StateFeedback {
+        return Err("an output-feedback design's observer tables are not in the report".into());
+    }
     let r: ReportView =
         serde_json::from_str(json).map_err(|e| format!("it is not a tsfc report ({e})"))?;
     let spec = &model.spec;

@@ -129,11 +129,12 @@ fn synthesize_with(runner: &mut Runner<'_>) -> Result<Design, SynthError> {
             if analysis {
                 d.verdicts = given::together(&d);
             }
+            // The observer first: the sampled observer loop's law certifies it.
+            let observed = observer::observe(runner, &mut d);
+            kept(runner, &d, observed)?;
             let start = loops::Start { plan, goal };
             let law = loops::law_of(model).design(runner, &mut d, &start);
             d.loop_design = kept(runner, &d, law)?;
-            let observed = observer::observe(runner, &mut d);
-            kept(runner, &d, observed)?;
             if let Some(w) = gain_warning(model, &d) {
                 d.notes.push(w);
             }

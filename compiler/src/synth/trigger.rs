@@ -748,8 +748,20 @@ impl Runner<'_> {
         what: &str,
         gap_tol: Option<f64>,
     ) -> Result<Option<Solved>, SynthError> {
+        let model = self.model;
+        self.solve_looped_on(model, plan, what, gap_tol)
+    }
+
+    /// [`Runner::solve_looped`] for `model` (e.g. [`super::observer::sampled`]).
+    pub(super) fn solve_looped_on(
+        &mut self,
+        model: &TsModel,
+        plan: &TriggerPlan,
+        what: &str,
+        gap_tol: Option<f64>,
+    ) -> Result<Option<Solved>, SynthError> {
         let t0 = Instant::now();
-        let built = build(self.model, plan, self.settings.eps, true)?;
+        let built = build(model, plan, self.settings.eps, true)?;
         self.log.build_time += t0.elapsed();
         let mut settings = self.settings.solver.clone();
         if let Some(tol) = gap_tol {

@@ -305,7 +305,7 @@ pub fn tables(
             (None, None) => Sensor::None,
         },
         modes: mode_tables(model, design),
-        observer: None,
+        observer: observer::of_design(model, design)?,
     })
 }
 

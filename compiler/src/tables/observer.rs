@@ -19,7 +19,7 @@
 //! period and where the premises come from).
 
 use super::TablesError;
-use crate::synth::objectives::discrete::zoh;
+use crate::synth::observer::sampled::ObserverSteps;
 use nalgebra::DMatrix;
 use tsf_lang::spec::{Spec, Trigger};
 
@@ -64,25 +64,7 @@ fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
     crate::util::matrix::rows(m)
 }
 
-/// The exact discretization of one rule's observer over `period`:
-/// `(Phi, Gu, Gy)`.
-pub fn discretize(
-    a: &DMatrix<f64>,
-    b: &DMatrix<f64>,
-    c: &DMatrix<f64>,
-    l: &DMatrix<f64>,
-    period: f64,
-) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
-    let (n, m, q) = (a.nrows(), b.ncols(), c.nrows());
-    let ao = a - l * c;
-    let mut inputs = DMatrix::zeros(n, m + q);
-    inputs.view_mut((0, 0), (n, m)).copy_from(b);
-    inputs.view_mut((0, m), (n, q)).copy_from(l);
-    let (phi, g) = zoh(&ao, &inputs, period);
-    let gu = g.view((0, 0), (n, m)).into_owned();
-    let gy = g.view((0, m), (n, q)).into_owned();
-    (phi, gu, gy)
-}
+pub use crate::synth::observer::sampled::discretize;
 
 /// The controller's period of a spec: `trigger periodic { every = T; }`.
 /// Any other loop is refused (the observer runs at a fixed period).
@@ -91,6 +73,31 @@ pub fn period_of(spec: &Spec) -> Result<f64, TablesError> {
         Some(Trigger::Periodic { every }) => Ok(*every),
         _ => Err(TablesError::ObserverPeriod),
     }
+}
+
+/// The observer tables of a certified design: those of its sampled
+/// observer loop's certificate (`None` without one).
+pub fn of_design(
+    model: &crate::model::TsModel,
+    design: &crate::synth::Design,
+) -> Result<Option<ObserverTables>, TablesError> {
+    use crate::synth::observer::OutputFeedback;
+    let (Some(s), Some(OutputFeedback::Observer(o))) =
+        (design.loop_design.observer_sampled(), &design.output)
+    else {
+        return Ok(None);
+    };
+    let a: Vec<DMatrix<f64>> = model.rules.iter().map(|r| r.a.clone()).collect();
+    let b: Vec<DMatrix<f64>> = model.rules.iter().map(|r| r.b.clone()).collect();
+    ObserverTables::from_certified(
+        &o.c,
+        &o.gains,
+        (&a, &b),
+        &s.steps,
+        s.period,
+        PremiseFrom::Output,
+    )
+    .map(Some)
 }
 
 impl ObserverTables {
@@ -106,6 +113,38 @@ impl ObserverTables {
         l: &[DMatrix<f64>],
         a: &[DMatrix<f64>],
         b: &[DMatrix<f64>],
+        period: f64,
+        premise_from: PremiseFrom,
+    ) -> Result<Self, TablesError> {
+        Self::build(c, l, (a, b), None, period, premise_from)
+    }
+
+    /// [`ObserverTables::from_design`] with the discrete observer `steps`
+    /// the sampled loop's certificate was built from (the tables store
+    /// exactly those numbers).
+    pub fn from_certified(
+        c: &DMatrix<f64>,
+        l: &[DMatrix<f64>],
+        (a, b): (&[DMatrix<f64>], &[DMatrix<f64>]),
+        steps: &ObserverSteps,
+        period: f64,
+        premise_from: PremiseFrom,
+    ) -> Result<Self, TablesError> {
+        if steps.phi.len() != a.len() || steps.gu.len() != a.len() || steps.gy.len() != a.len() {
+            return Err(TablesError::ObserverShape(format!(
+                "{} discrete observers for {} rules",
+                steps.phi.len(),
+                a.len()
+            )));
+        }
+        Self::build(c, l, (a, b), Some(steps), period, premise_from)
+    }
+
+    fn build(
+        c: &DMatrix<f64>,
+        l: &[DMatrix<f64>],
+        (a, b): (&[DMatrix<f64>], &[DMatrix<f64>]),
+        steps: Option<&ObserverSteps>,
         period: f64,
         premise_from: PremiseFrom,
     ) -> Result<Self, TablesError> {
@@ -154,8 +193,14 @@ impl ObserverTables {
             }
         };
         let (mut phi, mut gu, mut gy) = (Vec::new(), Vec::new(), Vec::new());
-        for ((li, ai), bi) in l.iter().zip(a).zip(b) {
-            let (p, u, y) = discretize(ai, bi, c, li, period);
+        for (i, ((li, ai), bi)) in l.iter().zip(a).zip(b).enumerate() {
+            let (p, u, y) = match steps {
+                Some(s) => (s.phi[i].clone(), s.gu[i].clone(), s.gy[i].clone()),
+                None => discretize(ai, bi, c, li, period),
+            };
+            if p.shape() != (n, n) || u.shape() != (n, m) || y.shape() != (n, q) {
+                return shape(format!("rule {}: the discrete observer's shapes", i + 1));
+            }
             if ![&p, &u, &y].iter().all(|m| m.iter().all(|v| v.is_finite())) {
                 return Err(TablesError::ObserverNonFinite);
             }

@@ -168,9 +168,8 @@ pub fn run(
         return Err(SimError::unsupported("internal error: no observer tables"));
     };
     if prepared.model.spec.modes.is_some() {
-        return Err(SimError::unsupported(
-            "an observer-based controller with `modes` is not simulated (docs/limits.md)",
-        ));
+        let no = "an observer-based controller with `modes` is not simulated (docs/limits.md)";
+        return Err(SimError::unsupported(no));
     }
     let mut plant = Plant::new(truth, &prepared.source, opts.evaluator)?;
     let plan = plan(prepared, opts, plant.dim())?;
@@ -211,6 +210,7 @@ pub fn run(
         super::csv::header(*out, &names, &trace.input_names, false).map_err(write_err)?;
     }
     let mut lp = Loop::new(law.as_ref(), tables, o, opts, plan.seed, &xhat0);
+    lp.noise = or_spec_noise(lp.noise, &prepared.model.spec);
     let mut tally = Tally::new(n, tables.m, &plan.x0, opts.convergence_rel_tol);
     let region = Region::new(&prepared.model, tables);
     let mut progress = Progress::new(opts.progress, plan.t0, plan.t1);
@@ -304,6 +304,28 @@ pub fn run(
         u_max: tables.u_max.clone(),
         n,
     })
+}
+
+/// The spec's measurement noise: uniform within the smallest `noise <= e`
+/// bound of the `measure` rows when every row has one (seeded by the
+/// scenario's seed), else none.
+pub fn spec_noise(spec: &tsf_lang::Spec) -> Noise {
+    let Some(m) = &spec.measure else {
+        return Noise::None;
+    };
+    let bounds: Option<Vec<f64>> = m.noise.iter().copied().collect();
+    match bounds {
+        Some(b) if !b.is_empty() => Noise::Uniform(b.iter().copied().fold(f64::INFINITY, f64::min)),
+        _ => Noise::None,
+    }
+}
+
+/// `noise`, or the spec's ([`spec_noise`]) when it is none.
+fn or_spec_noise(noise: Noise, spec: &tsf_lang::Spec) -> Noise {
+    match noise {
+        Noise::None => spec_noise(spec),
+        n => n,
+    }
 }
 
 /// The initial estimate of the scenario (default 0), checked, and the noise checked.

@@ -17,7 +17,7 @@
 //! sampling with jitter, certified as [`every_sample`]'s loop), [`event`] (event trigger with
 //! a synthesized weight: two-step, co-design, regional), [`mixed`] (the mixed
 //! trigger on a signal), [`modes`] (the sampled loop of a design with Markov
-//! modes). Paper-specific experiments are not laws: they are
+//! modes), [`observer`] (the periodic loop of an observer-based controller). Paper-specific experiments are not laws: they are
 //! chosen from `super::experimental::EXPERIMENTS`.
 
 pub mod continuous;
@@ -26,6 +26,7 @@ pub mod every_sample;
 pub mod jittered;
 pub mod mixed;
 pub mod modes;
+pub mod observer;
 
 use super::design::{Design, SynthError};
 use super::reduction::Reduction;
@@ -70,6 +71,7 @@ pub const LAWS: &[&dyn LoopLaw] = &[
     &event::Transmissions,
     &event::TwoStep,
     &mixed::Mixed,
+    &observer::ObserverSampled,
     &every_sample::EverySample,
     &jittered::Jittered,
     &continuous::Continuous,
@@ -99,6 +101,8 @@ pub enum LoopDesign {
     /// The sampled loop of a design with Markov modes (its certificate is
     /// per mode: [`LoopDesign::certificate`] is `None`).
     SampledModes(super::markov::sampled::ModesSampled),
+    /// The periodic loop of an observer-based controller (augmented (x, xhat)).
+    ObserverSampled(super::observer::sampled::SampledObserver),
 }
 
 impl LoopDesign {
@@ -109,6 +113,7 @@ impl LoopDesign {
             LoopDesign::EverySample(s) => Some(s),
             LoopDesign::Event(t) => Some(t),
             LoopDesign::Mixed(m) => Some(m),
+            LoopDesign::ObserverSampled(o) => Some(o),
         }
     }
 
@@ -132,6 +137,14 @@ impl LoopDesign {
     pub fn sampled_modes(&self) -> Option<&super::markov::sampled::ModesSampled> {
         match self {
             LoopDesign::SampledModes(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The sampled observer loop's certificate, if the loop has one.
+    pub fn observer_sampled(&self) -> Option<&super::observer::sampled::SampledObserver> {
+        match self {
+            LoopDesign::ObserverSampled(o) => Some(o),
             _ => None,
         }
     }

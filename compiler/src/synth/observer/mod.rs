@@ -19,6 +19,7 @@
 pub mod augmented;
 pub mod gains;
 pub mod hinf;
+pub mod sampled;
 pub mod static_output;
 
 use nalgebra::DMatrix;

@@ -3,8 +3,10 @@
 //! premises on measured states (every state component a premise reads lies
 //! in the row space of C); for `static_output` a C of full row rank; for
 //! `observer_based` the objectives the augmented loop's certificate covers
-//! (stability, decay rate, H-inf). Neither is combined with a trigger, modes, an
-//! adaptive block, a fuzzy Lyapunov function, given gains or a plant region.
+//! (stability, decay rate; H-inf on the continuous loop only). Neither is
+//! combined with a trigger other than `periodic` (the sampled loop;
+//! `observer_based` there without `saturate`), modes, an adaptive block, a
+//! fuzzy Lyapunov function, given gains or a plant region.
 
 use crate::ast::ItemKind;
 use crate::check::measure::{rank, recovered, state_reads};
@@ -43,6 +45,17 @@ impl Checker<'_> {
         if kind == ControlKind::ObserverBased {
             for o in &spec.objectives {
                 let k = o.node.kind();
+                let sampled = spec
+                    .trigger
+                    .as_ref()
+                    .is_some_and(|t| matches!(t.node, Trigger::Periodic { .. }));
+                if k == ObjectiveKind::Hinf && sampled {
+                    self.err(
+                        Diagnostic::error(o.span, "`objective hinf` is not covered for the sampled `control observer_based` loop")
+                            .with_secondary(at, "the observer-based controller is declared here")
+                            .with_help("the sampled loop's certificate covers stability and a decay rate; the H-inf gain is certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
+                    );
+                }
                 if !matches!(
                     k,
                     ObjectiveKind::Stability | ObjectiveKind::DecayRate | ObjectiveKind::Hinf
@@ -95,8 +108,18 @@ impl Checker<'_> {
             );
         };
         if let Some(t) = &spec.trigger {
-            if !matches!(t.node, Trigger::Continuous) {
-                refuse(self, t.span, "a sampling or triggering law", "the output-feedback certificate covers the continuous loop in this build; remove the `trigger` item");
+            if !matches!(t.node, Trigger::Continuous | Trigger::Periodic { .. }) {
+                refuse(self, t.span, "this triggering law", "output feedback is certified for the continuous loop and for `trigger periodic { every = T; }` (the sampled loop) in this build");
+            }
+            let periodic = matches!(t.node, Trigger::Periodic { .. });
+            let saturated = spec.saturation.is_some();
+            if let (true, true, true, Some(input)) = (
+                periodic,
+                saturated,
+                spec.control.kind == ControlKind::ObserverBased,
+                spec.inputs.first(),
+            ) {
+                refuse(self, input.span, "a saturating input in the sampled loop", "the sampled observer-based loop is certified without saturation in this build: remove `saturate` or the `trigger` item");
             }
         }
         if matches!(spec.lyapunov.node, Lyapunov::Fuzzy { .. }) {
@@ -182,12 +205,17 @@ mod tests {
         );
         assert!(at.starts_with("objective input_norm"), "{at}");
         let src = format!(
-            "{PENDULUM}measure y = th;\ncontrol static_output;\ntrigger periodic {{ every = 0.01; }}\n"
+            "{PENDULUM}measure y = th;\ncontrol static_output;\ntrigger jittered {{ every = 0.01; jitter = 0.001; }}\n"
         );
         let (m, _) = only_error_of(&src);
         assert_eq!(
             m,
-            "a sampling or triggering law cannot be used with `control static_output`"
+            "this triggering law cannot be used with `control static_output`"
         );
+        for kind in ["static_output", "observer_based"] {
+            valid(&format!(
+                "{PENDULUM}measure y = th;\ncontrol {kind};\ntrigger periodic {{ every = 0.01; }}\n"
+            ));
+        }
     }
 }

@@ -1,0 +1,90 @@
+//! The sampled observer-based loop: `control observer_based;` with
+//! `trigger periodic { every = T; }`. The observer and controller run every T
+//! on the continuous plant; the certificate is the looped functional on the
+//! augmented state (x, xhat) ([`crate::synth::observer::sampled`]), rebuilt
+//! from the shipped gains F_l and observer tables (Phi_j, Gu_j, Gy_j), also
+//! as stored. Refused with the longest period that certifies.
+
+use super::every_sample::looped_conditions;
+use super::{Condition, LoopCertificate, LoopDesign, LoopLaw, Rounding, Start};
+use crate::model::TsModel;
+use crate::synth::design::{Design, SynthError};
+use crate::synth::observer::sampled::{augmented_model, SampledObserver};
+use crate::synth::observer::OutputFeedback;
+use crate::synth::search::Runner;
+use nalgebra::DMatrix;
+use tsf_lang::spec::{ControlKind, Trigger};
+
+/// The periodic loop of an observer-based controller.
+#[derive(Debug, Clone, Copy)]
+pub struct ObserverSampled;
+
+/// The period of an observer-based spec's periodic trigger, if it has one.
+pub fn period(model: &TsModel) -> Option<f64> {
+    if model.spec.control.kind != ControlKind::ObserverBased {
+        return None;
+    }
+    match model.spec.trigger.as_ref().map(|t| &t.node) {
+        Some(Trigger::Periodic { every }) => Some(*every),
+        _ => None,
+    }
+}
+
+impl LoopLaw for ObserverSampled {
+    fn name(&self) -> &'static str {
+        "sampled observer"
+    }
+
+    fn claims(&self, model: &TsModel) -> bool {
+        model.spec.modes.is_none() && period(model).is_some()
+    }
+
+    fn design(
+        &self,
+        runner: &mut Runner<'_>,
+        d: &mut Design,
+        _: &Start,
+    ) -> Result<LoopDesign, SynthError> {
+        let (Some(t), Some(OutputFeedback::Observer(o))) = (period(runner.model), &d.output) else {
+            return Err(SynthError::Internal(
+                "internal error: the sampled observer loop needs the observer design".into(),
+            ));
+        };
+        let alpha = d.plan.decay().map_or(0.0, |dec| dec.alpha);
+        let o = o.clone();
+        let s = runner.sampled_observer(d, &o, t, alpha)?;
+        d.notes
+            .push(format!("sampled loop certified: {}", s.covers()));
+        Ok(LoopDesign::ObserverSampled(s))
+    }
+}
+
+impl LoopCertificate for SampledObserver {
+    fn conditions(
+        &self,
+        model: &TsModel,
+        eps: f64,
+        gains: &[DMatrix<f64>],
+        stored: Option<Rounding<'_>>,
+    ) -> Result<Vec<Condition>, SynthError> {
+        let steps = match stored {
+            Some(round) => self.steps.rounded(round),
+            None => self.steps.clone(),
+        };
+        let plan = self.plan_with(gains, &steps);
+        let aug = augmented_model(model);
+        looped_conditions(&aug, &plan, eps, self.values.clone(), &self.reductions)
+    }
+
+    fn reductions(&self) -> &[crate::synth::reduction::Reduction] {
+        &self.reductions
+    }
+
+    fn stored_matrices(&self) -> Vec<&DMatrix<f64>> {
+        self.steps.matrices()
+    }
+
+    fn every_sample(&self) -> Option<(f64, f64)> {
+        Some((self.period, self.period))
+    }
+}

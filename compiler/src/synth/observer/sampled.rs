@@ -1,0 +1,333 @@
+//! The certificate of the SAMPLED observer-based loop: the continuous T-S
+//! plant, and the discrete observer and controller the generated code runs
+//! every period T (zero-order hold on u).
+//!
+//! What runs (`tsf_runtime::Observer::step`, premises measured): at t_k,
+//! y_k = C x(t_k), memberships h_j(t_k) from y_k (the plant's own, the
+//! premises read measured states), u_k = sum_l h_l(t_k) F_l xhat_k, and
+//!
+//! ```text
+//! xhat_{k+1} = sum_j h_j(t_k) (Phi_j xhat_k + Gu_j u_k + Gy_j y_k)
+//! ```
+//!
+//! with the tables Phi_j, Gu_j, Gy_j of every rule ([`discretize`]: the
+//! exact zero-order-hold discretization of the rule's continuous observer,
+//! but nothing below depends on how they were computed). The plant
+//! x'(t) = sum_i h_i(x(t)) (A_i x(t) + B_i u_k) between samples.
+//!
+//! The estimate is read only at the samples, so any continuous curve through
+//! the xhat_k describes the loop; take the straight line
+//! xhat(t) = xhat_k + (t - t_k) (xhat_{k+1} - xhat_k) / T. On (t_k, t_{k+1})
+//! its derivative is constant, and with sum_j h_j = 1:
+//!
+//! ```text
+//! xhat'(t) = sum_j sum_l h_j h_l [Gy_j C / T, (Phi_j - I) / T + Gu_j F_l / T] xi(t_k)
+//! x'(t)    = sum_i h_i(t) A_i x(t) + sum_i sum_l h_i(t) h_l(t_k) B_i F_l xhat(t_k)
+//! ```
+//!
+//! so xi = (x, xhat) (2n states, absolutely continuous) follows EXACTLY
+//!
+//! ```text
+//! xi'(t) = sum_{i,j,l} h_i(t) h_j(t_k) h_l(t_k) (Abar_i xi(t) + Bbar_i K_jl xi(t_k)),
+//! Abar_i = diag(A_i, 0),  Bbar_i = diag(B_i, I_n),
+//! K_jl = [0, F_l; Gy_j C / T, (Phi_j - I) / T + Gu_j F_l / T],
+//! ```
+//!
+//! a sampled-data T-S loop with plant rules (Abar_i, Bbar_i) and
+//! "controller gains" K_jl, one per pair (observer rule j, controller rule
+//! l), both blended at t_k (the observer's B_j u_k makes the double sum).
+//! The weights h_i(t) h_j(t_k) h_l(t_k) are >= 0 and sum to 1, so the
+//! looped-functional conditions of [`crate::synth::trigger`] (Seuret 2012;
+//! Xu & Huang 2020), imposed at every vertex (i, (j, l)) with every sample
+//! transmitted, cover the loop with h_i varying within the period: they are
+//! affine in (Abar_i, Bbar_i K_jl) but for h Phi' Y Phi, which is convex.
+//! With V' + phi V < 0 between samples and the looped term zero at them,
+//! V(t) <= e^{-phi (t - t_0)} x_0' P x_0: with phi = 2 alpha the loop decays
+//! at rate alpha (else phi = 0: asymptotic stability). The measurement noise
+//! enters as Gy_j v_k / T, an input the certificate does not bound.
+//!
+//! The certificate rebuilds the conditions from the shipped F_l and tables
+//! (and from their stored rounding: [`crate::synth::loops::observer`]).
+
+use super::ObserverDesign;
+use crate::model::TsModel;
+use crate::synth::advice::{about, round_down};
+use crate::synth::design::{SynthError, TriggerPlan};
+use crate::synth::objectives::discrete::zoh;
+use crate::synth::reduction::Reduction;
+use crate::synth::sampling::{longest_scale, plan_for};
+use crate::synth::search::Runner;
+use crate::synth::solved::{names, Solved as _};
+use crate::synth::Design;
+use nalgebra::DMatrix;
+
+/// The exact discretization of one rule's observer
+/// `xhat' = (A - L C) xhat + B u + L y` over `period` with u and y held:
+/// `(Phi, Gu, Gy)` (C. F. Van Loan, "Computing integrals involving the
+/// matrix exponential", IEEE TAC 23(3), 1978, through [`zoh`]).
+pub fn discretize(
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+    l: &DMatrix<f64>,
+    period: f64,
+) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    let (n, m, q) = (a.nrows(), b.ncols(), c.nrows());
+    let ao = a - l * c;
+    let mut inputs = DMatrix::zeros(n, m + q);
+    inputs.view_mut((0, 0), (n, m)).copy_from(b);
+    inputs.view_mut((0, m), (n, q)).copy_from(l);
+    let (phi, g) = zoh(&ao, &inputs, period);
+    let gu = g.view((0, 0), (n, m)).into_owned();
+    let gy = g.view((0, m), (n, q)).into_owned();
+    (phi, gu, gy)
+}
+
+/// Every rule's discrete observer step: the tables generated code stores.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObserverSteps {
+    /// Phi_j (n x n).
+    pub phi: Vec<DMatrix<f64>>,
+    /// Gu_j (n x m).
+    pub gu: Vec<DMatrix<f64>>,
+    /// Gy_j (n x p).
+    pub gy: Vec<DMatrix<f64>>,
+}
+
+impl ObserverSteps {
+    /// The steps of every rule of `model` with gains `l`, at `period`.
+    pub fn of(model: &TsModel, c: &DMatrix<f64>, l: &[DMatrix<f64>], period: f64) -> Self {
+        let (mut phi, mut gu, mut gy) = (Vec::new(), Vec::new(), Vec::new());
+        for (rule, li) in model.rules.iter().zip(l) {
+            let (p, u, y) = discretize(&rule.a, &rule.b, c, li, period);
+            phi.push(p);
+            gu.push(u);
+            gy.push(y);
+        }
+        ObserverSteps { phi, gu, gy }
+    }
+
+    /// Every entry passed through `round` (the stored precision).
+    pub fn rounded(&self, round: &dyn Fn(f64) -> f64) -> Self {
+        let r = |v: &Vec<DMatrix<f64>>| v.iter().map(|m| m.map(round)).collect();
+        ObserverSteps {
+            phi: r(&self.phi),
+            gu: r(&self.gu),
+            gy: r(&self.gy),
+        }
+    }
+
+    /// Every matrix, for the stored-rounding report.
+    pub fn matrices(&self) -> Vec<&DMatrix<f64>> {
+        self.phi.iter().chain(&self.gu).chain(&self.gy).collect()
+    }
+
+    /// Whether every entry is finite.
+    pub fn finite(&self) -> bool {
+        self.matrices()
+            .iter()
+            .all(|m| m.iter().all(|v| v.is_finite()))
+    }
+}
+
+/// The augmented loop as a T-S model of the sampled-data form: 2n states
+/// xi = (x, xhat), inputs v = (u, xhat') (m + n), rules
+/// Abar_i = diag(A_i, 0), Bbar_i = diag(B_i, I_n), no disturbance.
+pub fn augmented_model(model: &TsModel) -> TsModel {
+    let (n, m) = (model.n, model.m);
+    let mut aug = model.clone();
+    aug.n = 2 * n;
+    aug.m = m + n;
+    aug.q = 0;
+    aug.plant_error = None;
+    for rule in &mut aug.rules {
+        let mut a = DMatrix::zeros(2 * n, 2 * n);
+        a.view_mut((0, 0), (n, n)).copy_from(&rule.a);
+        let mut b = DMatrix::zeros(2 * n, m + n);
+        b.view_mut((0, 0), (n, m)).copy_from(&rule.b);
+        b.view_mut((n, m), (n, n))
+            .copy_from(&DMatrix::identity(n, n));
+        rule.a = a;
+        rule.b = b;
+        rule.d = DMatrix::zeros(2 * n, 0);
+    }
+    aug
+}
+
+/// K_jl for every observer rule j (outer) and controller rule l (inner):
+/// `[0, F_l; Gy_j C / T, (Phi_j - I) / T + Gu_j F_l / T]`.
+pub fn pair_gains(
+    f: &[DMatrix<f64>],
+    c: &DMatrix<f64>,
+    steps: &ObserverSteps,
+    period: f64,
+) -> Vec<DMatrix<f64>> {
+    let Some(n) = steps.phi.first().map(DMatrix::nrows) else {
+        return Vec::new();
+    };
+    let m = f.first().map_or(0, DMatrix::nrows);
+    let id = DMatrix::<f64>::identity(n, n);
+    let mut out = Vec::new();
+    for j in 0..steps.phi.len() {
+        let gyc = &steps.gy[j] * c / period;
+        let drift = (&steps.phi[j] - &id) / period;
+        for fl in f {
+            let mut k = DMatrix::zeros(m + n, 2 * n);
+            k.view_mut((0, n), (m, n)).copy_from(fl);
+            k.view_mut((m, 0), (n, n)).copy_from(&gyc);
+            k.view_mut((m, n), (n, n))
+                .copy_from(&(&drift + &steps.gu[j] * fl / period));
+            out.push(k);
+        }
+    }
+    out
+}
+
+/// The certificate of the sampled observer loop.
+#[derive(Debug, Clone)]
+pub struct SampledObserver {
+    /// The period T (s).
+    pub period: f64,
+    /// The decay rate certified (0: asymptotic stability).
+    pub alpha: f64,
+    /// The measured output map C.
+    pub c: DMatrix<f64>,
+    /// The discrete observer every rule runs (what the tables store).
+    pub steps: ObserverSteps,
+    /// The looped-functional problem data (augmented model, gains K_jl).
+    pub plan: TriggerPlan,
+    /// P of the functional (2n x 2n).
+    pub p: DMatrix<f64>,
+    /// Values of every variable of the solved problem.
+    pub values: Vec<(String, DMatrix<f64>)>,
+    /// Reductions applied to the solved problem.
+    pub reductions: Vec<Reduction>,
+}
+
+impl SampledObserver {
+    /// The looped-functional plan for the controller gains `f` and the
+    /// observer `steps` (rounded as stored by the caller, if so).
+    pub fn plan_with(&self, f: &[DMatrix<f64>], steps: &ObserverSteps) -> TriggerPlan {
+        TriggerPlan {
+            gains: pair_gains(f, &self.c, steps, self.period),
+            ..self.plan.clone()
+        }
+    }
+
+    /// What it certifies, in words.
+    pub fn covers(&self) -> String {
+        let rate = if self.alpha > 0.0 {
+            format!(
+                "decays at rate {} (V(t) <= e^(-{} t) V(0))",
+                self.alpha,
+                2.0 * self.alpha
+            )
+        } else {
+            "is asymptotically stable (the decay rate of the spec is not certified for the sampled loop)".into()
+        };
+        format!(
+            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}; the measurement noise is not bounded by it",
+            self.period
+        )
+    }
+}
+
+/// The plan of the sampled observer loop at `period` with `phi`.
+fn plan_at(
+    model: &TsModel,
+    d: &Design,
+    o: &ObserverDesign,
+    period: f64,
+    phi: f64,
+) -> (TriggerPlan, ObserverSteps) {
+    let steps = ObserverSteps::of(model, &o.c, &o.gains, period);
+    let mut plan = plan_for(model, d, (period, period));
+    plan.phi = phi;
+    plan.levels = Vec::new();
+    plan.sector = Vec::new();
+    plan.contain = Vec::new();
+    plan.c = DMatrix::zeros(0, 2 * model.n);
+    plan.gains = pair_gains(&d.gains, &o.c, &steps, period);
+    (plan, steps)
+}
+
+impl Runner<'_> {
+    /// One SDP of the sampled observer loop at `period` and `alpha`.
+    fn observer_attempt(
+        &mut self,
+        aug: &TsModel,
+        d: &Design,
+        o: &ObserverDesign,
+        period: f64,
+        alpha: f64,
+    ) -> Result<Option<SampledObserver>, SynthError> {
+        let (plan, steps) = plan_at(self.model, d, o, period, 2.0 * alpha);
+        if !steps.finite() {
+            return Ok(None);
+        }
+        let what = "sampled observer-loop problem";
+        let Some((built, all)) = self.solve_looped_on(aug, &plan, what, None)? else {
+            return Ok(None);
+        };
+        Ok(Some(SampledObserver {
+            period,
+            alpha,
+            c: o.c.clone(),
+            steps,
+            plan,
+            p: all.required(names::LOOP_P)?,
+            values: all,
+            reductions: built.reductions,
+        }))
+    }
+
+    /// The certificate of the sampled observer loop of `d` at `period`: at
+    /// the controller's decay rate `alpha` if it holds, else for stability
+    /// (noted); refused with the longest period that certifies stability
+    /// (bisection, [`longest_scale`]; the advice re-solved).
+    pub fn sampled_observer(
+        &mut self,
+        d: &Design,
+        o: &ObserverDesign,
+        period: f64,
+        alpha: f64,
+    ) -> Result<SampledObserver, SynthError> {
+        let aug = augmented_model(self.model);
+        if alpha > 0.0 {
+            if let Some(s) = self.observer_attempt(&aug, d, o, period, alpha)? {
+                return Ok(s);
+            }
+        }
+        if let Some(s) = self.observer_attempt(&aug, d, o, period, 0.0)? {
+            return Ok(s);
+        }
+        let what = format!("the observer-based loop sampled every {period} s is not certified (the looped-functional conditions of the sampled loop, with the discrete observer at that period, are infeasible)");
+        let Some(lo) = longest_scale(|s| {
+            Ok(self
+                .observer_attempt(&aug, d, o, period * s, 0.0)?
+                .is_some())
+        })?
+        else {
+            return Err(SynthError::Infeasible {
+                message: what,
+                achievable: vec![format!("not even a period of {} s certifies: weaken the controller's decay rate or change the observer's (`control observer_based(decay = ..)`)", about(period / 1024.0))],
+            });
+        };
+        let mut advice = round_down(period * lo);
+        let mut checked = "not re-certified";
+        for _ in 0..4 {
+            if self.observer_attempt(&aug, d, o, advice, 0.0)?.is_some() {
+                checked = "certified";
+                break;
+            }
+            advice = round_down(advice * 0.95);
+        }
+        Err(SynthError::Infeasible {
+            message: what,
+            achievable: vec![format!(
+                "the longest certified period is about {} s: write `trigger periodic {{ every = {advice}; }}` ({checked})",
+                about(period * lo)
+            )],
+        })
+    }
+}

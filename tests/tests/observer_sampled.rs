@@ -1,0 +1,237 @@
+//! Issue 36, part C: the certificate of the SAMPLED observer-based loop
+//! (continuous T-S plant, discrete observer and controller every T) and the
+//! release of its code and simulation.
+//!
+//! The spec is a two-rule unstable oscillator x1'' = x1 + 0.1 sin(x1) + u
+//! with only x1 measured (B the same in both rules): the shipped pendulum
+//! observer is refused by the sampled certificate (the vertex where the
+//! plant's rule and the observer's rule differ is unstable: its B_1 and B_2
+//! differ by a factor of 28, times gains in the thousands), see docs/limits.md.
+
+use crate::common;
+
+use nalgebra::DMatrix;
+use serde_json::Value;
+use std::path::Path;
+use std::process::Output;
+use tsf_runtime::{FactoredController, Observer, Term};
+use tsfc::tables::{PremiseCode, Tables};
+
+const SPEC: &str = "tsf 1;
+controller osc_observer;
+state x1, x2;
+input u;
+A(x) = [0, 1; 1 + 0.1 * sinc(x1), 0];
+B = [0; 1];
+premise s = sinc(x1) range 0.6 .. 1 { near = tri(0.6, 1, 1); far = tri(0.6, 0.6, 1); }
+rule R1: s is near => at(x1 = 0, x2 = 0);
+rule R2: s is far => at(x1 = 1.4, x2 = 0);
+objective decay_rate >= 0.5;
+relaxation basic;
+measure y = x1 noise <= 0.001;
+control observer_based(decay = 2);
+trigger periodic { every = PERIOD; }
+emit rust, c;
+simulate { x0 = [0.5, 0]; time = 0 .. 8 step 0.001; integrator = rk4; }
+";
+
+/// The period the spec certifies at.
+const T: f64 = 0.01;
+
+fn spec_at(period: f64, dir: &Path) -> std::path::PathBuf {
+    let path = dir.join("osc_observer.tsf");
+    std::fs::write(&path, SPEC.replace("PERIOD", &period.to_string())).expect("write spec");
+    path
+}
+
+fn tsfc(args: &[&str], spec: &Path, out: &Path) -> Output {
+    std::process::Command::new(common::tsfc_binary())
+        .args(args)
+        .arg(spec)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("run tsfc")
+}
+
+/// x2' of the nonlinear plant, x' = A(x) x + B u written out.
+fn plant(x: [f64; 2], u: f64) -> [f64; 2] {
+    [x[1], x[0] + 0.1 * x[0].sin() + u]
+}
+
+type Runtime<'a> = Observer<'a, f64, 2, 1, 1, 1, 2, 2>;
+
+/// The runtime's observer on the generated tables.
+fn runtime_observer<'a>(t: &'a Tables, terms: &'a [Term<'a, f64>]) -> Runtime<'a> {
+    let o = t.observer.as_ref().expect("observer tables");
+    let rules: Vec<&[usize]> = t.factored.rules.iter().map(Vec::as_slice).collect();
+    let m2 = |r: &[Vec<f64>]| [[r[0][0], r[0][1]], [r[1][0], r[1][1]]];
+    let col = |r: &[Vec<f64>]| [[r[0][0]], [r[1][0]]];
+    Observer {
+        controller: FactoredController {
+            premise_map: [[0.0, 0.0]],
+            terms: [terms[0], terms[1]],
+            rules: [rules[0], rules[1]],
+            centres: [[t.centres[0][0]], [t.centres[1][0]]],
+            gains: [
+                [[t.gains[0][0][0], t.gains[0][0][1]]],
+                [[t.gains[1][0][0], t.gains[1][0][1]]],
+            ],
+            u_max: [t.u_max[0]],
+        },
+        output_map: o.output_map.as_ref().map(|s| col(s)),
+        phi: [m2(&o.phi[0]), m2(&o.phi[1])],
+        gu: [col(&o.gu[0]), col(&o.gu[1])],
+        gy: [col(&o.gy[0]), col(&o.gy[1])],
+    }
+}
+
+/// Certified at T: exit 0, the report's note says what the sampled
+/// certificate covers, Rust and C are written; the tables' discrete
+/// observer is the exact discretization of the reported gains L_i; the
+/// simulator converges from a wrong estimate and agrees with an RK4 loop
+/// written here (nonlinear plant, the runtime's observer step every T).
+#[test]
+fn sampled_observer_loop_certifies_generates_and_converges() {
+    let dir = common::fresh_dir("observer_sampled", "certified");
+    let spec = spec_at(T, &dir);
+    let out = tsfc(&["compile"], &spec, &dir);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    for f in ["osc_observer.rs", "osc_observer.c", "osc_observer.h"] {
+        assert!(dir.join(f).exists(), "{f}: {stderr}");
+    }
+    let report: Value = serde_json::from_slice(
+        &std::fs::read(dir.join("osc_observer.report.json")).expect("report"),
+    )
+    .expect("JSON");
+    let notes = report["notes"].to_string();
+    assert!(
+        notes.contains("sampled observer-based loop") && notes.contains("every 0.01 s"),
+        "{notes}"
+    );
+    assert!(report["certificate"]["lmis"]
+        .as_array()
+        .expect("lmis")
+        .iter()
+        .any(|l| l["name"]
+            .as_str()
+            .is_some_and(|n| n.starts_with("trigger r=2"))));
+    let prepared = tsfc::driver::prepare(&spec).expect("prepared");
+    let t = &prepared.tables;
+    let o = t.observer.as_ref().expect("observer tables");
+    assert_eq!(o.period, T);
+    // The tables are the ZOH of the reported L_i (re-derived here).
+    let l_rows = &report["observer"]["gains"];
+    for (i, rule) in prepared.model.rules.iter().enumerate() {
+        let l = &l_rows[i]["L"];
+        let li = DMatrix::from_row_slice(
+            2,
+            1,
+            &[l[0][0].as_f64().unwrap(), l[1][0].as_f64().unwrap()],
+        );
+        let c = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
+        let (phi, _, gy) = tsfc::tables::observer::discretize(&rule.a, &rule.b, &c, &li, T);
+        for r in 0..2 {
+            assert!((phi[(r, 0)] - o.phi[i][r][0]).abs() < 1e-12);
+            assert!((gy[(r, 0)] - o.gy[i][r][0]).abs() < 1e-12);
+        }
+    }
+    let xhat0 = vec![0.0, 0.8];
+    let mut opts = tsfc::sim::Options::default();
+    opts.observer.xhat0 = Some(xhat0.clone());
+    opts.observer.noise = tsfc::sim::observer::Noise::Uniform(0.0);
+    let mut samples: Vec<(f64, Vec<f64>, f64)> = Vec::new();
+    let mut see = |tt: f64, x: &[f64], u: &[f64]| samples.push((tt, x.to_vec(), u[0]));
+    let spec_data = prepared.model.spec.clone();
+    let outcome = tsfc::sim::run_truth(&prepared, &spec_data, &opts, None, Some(&mut see))
+        .expect("simulated");
+    let est = outcome.metrics.estimation.as_ref().expect("estimation");
+    assert!(
+        outcome.metrics.converged,
+        "{:?}",
+        outcome.metrics.failures()
+    );
+    assert!(
+        est.final_error_norm < 1e-3 * est.initial_error_norm,
+        "{est:?}"
+    );
+    let PremiseCode::Exprs(exprs) = &t.premise else {
+        panic!("sinc premise")
+    };
+    let terms: Vec<Term<'_, f64>> = t.factored.terms.iter().map(|s| s.runtime()).collect();
+    let obs = runtime_observer(t, &terms);
+    let (mut x, mut xhat, h) = ([0.5, 0.0], [xhat0[0], xhat0[1]], 0.001);
+    let mut worst: f64 = 0.0;
+    for (tt, xs, us) in &samples {
+        let y = [x[0]];
+        let v = obs.premise_state(&xhat, &y);
+        let u = obs
+            .step_with_premises(&mut xhat, &y, &[exprs[0].eval(&v)])
+            .u[0];
+        worst = worst
+            .max((xs[0] - x[0]).abs())
+            .max((xs[1] - x[1]).abs())
+            .max((us - u).abs() / (1.0 + u.abs()));
+        for _ in 0..10 {
+            let f = |s: [f64; 2]| plant(s, u);
+            let k1 = f(x);
+            let k2 = f([x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]]);
+            let k3 = f([x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]]);
+            let k4 = f([x[0] + h * k3[0], x[1] + h * k3[1]]);
+            for i in 0..2 {
+                x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+        }
+        assert!(tt.is_finite());
+    }
+    assert!(worst < 1e-8, "simulator vs independent loop: {worst:e}");
+    assert!(
+        x[0].abs() < 1e-3 && (x[0] - xhat[0]).abs() < 1e-3,
+        "{x:?} {xhat:?}"
+    );
+    // `tsfc simulate` runs end to end with the spec's noise and the plot.
+    let sim = tsfc(&["simulate"], &spec, &dir);
+    let err = String::from_utf8_lossy(&sim.stderr);
+    assert_eq!(sim.status.code(), Some(0), "{err}");
+    assert!(dir.join("osc_observer.estimate.svg").exists(), "{err}");
+    let metrics: Value = serde_json::from_slice(
+        &std::fs::read(dir.join("osc_observer.metrics.json")).expect("metrics"),
+    )
+    .expect("JSON");
+    assert!(
+        metrics["estimation"]["noise"]
+            .as_str()
+            .is_some_and(|n| n.contains("0.001")),
+        "{metrics}"
+    );
+}
+
+/// A period too long: exit 3 naming the longest certified period, and that
+/// period, written as advised, certifies.
+#[test]
+fn too_long_a_period_is_refused_with_the_longest_that_certifies() {
+    let dir = common::fresh_dir("observer_sampled", "refused");
+    let spec = spec_at(0.5, &dir);
+    let out = tsfc(&["compile"], &spec, &dir);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(!dir.join("osc_observer.c").exists());
+    let at = stderr.find("trigger periodic { every = ").expect("advice")
+        + "trigger periodic { every = ".len();
+    let rest = &stderr[at..];
+    let advised: f64 = rest[..rest.find(';').expect(";")]
+        .parse()
+        .expect("a number");
+    assert!(advised > 0.01 && advised < 0.5, "{advised}");
+    assert!(stderr.contains("(certified)"), "{stderr}");
+    let ok_dir = common::fresh_dir("observer_sampled", "advised");
+    let spec = spec_at(advised, &ok_dir);
+    let out = tsfc(&["compile"], &spec, &ok_dir);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
