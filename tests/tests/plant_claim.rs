@@ -7,55 +7,17 @@
 //! of the model stage plugs into the same seam.
 
 use crate::common;
+use crate::common::plant::{known, run, textbook_error};
 use nalgebra::{DMatrix, DVector};
 use tsfc::driver::compile::{Compiled, Status};
-use tsfc::driver::plant::{compile, PlantRequest};
+use tsfc::driver::plant::PlantRequest;
 use tsfc::model::plant_error::{PlantError, StateBox};
 use tsfc::model::TsModel;
-use tsfc::report::SpecInfo;
-use tsfc::synth::Settings;
 
 const TEXTBOOK: &str = "textbook_operating_points.tsf";
 /// The rules of the textbook spec sit at x1 = -R, 0, R.
 const R: f64 = 2.0;
 const DELTA: f64 = 0.25;
-
-/// A closed-form bound: ||dA|| <= a, ||dB|| = 0.
-fn known(a: f64) -> PlantError {
-    PlantError {
-        a,
-        b: 0.0,
-        d: None,
-        boxes: 1,
-        converged: true,
-        sampled_max: (a, 0.0),
-    }
-}
-
-/// The textbook spec's exact error over a box: max over |x1| <= w of
-/// R |x1| - x1^2 (the blend interpolates the stiffness 1 - x1^2 linearly).
-#[allow(clippy::result_large_err)] // the seam's error is the model stage's Diagnostic
-fn textbook_error(_: &TsModel, region: &StateBox) -> Result<PlantError, tsf_lang::Diagnostic> {
-    let w = region[0].0.abs().max(region[0].1.abs()).min(R);
-    let top = (R / 2.0).min(w);
-    Ok(known(R * top - top * top))
-}
-
-fn run(model: &TsModel, request: PlantRequest<'_>) -> Compiled {
-    let info = SpecInfo {
-        path: "test.tsf".into(),
-        sha256: String::new(),
-    };
-    let c = compile(
-        model,
-        info,
-        &Settings::default(),
-        Default::default(),
-        request,
-    );
-    common::schema::report_json(&c.report);
-    c
-}
 
 fn nominal(model: &TsModel) -> Compiled {
     run(model, PlantRequest::default())

@@ -4,33 +4,16 @@
 //! nonlinear plant A(x), B(x) with the report's gains.
 
 use crate::common;
+use crate::common::plant::run;
 use nalgebra::{DMatrix, DVector};
 use tsf_lang::eval::Mode;
 use tsfc::driver::compile::{Compiled, Status};
-use tsfc::driver::plant::{compile, production_bound, PlantRequest};
+use tsfc::driver::plant::{production_bound, PlantRequest};
 use tsfc::model::error_bound::premise_range::PremiseRange;
 use tsfc::model::error_bound::{bound, BoundLimits};
 use tsfc::model::plant_error::{PlantError, StateBox};
 use tsfc::model::{premise_values, rule_weight, TsModel};
-use tsfc::report::SpecInfo;
-use tsfc::synth::Settings;
 use tsfc::util::rng::SplitMix64;
-
-fn run(model: &TsModel, request: PlantRequest<'_>) -> Compiled {
-    let info = SpecInfo {
-        path: "test.tsf".into(),
-        sha256: String::new(),
-    };
-    let c = compile(
-        model,
-        info,
-        &Settings::default(),
-        Default::default(),
-        request,
-    );
-    common::schema::report_json(&c.report);
-    c
-}
 
 fn rigorous(model: &TsModel, region: Option<&StateBox>) -> Compiled {
     run(

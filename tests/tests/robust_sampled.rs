@@ -5,13 +5,11 @@
 //! plus `plant region` over a vector state.
 
 use crate::common;
+use crate::common::plant::{known, run, textbook_error};
 use tsfc::driver::compile::{Compiled, Status};
-use tsfc::driver::plant::{compile, PlantRequest};
-use tsfc::model::plant_error::{PlantError, StateBox};
+use tsfc::driver::plant::PlantRequest;
 use tsfc::model::TsModel;
-use tsfc::report::SpecInfo;
 use tsfc::synth::loops::LoopDesign;
-use tsfc::synth::Settings;
 
 /// The textbook spec (rules at x1 = -r, 0, r; shipped with r = 2) sampled
 /// every 10 ms.
@@ -24,42 +22,6 @@ fn sampled_textbook(r: f64) -> TsModel {
         "sampled.tsf",
         &format!("{text}trigger periodic {{ every = 0.01; }}\n"),
     )
-}
-
-fn known(a: f64) -> PlantError {
-    PlantError {
-        a,
-        b: 0.0,
-        d: None,
-        boxes: 1,
-        converged: true,
-        sampled_max: (a, 0.0),
-    }
-}
-
-/// The textbook's exact error over a box (plant_claim.rs): max over
-/// |x1| <= w of 2 |x1| - x1^2.
-#[allow(clippy::result_large_err)] // the seam's error is the model stage's Diagnostic
-fn textbook_error(_: &TsModel, region: &StateBox) -> Result<PlantError, tsf_lang::Diagnostic> {
-    let w = region[0].0.abs().max(region[0].1.abs()).min(2.0);
-    let top = w.min(1.0);
-    Ok(known(2.0 * top - top * top))
-}
-
-fn run(model: &TsModel, request: PlantRequest<'_>) -> Compiled {
-    let info = SpecInfo {
-        path: "sampled.tsf".into(),
-        sha256: String::new(),
-    };
-    let c = compile(
-        model,
-        info,
-        &Settings::default(),
-        Default::default(),
-        request,
-    );
-    common::schema::report_json(&c.report);
-    c
 }
 
 /// The sampled loop's solved values (name, value).
