@@ -13,12 +13,13 @@
 
 use crate::common;
 use common::observer::{
-    fixed, hex, osc_spec_at, outputs, run_c_driver, runtime_observer, runtime_terms, tsfc, C_BITS,
+    factored, hex, osc_spec_at, outputs, run_c_driver, runtime_observer, runtime_terms, tsfc,
+    C_BITS,
 };
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use tsf_runtime::{FactoredController, Step};
+use tsf_runtime::Step;
 use tsfc::tables::{PremiseCode, Tables};
 
 /// Seeded steps per spec.
@@ -259,26 +260,6 @@ int main(void) {{
     )
 }
 
-/// The runtime's PDC controller on the tables of a static-output design
-/// (its "state" is y) at their exact sizes (checked).
-fn on_y<'a, const Q: usize, const M: usize, const P: usize, const R: usize, const D: usize>(
-    t: &'a Tables,
-    terms: &'a [tsf_runtime::Term<'a, f64>],
-) -> FactoredController<'a, f64, Q, M, P, R, D> {
-    assert_eq!((t.n, t.m, t.p, t.r, terms.len()), (Q, M, P, R, D), "sizes");
-    FactoredController {
-        premise_map: match &t.premise {
-            PremiseCode::Linear(l) => fixed(l),
-            PremiseCode::Exprs(_) => [[0.0; Q]; P],
-        },
-        terms: std::array::from_fn(|k| terms[k]),
-        rules: std::array::from_fn(|j| t.factored.rules[j].as_slice()),
-        centres: fixed(&t.centres),
-        gains: std::array::from_fn(|j| fixed(&t.gains[j])),
-        u_max: std::array::from_fn(|k| t.u_max[k]),
-    }
-}
-
 /// The runtime's PDC step on y for the tables of a static-output design
 /// (its "state" is y) at their exact sizes, in the driver's format.
 fn rust_static_output_lines<
@@ -292,7 +273,7 @@ fn rust_static_output_lines<
     ys: &[Vec<f64>],
 ) -> Vec<String> {
     let terms = runtime_terms(t);
-    let ctl = on_y::<Q, M, P, R, D>(t, &terms);
+    let ctl = factored::<Q, M, P, R, D>(t, &terms);
     ys.iter()
         .map(|y| {
             let y: [f64; Q] = std::array::from_fn(|k| y[k]);
@@ -390,7 +371,7 @@ fn static_output_lorenz_simulates_on_y_and_agrees_with_an_independent_loop() {
     let prepared = tsfc::driver::prepare(&spec).expect("prepared");
     let t = &prepared.tables;
     let terms = runtime_terms(t);
-    let ctl = on_y::<1, 1, 1, 2, 2>(t, &terms);
+    let ctl = factored::<1, 1, 1, 2, 2>(t, &terms);
     let opts = tsfc::sim::Options::default();
     let mut samples: Vec<(f64, Vec<f64>, f64)> = Vec::new();
     let mut see = |tt: f64, x: &[f64], u: &[f64]| samples.push((tt, x.to_vec(), u[0]));

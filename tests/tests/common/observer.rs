@@ -58,6 +58,38 @@ pub fn fixed<const A: usize, const B: usize>(rows: &[Vec<f64>]) -> [[f64; B]; A]
     })
 }
 
+/// The runtime's factored PDC controller on the tables `t` at their exact
+/// sizes (`N` the tables' state, y for a static-output design; `M` inputs,
+/// `P` premises, `R` rules, `D` distinct terms, all checked).
+pub fn factored<
+    'a,
+    const N: usize,
+    const M: usize,
+    const P: usize,
+    const R: usize,
+    const D: usize,
+>(
+    t: &'a Tables,
+    terms: &'a [Term<'a, f64>],
+) -> FactoredController<'a, f64, N, M, P, R, D> {
+    assert_eq!(
+        (t.n, t.m, t.p, t.r, terms.len()),
+        (N, M, P, R, D),
+        "sizes (n, m, p, r, terms)"
+    );
+    FactoredController {
+        premise_map: match &t.premise {
+            PremiseCode::Linear(l) => fixed(l),
+            PremiseCode::Exprs(_) => [[0.0; N]; P],
+        },
+        terms: std::array::from_fn(|k| terms[k]),
+        rules: std::array::from_fn(|j| t.factored.rules[j].as_slice()),
+        centres: fixed(&t.centres),
+        gains: std::array::from_fn(|j| fixed(&t.gains[j])),
+        u_max: std::array::from_fn(|k| t.u_max[k]),
+    }
+}
+
 /// The runtime's observer on the observer tables of `t` at its exact sizes
 /// (`N` states, `M` inputs, `Q` outputs, `P` premises, `R` rules, `D`
 /// distinct terms, all checked); `terms` are the runtime terms of
@@ -75,23 +107,9 @@ pub fn runtime_observer<
     terms: &'a [Term<'a, f64>],
 ) -> Observer<'a, f64, N, M, Q, P, R, D> {
     let o = t.observer.as_ref().expect("observer tables");
-    assert_eq!(
-        (t.n, t.m, o.q, t.p, t.r, terms.len()),
-        (N, M, Q, P, R, D),
-        "sizes (n, m, q, p, r, terms)"
-    );
+    assert_eq!(o.q, Q, "measured outputs");
     Observer {
-        controller: FactoredController {
-            premise_map: match &t.premise {
-                PremiseCode::Linear(l) => fixed(l),
-                PremiseCode::Exprs(_) => [[0.0; N]; P],
-            },
-            terms: std::array::from_fn(|k| terms[k]),
-            rules: std::array::from_fn(|j| t.factored.rules[j].as_slice()),
-            centres: fixed(&t.centres),
-            gains: std::array::from_fn(|j| fixed(&t.gains[j])),
-            u_max: std::array::from_fn(|k| t.u_max[k]),
-        },
+        controller: factored(t, terms),
         output_map: o.output_map.as_deref().map(fixed),
         phi: std::array::from_fn(|j| fixed(&o.phi[j])),
         gu: std::array::from_fn(|j| fixed(&o.gu[j])),
