@@ -115,6 +115,10 @@ enum Command {
         /// Initial state, comma-separated finite numbers (default: the spec's x0).
         #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
         x0: Option<Vec<f64>>,
+        /// Initial estimate of an observer-based controller, comma-separated finite numbers
+        /// (default: the spec's xhat0, else 0).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true, conflicts_with_all = ["monte_carlo", "sweep", "merge"])]
+        xhat0: Option<Vec<f64>>,
         /// Simulated time in seconds from t0, positive (default: the spec's span); at most 1e7
         /// steps of the scenario's time step.
         #[arg(long, allow_negative_numbers = true)]
@@ -209,6 +213,7 @@ fn main() -> ExitCode {
             spec,
             out,
             x0,
+            xhat0,
             horizon,
             report,
             monte_carlo,
@@ -254,7 +259,7 @@ fn main() -> ExitCode {
                     };
                     campaign(&spec, &out, x0, horizon, report.as_deref(), &cfg)
                 }
-                None => simulate(&spec, &out, x0, horizon, report.as_deref()),
+                None => simulate(&spec, &out, (x0, xhat0), horizon, report.as_deref()),
             },
             // ok: clap requires the spec unless --merge is given.
             (None, None) => ExitCode::from(2),
@@ -425,7 +430,7 @@ fn emit_targets(emit: Option<&[Target]>, spec: &[Emit]) -> Vec<Emit> {
 fn simulate(
     path: &std::path::Path,
     out: &std::path::Path,
-    x0: Option<Vec<f64>>,
+    (x0, xhat0): (Option<Vec<f64>>, Option<Vec<f64>>),
     horizon: Option<f64>,
     report: Option<&std::path::Path>,
 ) -> ExitCode {
@@ -455,12 +460,13 @@ fn simulate(
             .as_ref()
             .zip(start.as_deref())
             .and_then(|(u, x)| tsfc::driver::summary::outside_region(u, x));
-        let opts = tsfc::sim::Options {
+        let mut opts = tsfc::sim::Options {
             x0,
             horizon,
             progress: true,
             ..tsfc::sim::Options::default()
         };
+        opts.observer.xhat0 = xhat0;
         let (outcome, files) = tsfc::sim::simulate_to(&prepared, &opts, out)?;
         Ok((outcome, files, outside))
     };

@@ -663,6 +663,9 @@ pub struct Dynamics {
 pub struct Simulation {
     /// Initial state.
     pub x0: Vec<f64>,
+    /// Initial estimate of an observer-based controller (`xhat0 = [..];`,
+    /// n components; the generated `INIT`, 0, when not given).
+    pub xhat0: Option<crate::span::Spanned<Vec<f64>>>,
     /// Start, end, step.
     pub time: (f64, f64, f64),
     /// Disturbance signals: (disturbance index, expression of t).

@@ -120,10 +120,11 @@ for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
             rows+=("| $name | f32 | - | - | - | - | - | - | no f32 code: $why | - | - | - |")
             continue
         fi
-        withheld='its code and simulation need `trigger periodic|code generation and simulation of `control static_output` are not in this build'
+        withheld='its code and simulation need `trigger periodic'
         if [ "$code" = 2 ] && grep -qE "$withheld" "$dir/compile.log"; then
             # Output feedback (issue 36): certified and reported; code only for an observer whose
-            # sampled loop certifies (docs/language.md). The row says why there is none.
+            # sampled loop certifies (docs/language.md; static output feedback ships like state
+            # feedback). The row says why there is none.
             why=$(grep -oE "$withheld" "$dir/compile.log" | head -1 | tr -d '`|')
             rows+=("| $name | $precision | - | - | - | - | - | - | no code: $why | - | - | - |")
             continue

@@ -14,16 +14,17 @@
 //! the runtime's step every T, which must agree.
 
 use crate::common;
+use common::observer::{
+    hex, outputs, rk4_held, run_c_driver, runtime_observer, runtime_terms, C_BITS,
+};
 use common::Rng;
 
 use nalgebra::DMatrix;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 use tsf_lang::spec::CStyle;
-use tsf_runtime::{FactoredController, Flags, Observer, Term};
-use tsfc::codegen::c::runtime;
+use tsf_runtime::Flags;
 use tsfc::codegen::{generate, CodegenError};
 use tsfc::model::TsModel;
 use tsfc::tables::observer::{discretize, period_of};
@@ -168,57 +169,6 @@ fn observer_tables_refuse_what_they_cannot_build() {
     assert_eq!(period_of(&m.spec), Ok(0.01));
 }
 
-/// The Rust runtime's observer of the tables, premises supplied by the caller.
-type Runtime<'a> = Observer<'a, f64, 2, 1, 1, 1, 2, 2>;
-
-fn runtime_observer<'a>(t: &'a Tables, terms: &'a [Term<'a, f64>]) -> Runtime<'a> {
-    let o = t.observer.as_ref().expect("observer");
-    let rules: Vec<&[usize]> = t.factored.rules.iter().map(Vec::as_slice).collect();
-    let m2 = |rows: &[Vec<f64>]| -> [[f64; 2]; 2] {
-        [[rows[0][0], rows[0][1]], [rows[1][0], rows[1][1]]]
-    };
-    let col = |rows: &[Vec<f64>]| -> [[f64; 1]; 2] { [[rows[0][0]], [rows[1][0]]] };
-    let premise_map = match &t.premise {
-        PremiseCode::Linear(l) => [[l[0][0], l[0][1]]],
-        PremiseCode::Exprs(_) => [[0.0, 0.0]],
-    };
-    Observer {
-        controller: FactoredController {
-            premise_map,
-            terms: [terms[0], terms[1]],
-            rules: [rules[0], rules[1]],
-            centres: [[t.centres[0][0]], [t.centres[1][0]]],
-            gains: [
-                [[t.gains[0][0][0], t.gains[0][0][1]]],
-                [[t.gains[1][0][0], t.gains[1][0][1]]],
-            ],
-            u_max: [t.u_max[0]],
-        },
-        output_map: o.output_map.as_ref().map(|s| col(s)),
-        phi: [m2(&o.phi[0]), m2(&o.phi[1])],
-        gu: [col(&o.gu[0]), col(&o.gu[1])],
-        gy: [col(&o.gy[0]), col(&o.gy[1])],
-    }
-}
-
-/// Seeded outputs: mostly inside +-1.5 rad, some far outside, and a few
-/// non-finite and extreme values (fault paths, estimate resets).
-fn outputs(count: usize) -> Vec<f64> {
-    let mut rng = Rng::new(0x36b);
-    (0..count)
-        .map(|k| match k % 997 {
-            13 => f64::NAN,
-            101 => f64::INFINITY,
-            211 => 1e308,
-            // A run of the largest output: the estimate overflows.
-            401..=420 => f64::MAX,
-            307 => -0.0,
-            _ if k % 10 == 0 => rng.uniform(-40.0, 40.0),
-            _ => rng.uniform(-1.5, 1.5),
-        })
-        .collect()
-}
-
 fn work_dir(tag: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join("observer_code")
@@ -235,21 +185,7 @@ fn work_dir(tag: &str) -> PathBuf {
 fn driver(name: &str) -> String {
     format!(
         r#"#include "{name}.c"
-#include <stdio.h>
-#include <string.h>
-
-static unsigned long long bits(double v) {{
-    unsigned long long b;
-    memcpy(&b, &v, sizeof b);
-    return b;
-}}
-
-static double real(unsigned long long b) {{
-    double v;
-    memcpy(&v, &b, sizeof v);
-    return v;
-}}
-
+{C_BITS}
 int main(void) {{
     {name}_state_t a = {name}_init, g = {name}_init;
     double y[1], z[1], u[1], ug[1], deg[2], h[2], next[2];
@@ -277,53 +213,11 @@ fn run_c(t: &Tables, cases: &[(f64, f64)]) -> Vec<String> {
     for f in generate(t, &[tsf_lang::spec::Emit::C]).expect("generated C") {
         std::fs::write(dir.join(&f.name), &f.text).expect("write");
     }
-    for f in runtime::files() {
-        std::fs::write(dir.join(&f.name), &f.text).expect("write runtime");
-    }
-    std::fs::write(dir.join("driver.c"), driver(&t.name)).expect("write driver");
-    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
-    let exe = dir.join("driver");
-    let built = Command::new(&cc)
-        .args([
-            "-std=c99",
-            "-Wall",
-            "-Wextra",
-            "-Werror",
-            "-pedantic",
-            "-O2",
-        ])
-        .arg("-ffp-contract=off")
-        .arg(format!("-I{}", dir.display()))
-        .arg(dir.join("driver.c"))
-        .arg(dir.join(runtime::SOURCE_NAME))
-        .arg("-o")
-        .arg(&exe)
-        .arg("-lm")
-        .output()
-        .expect("run the C compiler");
-    assert!(
-        built.status.success(),
-        "{}",
-        String::from_utf8_lossy(&built.stderr)
-    );
     let mut input = String::new();
     for (y, z) in cases {
         let _ = writeln!(input, "{:x} {:x}", y.to_bits(), z.to_bits());
     }
-    let input_path = dir.join("cases.txt");
-    std::fs::write(&input_path, input).expect("write cases");
-    let out = Command::new(&exe)
-        .stdin(std::fs::File::open(&input_path).expect("cases"))
-        .stdout(Stdio::piped())
-        .output()
-        .expect("run the driver");
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).expect("utf-8");
-    text.lines().map(str::to_string).collect()
-}
-
-fn hex(v: f64) -> String {
-    format!("{:x}", v.to_bits())
+    run_c_driver(&dir, &driver(&t.name), &input)
 }
 
 /// The pendulum (premises sinc(theta) from the measured angle): the Rust
@@ -337,9 +231,9 @@ fn rust_and_c_runtime_observers_agree_bit_for_bit() {
     let PremiseCode::Exprs(exprs) = &t.premise else {
         panic!("sinc(theta) is a premise expression")
     };
-    let terms: Vec<Term<'_, f64>> = t.factored.terms.iter().map(|s| s.runtime()).collect();
-    let obs = runtime_observer(t, &terms);
-    let ys = outputs(10_000);
+    let terms = runtime_terms(t);
+    let obs = runtime_observer::<2, 1, 1, 1, 2, 2>(t, &terms);
+    let ys = outputs(10_000, 0x36b);
     let mut xhat = [0.0; 2];
     let mut cases = Vec::new();
     let mut want = Vec::new();
@@ -394,10 +288,10 @@ fn generated_c_observer_matches_the_runtime_bit_for_bit() {
         observer: Some(observer_tables(model, PremiseFrom::Estimate)),
         ..base.clone()
     };
-    let terms: Vec<Term<'_, f64>> = t.factored.terms.iter().map(|s| s.runtime()).collect();
-    let obs = runtime_observer(&t, &terms);
+    let terms = runtime_terms(&t);
+    let obs = runtime_observer::<2, 1, 1, 1, 2, 2>(&t, &terms);
     assert!(obs.output_map.is_none());
-    let ys = outputs(10_000);
+    let ys = outputs(10_000, 0x36b);
     // The C side starts from INIT (estimate 0).
     let mut xhat = [0.0; 2];
     let mut want = Vec::new();
@@ -502,8 +396,8 @@ fn closed_loop_from_a_wrong_estimate_converges_and_agrees() {
     let PremiseCode::Exprs(exprs) = &t.premise else {
         panic!("sinc premise")
     };
-    let terms: Vec<Term<'_, f64>> = t.factored.terms.iter().map(|s| s.runtime()).collect();
-    let obs = runtime_observer(t, &terms);
+    let terms = runtime_terms(t);
+    let obs = runtime_observer::<2, 1, 1, 1, 2, 2>(t, &terms);
     let mut x = [60f64.to_radians(), 0.0];
     let mut xhat = [xhat0[0], xhat0[1]];
     let h = 0.001;
@@ -519,16 +413,7 @@ fn closed_loop_from_a_wrong_estimate_converges_and_agrees() {
             .max((xs[0] - x[0]).abs())
             .max((xs[1] - x[1]).abs())
             .max((us[0] - u).abs() / (1.0 + u.abs()));
-        for _ in 0..10 {
-            let f = |s: [f64; 2]| pendulum(s, u);
-            let k1 = f(x);
-            let k2 = f([x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]]);
-            let k3 = f([x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]]);
-            let k4 = f([x[0] + h * k3[0], x[1] + h * k3[1]]);
-            for i in 0..2 {
-                x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-        }
+        rk4_held(&mut x, u, h, 10, pendulum);
     }
     assert!(worst < 1e-8, "simulator vs independent loop: {worst:e}");
     // The estimate plot is drawn.

@@ -9,81 +9,18 @@
 //! differ by a factor of 28, times gains in the thousands), see docs/limits.md.
 
 use crate::common;
+use common::observer::{osc_spec_at as spec_at, rk4_held, runtime_observer, runtime_terms, tsfc};
 
 use nalgebra::DMatrix;
 use serde_json::Value;
-use std::path::Path;
-use std::process::Output;
-use tsf_runtime::{FactoredController, Observer, Term};
-use tsfc::tables::{PremiseCode, Tables};
-
-const SPEC: &str = "tsf 1;
-controller osc_observer;
-state x1, x2;
-input u;
-A(x) = [0, 1; 1 + 0.1 * sinc(x1), 0];
-B = [0; 1];
-premise s = sinc(x1) range 0.6 .. 1 { near = tri(0.6, 1, 1); far = tri(0.6, 0.6, 1); }
-rule R1: s is near => at(x1 = 0, x2 = 0);
-rule R2: s is far => at(x1 = 1.4, x2 = 0);
-objective decay_rate >= 0.5;
-relaxation basic;
-measure y = x1 noise <= 0.001;
-control observer_based(decay = 2);
-trigger periodic { every = PERIOD; }
-emit rust, c;
-simulate { x0 = [0.5, 0]; time = 0 .. 8 step 0.001; integrator = rk4; }
-";
+use tsfc::tables::PremiseCode;
 
 /// The period the spec certifies at.
 const T: f64 = 0.01;
 
-fn spec_at(period: f64, dir: &Path) -> std::path::PathBuf {
-    let path = dir.join("osc_observer.tsf");
-    std::fs::write(&path, SPEC.replace("PERIOD", &period.to_string())).expect("write spec");
-    path
-}
-
-fn tsfc(args: &[&str], spec: &Path, out: &Path) -> Output {
-    std::process::Command::new(common::tsfc_binary())
-        .args(args)
-        .arg(spec)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .expect("run tsfc")
-}
-
 /// x2' of the nonlinear plant, x' = A(x) x + B u written out.
 fn plant(x: [f64; 2], u: f64) -> [f64; 2] {
     [x[1], x[0] + 0.1 * x[0].sin() + u]
-}
-
-type Runtime<'a> = Observer<'a, f64, 2, 1, 1, 1, 2, 2>;
-
-/// The runtime's observer on the generated tables.
-fn runtime_observer<'a>(t: &'a Tables, terms: &'a [Term<'a, f64>]) -> Runtime<'a> {
-    let o = t.observer.as_ref().expect("observer tables");
-    let rules: Vec<&[usize]> = t.factored.rules.iter().map(Vec::as_slice).collect();
-    let m2 = |r: &[Vec<f64>]| [[r[0][0], r[0][1]], [r[1][0], r[1][1]]];
-    let col = |r: &[Vec<f64>]| [[r[0][0]], [r[1][0]]];
-    Observer {
-        controller: FactoredController {
-            premise_map: [[0.0, 0.0]],
-            terms: [terms[0], terms[1]],
-            rules: [rules[0], rules[1]],
-            centres: [[t.centres[0][0]], [t.centres[1][0]]],
-            gains: [
-                [[t.gains[0][0][0], t.gains[0][0][1]]],
-                [[t.gains[1][0][0], t.gains[1][0][1]]],
-            ],
-            u_max: [t.u_max[0]],
-        },
-        output_map: o.output_map.as_ref().map(|s| col(s)),
-        phi: [m2(&o.phi[0]), m2(&o.phi[1])],
-        gu: [col(&o.gu[0]), col(&o.gu[1])],
-        gy: [col(&o.gy[0]), col(&o.gy[1])],
-    }
 }
 
 /// Certified at T: exit 0, the report's note says what the sampled
@@ -159,8 +96,8 @@ fn sampled_observer_loop_certifies_generates_and_converges() {
     let PremiseCode::Exprs(exprs) = &t.premise else {
         panic!("sinc premise")
     };
-    let terms: Vec<Term<'_, f64>> = t.factored.terms.iter().map(|s| s.runtime()).collect();
-    let obs = runtime_observer(t, &terms);
+    let terms = runtime_terms(t);
+    let obs = runtime_observer::<2, 1, 1, 1, 2, 2>(t, &terms);
     let (mut x, mut xhat, h) = ([0.5, 0.0], [xhat0[0], xhat0[1]], 0.001);
     let mut worst: f64 = 0.0;
     for (tt, xs, us) in &samples {
@@ -173,16 +110,7 @@ fn sampled_observer_loop_certifies_generates_and_converges() {
             .max((xs[0] - x[0]).abs())
             .max((xs[1] - x[1]).abs())
             .max((us - u).abs() / (1.0 + u.abs()));
-        for _ in 0..10 {
-            let f = |s: [f64; 2]| plant(s, u);
-            let k1 = f(x);
-            let k2 = f([x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]]);
-            let k3 = f([x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]]);
-            let k4 = f([x[0] + h * k3[0], x[1] + h * k3[1]]);
-            for i in 0..2 {
-                x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-        }
+        rk4_held(&mut x, u, h, 10, plant);
         assert!(tt.is_finite());
     }
     assert!(worst < 1e-8, "simulator vs independent loop: {worst:e}");
@@ -205,6 +133,26 @@ fn sampled_observer_loop_certifies_generates_and_converges() {
             .is_some_and(|n| n.contains("0.001")),
         "{metrics}"
     );
+    // The scenario's `xhat0`, then `--xhat0` over it.
+    assert_eq!(
+        metrics["estimation"]["xhat0"],
+        serde_json::json!([0.0, 0.8])
+    );
+    let sim = tsfc(&["simulate", "--xhat0=-0.25,0.5"], &spec, &dir);
+    let err = String::from_utf8_lossy(&sim.stderr);
+    assert_eq!(sim.status.code(), Some(0), "{err}");
+    let metrics: Value = serde_json::from_slice(
+        &std::fs::read(dir.join("osc_observer.metrics.json")).expect("metrics"),
+    )
+    .expect("JSON");
+    assert_eq!(
+        metrics["estimation"]["xhat0"],
+        serde_json::json!([-0.25, 0.5])
+    );
+    let bad = tsfc(&["simulate", "--xhat0", "1,2,3"], &spec, &dir);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(2), "{err}");
+    assert!(err.contains("xhat0 must have 2 finite components"), "{err}");
 }
 
 /// A period too long: exit 3 naming the longest certified period, and that

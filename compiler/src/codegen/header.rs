@@ -19,8 +19,12 @@ pub fn marker(h: &Header) -> String {
         ),
         None => "the certificate was not re-checked with these tables as stored".to_string(),
     };
+    let reads = h
+        .reads
+        .as_ref()
+        .map_or(String::new(), |r| format!("// {r}\n"));
     format!(
-        "{}// Precision {precision}: {stored}.\n//\n",
+        "{}// Precision {precision}: {stored}.\n{reads}//\n",
         generated_lines(h)
     )
 }

@@ -205,8 +205,9 @@ impl Run {
 /// Why a certified design of `model` has no tables or code in this build
 /// (exit 2, docs/limits.md): an observer-based controller whose sampled loop
 /// is not certified (no `trigger periodic { every = T; }`: only the
-/// continuous augmented loop is), and static output feedback (the generated
-/// step reads the state, not y).
+/// continuous augmented loop is). Static output feedback ships like state
+/// feedback (its loop, continuous or sampled, is certified with F_j = K_j C;
+/// the step reads y, [`crate::tables::static_output`]).
 pub fn withheld(model: &TsModel, design: &Design) -> Option<String> {
     use tsf_lang::spec::ControlKind;
     match model.spec.control.kind {
@@ -215,8 +216,6 @@ pub fn withheld(model: &TsModel, design: &Design) -> Option<String> {
         ControlKind::ObserverBased => Some(
             "an observer-based controller runs every period T: its code and simulation need `trigger periodic { every = T; }` (the certificate then covers the sampled loop; without it only the continuous loop is certified, and no code or simulation is emitted)".into(),
         ),
-        ControlKind::StaticOutput => Some(
-            "code generation and simulation of `control static_output` are not in this build (the generated step reads the state, not y; the design is certified and reported)".into(),
-        ),
+        ControlKind::StaticOutput => None,
     }
 }

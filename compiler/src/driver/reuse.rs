@@ -194,6 +194,7 @@ pub fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepare
                 .sampled_loop
                 .as_ref()
                 .map(|s| (s.sampling[0], s.sampling[1])),
+            reads: None,
         },
         n,
         m,
@@ -216,6 +217,7 @@ pub fn from_report(front: &Front, model: &TsModel, json: &str) -> Result<Prepare
         sensor: crate::tables::Sensor::None,
         modes,
         observer: None,
+        static_output: None,
     };
     let region = match &r.region_of_attraction {
         Some(roa) => Some(matrix(&roa.u, n, n, "region of attraction U")?),

@@ -26,6 +26,7 @@ pub mod controller;
 pub mod csv;
 pub mod integrator;
 pub mod limits;
+pub mod measure;
 pub mod metrics;
 pub mod modes;
 pub mod observer;

@@ -426,6 +426,10 @@ struct Run<'a> {
     premises: Option<Premises>,
     /// Plant state.
     x: Vec<f64>,
+    /// Static output feedback: the measured output the controller reads.
+    measure: Option<super::measure::Measure>,
+    /// What the controller reads at the sample: the state, or y = C x + noise.
+    seen: Vec<f64>,
     /// Premise vector z(x).
     z: Vec<f64>,
     /// Held command.
@@ -514,7 +518,12 @@ impl<'a> Run<'a> {
             t: t0,
             k: 0,
             sampled_modes,
-            held: (x[..n].to_vec(), z.clone()),
+            held: (vec![0.0; tables.n], z.clone()),
+            measure: tables.static_output.as_ref().map(|so| {
+                let noise = super::observer::or_spec_noise(opts.observer.noise, spec);
+                super::measure::Measure::new(so.c.clone(), noise, plan.seed)
+            }),
+            seen: vec![0.0; tables.n],
             at_jump: false,
             pending: None,
             monitor_tol: (h * 1e-6).max(1e-12),
@@ -546,18 +555,22 @@ impl<'a> Run<'a> {
         let rejump = self.sampled_modes && std::mem::take(&mut self.at_jump);
         let sent = !rejump && self.sampler.gate.decide(&self.x[..n]);
         let mut no_rule = false;
+        match self.measure.as_mut() {
+            Some(m) => m.sample(&self.x[..n], &mut self.seen),
+            None => self.seen.copy_from_slice(&self.x[..n]),
+        }
         if let Some(p) = self.premises.as_mut() {
-            p.eval(&self.x[..n], &mut self.z);
+            p.eval(&self.seen, &mut self.z);
         }
         self.controller.strengths(
-            &self.x[..n],
+            &self.seen,
             self.premises.as_ref().map(|_| &self.z[..]),
             &mut self.h_now,
         );
         self.mismatch.sample(&self.h_now, sent);
         self.rates.sample(t, &self.h_now);
         if sent && self.sampled_modes {
-            self.held.0.copy_from_slice(&self.x[..n]);
+            self.held.0.copy_from_slice(&self.seen);
             self.held.1.copy_from_slice(&self.z);
         }
         if sent || (rejump && !self.mode_laws.is_empty()) {
@@ -565,7 +578,7 @@ impl<'a> Run<'a> {
         }
         let in_region = match &self.premises {
             Some(_) => self.region.contains_premises(&self.z),
-            None => self.region.contains(&self.x[..n]),
+            None => self.region.contains(&self.seen),
         };
         self.tally.sample(&Sample {
             t,
@@ -585,7 +598,6 @@ impl<'a> Run<'a> {
     /// the one law, on the sample (`sent`; at a jump of a sampled loop: the
     /// held one). Whether no rule fired.
     fn command(&mut self, mode: Option<usize>, sent: bool) -> bool {
-        let n = self.n;
         let ctl = match mode {
             Some(a) if !self.mode_laws.is_empty() => {
                 &self.mode_laws[a.min(self.mode_laws.len() - 1)]
@@ -593,7 +605,7 @@ impl<'a> Run<'a> {
             _ => &self.controller,
         };
         let (xs, zs) = if sent {
-            (&self.x[..n], &self.z[..])
+            (&self.seen[..], &self.z[..])
         } else {
             (&self.held.0[..], &self.held.1[..])
         };

@@ -49,6 +49,7 @@ pub fn adaptive_tables(
             stored_margin: None,
             relaxation: String::new(),
             sampling: Some((dt, dt)),
+            reads: None,
         },
         n: model.n,
         m: model.m,
@@ -68,6 +69,7 @@ pub fn adaptive_tables(
         sensor: crate::tables::Sensor::None,
         modes: None,
         observer: None,
+        static_output: None,
     };
     let mut design = design.clone();
     for table in [

@@ -11,6 +11,7 @@ mod factored;
 pub mod observer;
 mod sensor;
 mod signal;
+pub mod static_output;
 pub mod sym;
 
 pub use adaptive::{adaptive_tables, AdaptiveTables};
@@ -60,6 +61,9 @@ pub struct Header {
     /// loop that transmits every sample; `None` for a continuous loop or an
     /// event trigger (its sensor module carries its sampling).
     pub sampling: Option<(f64, f64)>,
+    /// What the step reads when it is not the state (static output
+    /// feedback: the measured output), one sentence for every file's header.
+    pub reads: Option<String>,
 }
 
 /// Everything a generator needs.
@@ -111,6 +115,10 @@ pub struct Tables {
     /// generated step takes the measured output y and a caller-owned state
     /// holding the estimate. `None`: state feedback.
     pub observer: Option<ObserverTables>,
+    /// A static-output-feedback design: the tables are the controller on y
+    /// (`n` outputs named in `state_names`, gains K_j); this holds the plant's
+    /// C and state names. `None` otherwise.
+    pub static_output: Option<static_output::StaticOutputTables>,
 }
 
 /// The sensor-side module of a networked loop: one variant per loop law
@@ -277,6 +285,7 @@ pub fn tables(
                 },
             },
             sampling: design.sampling(),
+            reads: None,
         },
         n: model.n,
         m: model.m,
@@ -306,7 +315,9 @@ pub fn tables(
         },
         modes: mode_tables(model, design),
         observer: observer::of_design(model, design)?,
+        static_output: None,
     })
+    .and_then(|t| static_output::on_output(t, design))
 }
 
 impl Tables {

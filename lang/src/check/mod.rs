@@ -365,6 +365,7 @@ impl<'a> Checker<'a> {
         };
         self.f32_storable(&spec, saturate_span);
         self.output_feedback_fits(&spec);
+        self.simulate_estimate(&spec);
         Some(spec)
     }
 

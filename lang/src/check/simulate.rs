@@ -11,11 +11,20 @@ use crate::span::{Span, Spanned};
 use crate::spec::{Dynamics, Integrator, Simulation};
 
 /// Settings of `simulate`.
-const SIM_KEYS: [&str; 6] = ["x0", "time", "seed", "integrator", "mode0", "mode_seed"];
+const SIM_KEYS: [&str; 7] = [
+    "x0",
+    "xhat0",
+    "time",
+    "seed",
+    "integrator",
+    "mode0",
+    "mode_seed",
+];
 
 /// What the statements of a `simulate` block set so far.
 struct Scenario<'a> {
     x0: Option<Vec<f64>>,
+    xhat0: Option<Spanned<Vec<f64>>>,
     time: Option<(f64, f64, f64)>,
     signals: Vec<(usize, Expr)>,
     seed: u64,
@@ -51,6 +60,7 @@ impl Checker<'_> {
     fn simulate(&mut self, stmts: &[SimStmt], span: Span, n: usize) -> Option<Simulation> {
         let mut sc = Scenario {
             x0: None,
+            xhat0: None,
             time: None,
             signals: Vec::new(),
             seed: 0,
@@ -133,6 +143,7 @@ impl Checker<'_> {
             monte_carlo,
             sweep,
             x0,
+            xhat0: sc.xhat0,
             time,
             signals: sc.signals,
             seed: sc.seed,
@@ -144,7 +155,8 @@ impl Checker<'_> {
         })
     }
 
-    /// One setting: `x0`, `time`, `seed` or `integrator`, each given once.
+    /// One setting: `x0`, `xhat0`, `time`, `seed`, `integrator`, `mode0` or
+    /// `mode_seed`, each given once.
     fn sim_setting(&mut self, s: &Setting, n: usize, sc: &mut Scenario<'_>) {
         if sc.seen.contains(&s.key.node) {
             self.err(Diagnostic::error(
@@ -160,6 +172,21 @@ impl Checker<'_> {
                 Value::Expr(e) => sc.x0 = self.vector(e, n, "x0"),
                 Value::Range(..) => {
                     self.err(Diagnostic::error(s.span, "x0 is a vector, not a range"))
+                }
+            },
+            "xhat0" => match &s.value {
+                Value::Expr(e) => match self.vector(e, n, "xhat0") {
+                    Some(v) => {
+                        sc.xhat0 = Some(Spanned {
+                            node: v,
+                            span: s.span,
+                        })
+                    }
+                    None => sc.ok = false,
+                },
+                Value::Range(..) => {
+                    self.err(Diagnostic::error(s.span, "xhat0 is a vector, not a range"));
+                    sc.ok = false;
                 }
             },
             "time" => {
@@ -236,6 +263,28 @@ impl Checker<'_> {
                 ));
                 sc.ok = false;
             }
+        }
+    }
+
+    /// `xhat0` (the observer's initial estimate) against the controller
+    /// kind: only an observer-based controller has an estimate.
+    pub(super) fn simulate_estimate(&mut self, spec: &crate::spec::Spec) {
+        let Some(at) = spec.simulate.as_ref().and_then(|s| s.xhat0.as_ref()) else {
+            return;
+        };
+        let kind = spec.control.kind;
+        if kind != crate::spec::ControlKind::ObserverBased {
+            self.err(
+                Diagnostic::error(
+                    at.span,
+                    format!(
+                        "`xhat0` is the initial estimate of an observer, but this controller is `control {}`",
+                        kind.keyword()
+                    ),
+                )
+                .with_label("no estimate to start")
+                .with_help("remove `xhat0`, or declare `control observer_based;` (with `measure y = ..;`)"),
+            );
         }
     }
 
@@ -332,6 +381,41 @@ mod tests {
         assert_eq!(at, "steps");
         let (m, _) = only_error("simulate { x0 = 0; x0 = 1; time = 0 .. 1; }");
         assert_eq!(m, "`x0` is given twice");
+    }
+
+    /// An observer-based spec (x1 measured) with the scenario `sim`.
+    fn observer_spec(sim: &str) -> String {
+        format!(
+            "tsf 1; controller c; state x1, x2; input u;\n\
+             A = [0, 1; 1, 0]; B = [0; 1];\n\
+             premise x1 range -1 .. 1 {{ n = tri(-1, -1, 1); p = tri(-1, 1, 1); }}\n\
+             rule R1: x1 is n => at(x1 = -1);\nrule R2: x1 is p => at(x1 = 1);\n\
+             objective decay_rate >= 0.5;\nmeasure y = x1;\ncontrol observer_based;\n{sim}\n"
+        )
+    }
+
+    #[test]
+    fn xhat0_is_an_estimate_of_n_components_for_observers_only() {
+        let spec = valid(&observer_spec(
+            "simulate { x0 = [0.5, 0]; xhat0 = [0, 0.8]; time = 0 .. 1; }",
+        ));
+        let s = spec.simulate.expect("a scenario"); // ok: unit test
+        assert_eq!(s.xhat0.map(|x| x.node), Some(vec![0.0, 0.8]));
+        let (m, at) = only_error_of(&observer_spec(
+            "simulate { x0 = [0.5, 0]; xhat0 = [0, 0.8, 1]; time = 0 .. 1; }",
+        ));
+        assert_eq!(m, "xhat0 must have 2 components");
+        assert_eq!(at, "[0, 0.8, 1]");
+        let (m, _) = only_error_of(&observer_spec(
+            "simulate { x0 = [0.5, 0]; xhat0 = 0 .. 1; time = 0 .. 1; }",
+        ));
+        assert_eq!(m, "xhat0 is a vector, not a range");
+        let (m, at) = only_error("simulate { x0 = 0.5; xhat0 = 0.1; time = 0 .. 1; }");
+        assert_eq!(
+            m,
+            "`xhat0` is the initial estimate of an observer, but this controller is `control state_feedback`"
+        );
+        assert_eq!(at, "xhat0 = 0.1;");
     }
 
     #[test]

@@ -38,6 +38,10 @@ fn blocks_are_indented_one_statement_per_line() {
         "simulate {\n    x0 = [1, 0];\n    time = 0 .. 5 step 0.1;\n    dynamics { x' = -x; }\n}\n"
     );
     assert_eq!(
+        fmt("simulate{x0=[1,0];xhat0=[0 ,-0.5];time=0..5 step 0.1;}"),
+        "simulate {\n    x0 = [1, 0];\n    xhat0 = [0, -0.5];\n    time = 0 .. 5 step 0.1;\n}\n"
+    );
+    assert_eq!(
         fmt("modes {\n  mode a   { }\n mode b {k = 1; j = 2;}\n}"),
         "modes {\n    mode a { }\n    mode b {\n        k = 1;\n        j = 2;\n    }\n}\n"
     );

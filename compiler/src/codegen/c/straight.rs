@@ -161,7 +161,10 @@ static int {p}nearest_rule(const {real} z[]) {{
 "#
         );
         if t.n > 0 && t.m > 0 {
-            let mut body = format!("    {real} acc = row[0] * x[0];\n    {real} t;\n");
+            let mut body = format!("    {real} acc = row[0] * x[0];\n");
+            if t.n > 1 {
+                let _ = writeln!(body, "    {real} t;");
+            }
             for k in 1..t.n {
                 let _ = writeln!(body, "    t = row[{k}] * x[{k}];\n    acc = acc + t;");
             }

@@ -15,6 +15,7 @@ pub mod law;
 
 use super::integrator::{Dopri5, Rk4, Stepper};
 use super::limits::{step_count, MAX_STATE_MAGNITUDE};
+use super::measure::Measure;
 use super::metrics::{norm, RunFacts, Sample, Tally, Trace};
 use super::plant::Plant;
 use super::premise::Premises;
@@ -54,7 +55,7 @@ impl Noise {
     }
 
     /// One draw.
-    fn draw(&self, rng: &mut SplitMix64) -> f64 {
+    pub(crate) fn draw(&self, rng: &mut SplitMix64) -> f64 {
         match *self {
             Noise::None => 0.0,
             Noise::Uniform(b) => rng.uniform(-b, b),
@@ -68,7 +69,7 @@ impl Noise {
     }
 
     /// Whether its parameter is a finite number `>= 0`.
-    fn valid(&self) -> bool {
+    pub(crate) fn valid(&self) -> bool {
         match *self {
             Noise::None => true,
             Noise::Uniform(v) | Noise::Gaussian(v) => v.is_finite() && v >= 0.0,
@@ -79,7 +80,8 @@ impl Noise {
 /// The observer's part of a scenario.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ObserverScenario {
-    /// The initial estimate (n values; default 0, the generated `INIT`).
+    /// The initial estimate (n values; default the scenario's `xhat0`, else
+    /// 0, the generated `INIT`).
     pub xhat0: Option<Vec<f64>>,
     /// Measurement noise.
     pub noise: Noise,
@@ -175,7 +177,7 @@ pub fn run(
     let plan = plan(prepared, opts, plant.dim())?;
     let period = period(o, &plan, opts)?;
     let n = tables.n;
-    let xhat0 = initial_estimate(&opts.observer, n)?;
+    let xhat0 = initial_estimate(&opts.observer, &prepared.model.spec, n)?;
     let terms = factored_terms(tables);
     let law = observer_law(tables, o, &terms)?;
     let mut signals = Signals::new(truth, &prepared.source, opts.evaluator);
@@ -210,7 +212,7 @@ pub fn run(
         super::csv::header(*out, &names, &trace.input_names, false).map_err(write_err)?;
     }
     let mut lp = Loop::new(law.as_ref(), tables, o, opts, plan.seed, &xhat0);
-    lp.noise = or_spec_noise(lp.noise, &prepared.model.spec);
+    lp.measure.noise = or_spec_noise(lp.measure.noise, &prepared.model.spec);
     let mut tally = Tally::new(n, tables.m, &plan.x0, opts.convergence_rel_tol);
     let region = Region::new(&prepared.model, tables);
     let mut progress = Progress::new(opts.progress, plan.t0, plan.t1);
@@ -284,7 +286,7 @@ pub fn run(
     describe(&mut metrics, &stepper, &plan, opts, (dim, n));
     metrics.trigger = format!(
         "observer-based controller every T = {period} s (y = C x{} sampled, command held)",
-        if lp.noise == Noise::None {
+        if lp.measure.noise == Noise::None {
             ""
         } else {
             " + noise"
@@ -321,16 +323,28 @@ pub fn spec_noise(spec: &tsf_lang::Spec) -> Noise {
 }
 
 /// `noise`, or the spec's ([`spec_noise`]) when it is none.
-fn or_spec_noise(noise: Noise, spec: &tsf_lang::Spec) -> Noise {
+pub fn or_spec_noise(noise: Noise, spec: &tsf_lang::Spec) -> Noise {
     match noise {
         Noise::None => spec_noise(spec),
         n => n,
     }
 }
 
-/// The initial estimate of the scenario (default 0), checked, and the noise checked.
-fn initial_estimate(sc: &ObserverScenario, n: usize) -> Result<Vec<f64>, SimError> {
-    let xhat0 = sc.xhat0.clone().unwrap_or_else(|| vec![0.0; n]);
+/// The initial estimate of the run (the options', else the scenario's
+/// `xhat0`, else 0), checked, and the noise checked.
+fn initial_estimate(
+    sc: &ObserverScenario,
+    spec: &tsf_lang::Spec,
+    n: usize,
+) -> Result<Vec<f64>, SimError> {
+    let xhat0 = sc
+        .xhat0
+        .clone()
+        .or_else(|| {
+            let sim = spec.simulate.as_ref()?;
+            sim.xhat0.as_ref().map(|x| x.node.clone())
+        })
+        .unwrap_or_else(|| vec![0.0; n]);
     if xhat0.len() != n || xhat0.iter().any(|v| !v.is_finite()) {
         return Err(SimError::usage(format!(
             "xhat0 must have {n} finite components (got {xhat0:?})"
@@ -387,8 +401,7 @@ struct Loop<'a> {
     /// The premise expressions' tape (premise expressions, compiled evaluator).
     premises: Option<Option<Premises>>,
     exprs: Option<&'a [crate::tables::sym::Sym]>,
-    rng: SplitMix64,
-    noise: Noise,
+    measure: Measure,
     xhat: Vec<f64>,
     y: Vec<f64>,
     v: Vec<f64>,
@@ -421,8 +434,7 @@ impl<'a> Loop<'a> {
                 PremiseCode::Exprs(e) => Some(e.as_slice()),
                 PremiseCode::Linear(_) => None,
             },
-            rng: SplitMix64::new(seed ^ 0x6f62_7365_7276_6572),
-            noise: opts.observer.noise,
+            measure: Measure::new(o.c.clone(), opts.observer.noise, seed),
             xhat: xhat0.to_vec(),
             y: vec![0.0; o.q],
             v: vec![0.0; n],
@@ -448,7 +460,7 @@ impl<'a> Loop<'a> {
                 PremiseFrom::Output => "output".into(),
                 PremiseFrom::Estimate => "estimate".into(),
             },
-            noise: self.noise.describe(),
+            noise: self.measure.noise.describe(),
             xhat0,
             initial_error_norm: self.err.initial.unwrap_or(f64::NAN),
             peak_error_norm: self.err.peak,
@@ -462,10 +474,7 @@ impl<'a> Loop<'a> {
     /// estimate advanced). Returns whether no rule fired and the estimate
     /// the command was computed from.
     fn sample(&mut self, x: &[f64]) -> (bool, Vec<f64>) {
-        for (yq, row) in self.y.iter_mut().zip(&self.o.c) {
-            let clean: f64 = row.iter().zip(x).map(|(c, v)| c * v).sum();
-            *yq = clean + self.noise.draw(&mut self.rng);
-        }
+        self.measure.sample(x, &mut self.y);
         let xhat_k = self.xhat.clone();
         let z = match (&mut self.premises, self.exprs) {
             (Some(tape), Some(exprs)) => {

@@ -1,0 +1,225 @@
+//! The output-feedback test seam shared by `observer_code`,
+//! `observer_sampled` and `output_feedback_c`: the runtime's observer built
+//! from a design's tables at its exact sizes, the `tsfc` command on a spec,
+//! the test oscillator spec that certifies its sampled loop, seeded outputs
+//! with fault values, and RK4 of a 2-state plant with the command held.
+
+use super::Rng;
+use std::path::{Path, PathBuf};
+use std::process::Output;
+use tsf_runtime::{FactoredController, Observer, Term};
+use tsfc::tables::{PremiseCode, Tables};
+
+/// A two-rule unstable oscillator x1'' = x1 + 0.1 sin(x1) + u with only x1
+/// measured (B the same in both rules); `PERIOD` is replaced by the
+/// controller's period (0.01 s certifies).
+pub const OSC_SPEC: &str = "tsf 1;
+controller osc_observer;
+state x1, x2;
+input u;
+A(x) = [0, 1; 1 + 0.1 * sinc(x1), 0];
+B = [0; 1];
+premise s = sinc(x1) range 0.6 .. 1 { near = tri(0.6, 1, 1); far = tri(0.6, 0.6, 1); }
+rule R1: s is near => at(x1 = 0, x2 = 0);
+rule R2: s is far => at(x1 = 1.4, x2 = 0);
+objective decay_rate >= 0.5;
+relaxation basic;
+measure y = x1 noise <= 0.001;
+control observer_based(decay = 2);
+trigger periodic { every = PERIOD; }
+emit rust, c;
+simulate { x0 = [0.5, 0]; xhat0 = [0, 0.8]; time = 0 .. 8 step 0.001; integrator = rk4; }
+";
+
+/// [`OSC_SPEC`] at `period`, written to `dir/osc_observer.tsf`.
+pub fn osc_spec_at(period: f64, dir: &Path) -> PathBuf {
+    let path = dir.join("osc_observer.tsf");
+    std::fs::write(&path, OSC_SPEC.replace("PERIOD", &period.to_string())).expect("write spec");
+    path
+}
+
+/// `tsfc <args> SPEC --out OUT`.
+pub fn tsfc(args: &[&str], spec: &Path, out: &Path) -> Output {
+    std::process::Command::new(super::tsfc_binary())
+        .args(args)
+        .arg(spec)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("run tsfc")
+}
+
+/// A matrix of `A` rows and `B` columns from its rows (sizes checked).
+pub fn fixed<const A: usize, const B: usize>(rows: &[Vec<f64>]) -> [[f64; B]; A] {
+    assert_eq!(rows.len(), A, "rows");
+    std::array::from_fn(|i| {
+        assert_eq!(rows[i].len(), B, "columns of row {i}");
+        std::array::from_fn(|j| rows[i][j])
+    })
+}
+
+/// The runtime's factored PDC controller on the tables `t` at their exact
+/// sizes (`N` the tables' state, y for a static-output design; `M` inputs,
+/// `P` premises, `R` rules, `D` distinct terms, all checked).
+pub fn factored<
+    'a,
+    const N: usize,
+    const M: usize,
+    const P: usize,
+    const R: usize,
+    const D: usize,
+>(
+    t: &'a Tables,
+    terms: &'a [Term<'a, f64>],
+) -> FactoredController<'a, f64, N, M, P, R, D> {
+    assert_eq!(
+        (t.n, t.m, t.p, t.r, terms.len()),
+        (N, M, P, R, D),
+        "sizes (n, m, p, r, terms)"
+    );
+    FactoredController {
+        premise_map: match &t.premise {
+            PremiseCode::Linear(l) => fixed(l),
+            PremiseCode::Exprs(_) => [[0.0; N]; P],
+        },
+        terms: std::array::from_fn(|k| terms[k]),
+        rules: std::array::from_fn(|j| t.factored.rules[j].as_slice()),
+        centres: fixed(&t.centres),
+        gains: std::array::from_fn(|j| fixed(&t.gains[j])),
+        u_max: std::array::from_fn(|k| t.u_max[k]),
+    }
+}
+
+/// The runtime's observer on the observer tables of `t` at its exact sizes
+/// (`N` states, `M` inputs, `Q` outputs, `P` premises, `R` rules, `D`
+/// distinct terms, all checked); `terms` are the runtime terms of
+/// `t.factored.terms`.
+pub fn runtime_observer<
+    'a,
+    const N: usize,
+    const M: usize,
+    const Q: usize,
+    const P: usize,
+    const R: usize,
+    const D: usize,
+>(
+    t: &'a Tables,
+    terms: &'a [Term<'a, f64>],
+) -> Observer<'a, f64, N, M, Q, P, R, D> {
+    let o = t.observer.as_ref().expect("observer tables");
+    assert_eq!(o.q, Q, "measured outputs");
+    Observer {
+        controller: factored(t, terms),
+        output_map: o.output_map.as_deref().map(fixed),
+        phi: std::array::from_fn(|j| fixed(&o.phi[j])),
+        gu: std::array::from_fn(|j| fixed(&o.gu[j])),
+        gy: std::array::from_fn(|j| fixed(&o.gy[j])),
+    }
+}
+
+/// The runtime terms of the tables' distinct premise terms.
+pub fn runtime_terms(t: &Tables) -> Vec<Term<'_, f64>> {
+    t.factored.terms.iter().map(|s| s.runtime()).collect()
+}
+
+/// Seeded outputs from the stream `seed`: mostly inside +-1.5, some far
+/// outside, and a few non-finite and extreme values (fault paths, estimate
+/// resets).
+pub fn outputs(count: usize, seed: u64) -> Vec<f64> {
+    let mut rng = Rng::new(seed);
+    (0..count)
+        .map(|k| match k % 997 {
+            13 => f64::NAN,
+            101 => f64::INFINITY,
+            211 => 1e308,
+            // A run of the largest output: the estimate overflows.
+            401..=420 => f64::MAX,
+            307 => -0.0,
+            _ if k % 10 == 0 => rng.uniform(-40.0, 40.0),
+            _ => rng.uniform(-1.5, 1.5),
+        })
+        .collect()
+}
+
+/// `steps` RK4 steps of `h` of the 2-state plant `f(x, u)` with `u` held.
+pub fn rk4_held(x: &mut [f64; 2], u: f64, h: f64, steps: usize, f: fn([f64; 2], f64) -> [f64; 2]) {
+    for _ in 0..steps {
+        let k1 = f(*x, u);
+        let k2 = f([x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]], u);
+        let k3 = f([x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]], u);
+        let k4 = f([x[0] + h * k3[0], x[1] + h * k3[1]], u);
+        for i in 0..2 {
+            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+    }
+}
+
+/// The bits of `v` in hex.
+pub fn hex(v: f64) -> String {
+    format!("{:x}", v.to_bits())
+}
+
+/// Compiles `driver.c` in `dir` (which includes the generated C and the
+/// runtime header) with the runtime's source by the system C compiler
+/// (`$CC`, else `cc`; C99, warnings as errors, no FMA contraction), runs it
+/// with `input` on stdin and returns its output lines.
+pub fn run_c_driver(dir: &Path, driver: &str, input: &str) -> Vec<String> {
+    use tsfc::codegen::c::runtime;
+    for f in runtime::files() {
+        std::fs::write(dir.join(&f.name), &f.text).expect("write runtime");
+    }
+    std::fs::write(dir.join("driver.c"), driver).expect("write driver");
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let exe = dir.join("driver");
+    let built = std::process::Command::new(&cc)
+        .args([
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-pedantic",
+            "-O2",
+        ])
+        .arg("-ffp-contract=off")
+        .arg(format!("-I{}", dir.display()))
+        .arg(dir.join("driver.c"))
+        .arg(dir.join(runtime::SOURCE_NAME))
+        .arg("-o")
+        .arg(&exe)
+        .arg("-lm")
+        .output()
+        .expect("run the C compiler");
+    assert!(
+        built.status.success(),
+        "{}",
+        String::from_utf8_lossy(&built.stderr)
+    );
+    let input_path = dir.join("cases.txt");
+    std::fs::write(&input_path, input).expect("write cases");
+    let out = std::process::Command::new(&exe)
+        .stdin(std::fs::File::open(&input_path).expect("cases"))
+        .stdout(std::process::Stdio::piped())
+        .output()
+        .expect("run the driver");
+    assert!(out.status.success(), "the driver failed");
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    text.lines().map(str::to_string).collect()
+}
+
+/// The C helpers of a test driver: `bits` (a double's bits) and `real`
+/// (a double from its bits).
+pub const C_BITS: &str = r#"#include <stdio.h>
+#include <string.h>
+
+static unsigned long long bits(double v) {
+    unsigned long long b;
+    memcpy(&b, &v, sizeof b);
+    return b;
+}
+
+static double real(unsigned long long b) {
+    double v;
+    memcpy(&v, &b, sizeof v);
+    return v;
+}
+"#;
