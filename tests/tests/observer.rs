@@ -242,9 +242,10 @@ fn static_output_feedback_is_refused_with_advice() {
     let text = std::fs::read_to_string(common::spec_path("pendulum_observer.tsf"))
         .expect("the pendulum spec")
         .replace(
-            "control observer_based(decay = 3);",
+            "control observer_based(decay = 30);\ntrigger periodic { every = 0.01; }",
             "control static_output;",
         );
+    assert!(text.contains("control static_output;"));
     let (_, c) = common::compile_text("pendulum_sof.tsf", &text);
     assert_eq!(c.status, Status::Infeasible);
     let d = c.report.diagnosis.expect("a diagnosis");
@@ -271,12 +272,20 @@ fn unmeasured_premises_are_refused_for_observer_based_control() {
     );
 }
 
+/// The shipped spec without its periodic trigger: the continuous loop is
+/// certified, but no code is written.
 #[test]
 fn compile_writes_the_report_and_stops_before_code_for_output_feedback() {
     let dir = common::fresh_dir("observer", "compile");
+    let text = std::fs::read_to_string(common::spec_path("pendulum_observer.tsf"))
+        .expect("the pendulum spec");
+    let continuous = text.replace("trigger periodic { every = 0.01; }\n", "");
+    assert_ne!(continuous, text, "the shipped spec's trigger line");
+    let spec = dir.join("pendulum_observer.tsf");
+    std::fs::write(&spec, continuous).expect("write spec");
     let out = std::process::Command::new(common::tsfc_binary())
         .args(["compile"])
-        .arg(common::spec_path("pendulum_observer.tsf"))
+        .arg(&spec)
         .arg("--out")
         .arg(&dir)
         .output()

@@ -4,17 +4,16 @@
 //!
 //! The spec is a two-rule unstable oscillator x1'' = x1 + 0.1 sin(x1) + u
 //! with only x1 measured (B the same in both rules): the shipped pendulum
-//! observer is refused by the sampled certificate (the vertex where the
-//! plant's rule and the observer's rule differ is unstable: its B_1 and B_2
-//! differ by a factor of 28, times gains in the thousands), see docs/limits.md.
+//! observer ships its own test (`observer_shipped`).
 
 use crate::common;
+use crate::common::observer::{rk4_step, runtime_observer};
 
 use nalgebra::DMatrix;
 use serde_json::Value;
 use std::path::Path;
 use std::process::Output;
-use tsf_runtime::{FactoredController, Observer, Term};
+use tsf_runtime::Term;
 use tsfc::tables::{PremiseCode, Tables};
 
 const SPEC: &str = "tsf 1;
@@ -57,33 +56,6 @@ fn tsfc(args: &[&str], spec: &Path, out: &Path) -> Output {
 /// x2' of the nonlinear plant, x' = A(x) x + B u written out.
 fn plant(x: [f64; 2], u: f64) -> [f64; 2] {
     [x[1], x[0] + 0.1 * x[0].sin() + u]
-}
-
-type Runtime<'a> = Observer<'a, f64, 2, 1, 1, 1, 2, 2>;
-
-/// The runtime's observer on the generated tables.
-fn runtime_observer<'a>(t: &'a Tables, terms: &'a [Term<'a, f64>]) -> Runtime<'a> {
-    let o = t.observer.as_ref().expect("observer tables");
-    let rules: Vec<&[usize]> = t.factored.rules.iter().map(Vec::as_slice).collect();
-    let m2 = |r: &[Vec<f64>]| [[r[0][0], r[0][1]], [r[1][0], r[1][1]]];
-    let col = |r: &[Vec<f64>]| [[r[0][0]], [r[1][0]]];
-    Observer {
-        controller: FactoredController {
-            premise_map: [[0.0, 0.0]],
-            terms: [terms[0], terms[1]],
-            rules: [rules[0], rules[1]],
-            centres: [[t.centres[0][0]], [t.centres[1][0]]],
-            gains: [
-                [[t.gains[0][0][0], t.gains[0][0][1]]],
-                [[t.gains[1][0][0], t.gains[1][0][1]]],
-            ],
-            u_max: [t.u_max[0]],
-        },
-        output_map: o.output_map.as_ref().map(|s| col(s)),
-        phi: [m2(&o.phi[0]), m2(&o.phi[1])],
-        gu: [col(&o.gu[0]), col(&o.gu[1])],
-        gy: [col(&o.gy[0]), col(&o.gy[1])],
-    }
 }
 
 /// Certified at T: exit 0, the report's note says what the sampled
@@ -174,14 +146,7 @@ fn sampled_observer_loop_certifies_generates_and_converges() {
             .max((xs[1] - x[1]).abs())
             .max((us - u).abs() / (1.0 + u.abs()));
         for _ in 0..10 {
-            let f = |s: [f64; 2]| plant(s, u);
-            let k1 = f(x);
-            let k2 = f([x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]]);
-            let k3 = f([x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]]);
-            let k4 = f([x[0] + h * k3[0], x[1] + h * k3[1]]);
-            for i in 0..2 {
-                x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
+            rk4_step(&mut x, h, |s| plant(s, u));
         }
         assert!(tt.is_finite());
     }
