@@ -14,7 +14,7 @@ use serde_json::Value;
 use std::path::Path;
 use std::process::Output;
 use tsf_runtime::Term;
-use tsfc::tables::{PremiseCode, Tables};
+use tsfc::tables::PremiseCode;
 
 const SPEC: &str = "tsf 1;
 controller osc_observer;
