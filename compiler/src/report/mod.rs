@@ -218,7 +218,7 @@ fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
     let crate::synth::loops::LoopDesign::ObserverSampled(s) = &d.loop_design else {
         return None;
     };
-    let get = |name| s.values.value(name).map(|m| rows(m));
+    let get = |name| s.values.value(name).map(rows);
     Some(SampledReport {
         sampling: [s.period, s.period],
         covers: s.covers(),
