@@ -11,10 +11,15 @@ use nalgebra::{Complex, DMatrix};
 use serde_json::Value;
 
 /// The shipped pendulum observer spec with a torque disturbance d (D = [0; 1])
-/// and the output z = theta, minimizing the H-inf gain.
+/// and the output z = theta, minimizing the H-inf gain, for the continuous
+/// loop (its periodic trigger removed: the sampled certificate covers
+/// stability and decay only).
 fn spec() -> String {
-    std::fs::read_to_string(spec_path("pendulum_observer.tsf"))
-        .expect("the shipped pendulum observer spec")
+    let text = std::fs::read_to_string(spec_path("pendulum_observer.tsf"))
+        .expect("the shipped pendulum observer spec");
+    let continuous = text.replace("trigger periodic { every = 0.01; }\n", "");
+    assert_ne!(continuous, text, "the shipped spec's trigger line");
+    continuous
         .replace(
         "objective stability;",
         "objective stability;\ndisturbance d;\nD = [0; 1];\noutput z = theta;\nobjective hinf(d -> z) minimize;",

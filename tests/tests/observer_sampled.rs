@@ -4,9 +4,7 @@
 //!
 //! The spec is a two-rule unstable oscillator x1'' = x1 + 0.1 sin(x1) + u
 //! with only x1 measured (B the same in both rules): the shipped pendulum
-//! observer is refused by the sampled certificate (the vertex where the
-//! plant's rule and the observer's rule differ is unstable: its B_1 and B_2
-//! differ by a factor of 28, times gains in the thousands), see docs/limits.md.
+//! observer ships its own test (`observer_shipped`).
 
 use crate::common;
 use common::observer::{osc_spec_at as spec_at, rk4_held, runtime_observer, runtime_terms, tsfc};

@@ -39,6 +39,7 @@ mod observer;
 mod observer_code;
 mod observer_hinf;
 mod observer_sampled;
+mod observer_shipped;
 mod output_feedback_c;
 mod plant_claim;
 mod playground;

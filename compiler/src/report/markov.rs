@@ -163,6 +163,7 @@ pub fn sampled_loop(model: &TsModel, design: &Design) -> Option<SampledReport> {
         covers: crate::synth::markov::sampled::covers(s.sampling),
         p: rows(s.p.first()?),
         y: Some(rows(&s.y)),
+        l: None,
         modes: Some(
             modes
                 .modes

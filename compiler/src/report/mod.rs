@@ -200,10 +200,35 @@ pub struct SampledReport {
     /// Y of the functional's integral term (with modes; it is mode-independent).
     #[serde(rename = "Y", skip_serializing_if = "Option::is_none")]
     pub y: Option<Vec<Vec<f64>>>,
+    /// The free matrices L1, L2 of the functional (the sampled observer loop,
+    /// on the augmented state (x, xhat)), so the conditions can be re-checked
+    /// from the report.
+    #[serde(rename = "L", skip_serializing_if = "Option::is_none")]
+    pub l: Option<[Vec<Vec<f64>>; 2]>,
     /// With modes: per mode P_a, L1_a, L2_a of the functional (`P` above is
     /// the first mode's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub modes: Option<Vec<markov::ModeSampledReport>>,
+}
+
+/// The `sampled_loop` section of the sampled observer loop: the looped
+/// functional's P, Y, L1, L2 on the augmented state (x, xhat).
+fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
+    use crate::synth::solved::{names, Solved as _};
+    let crate::synth::loops::LoopDesign::ObserverSampled(s) = &d.loop_design else {
+        return None;
+    };
+    let get = |name| s.values.value(name).map(rows);
+    Some(SampledReport {
+        sampling: [s.period, s.period],
+        covers: s.covers(),
+        p: rows(&s.p),
+        y: get(names::LOOP_Y),
+        l: get(names::LOOP_L1)
+            .zip(get(names::LOOP_L2))
+            .map(|(a, b)| [a, b]),
+        modes: None,
+    })
 }
 
 /// One objective's verdict for given gains (analysis mode).
@@ -527,9 +552,11 @@ pub fn report(
                     covers: crate::synth::sampling::covers(&s.plan),
                     p: rows(&s.p),
                     y: None,
+                    l: None,
                     modes: None,
                 })
                 .or_else(|| markov::sampled_loop(model, d))
+                .or_else(|| observer_sampled_loop(d))
         }),
         solver: SolverInfo {
             name: "clarabel",

@@ -124,8 +124,8 @@ fn gain_step_problem(
     let g1 = problem.full("Gcd", m, n).map_err(internal)?;
 
     let l = [
-        problem.full("L1", n, n).map_err(internal)?,
-        problem.full("L2", n, n).map_err(internal)?,
+        problem.full(names::LOOP_L1, n, n).map_err(internal)?,
+        problem.full(names::LOOP_L2, n, n).map_err(internal)?,
     ];
     let (w, nu) = match goal {
         GainGoal::RaiseNu { .. } => (

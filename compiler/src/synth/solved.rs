@@ -16,6 +16,10 @@ pub mod names {
     pub const LOOP_P: &str = "Ptr";
     /// Y of the sampled loop's looped functional (the integral term).
     pub const LOOP_Y: &str = "Ytr";
+    /// The free matrix L1 of the looped functional's term.
+    pub const LOOP_L1: &str = "L1";
+    /// The free matrix L2 of the looped functional's term.
+    pub const LOOP_L2: &str = "L2";
     /// T, the sector multiplier of the sampled loop (diagonal).
     pub const LOOP_SECTOR: &str = "T";
     /// gamma of the sampled loop's L-inf bound.

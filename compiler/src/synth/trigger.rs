@@ -339,7 +339,10 @@ fn declare_trigger_step<'a>(
     } else {
         None
     };
-    let l = [problem.full("L1", n, n)?, problem.full("L2", n, n)?];
+    let l = [
+        problem.full(names::LOOP_L1, n, n)?,
+        problem.full(names::LOOP_L2, n, n)?,
+    ];
     let t = if plan.levels.is_empty() {
         None
     } else {
