@@ -30,6 +30,11 @@ out_md=${1:-}
 # arithmetic in libgcc's software double routines and gets the larger budgets.
 declare -A TEXT_BUDGET_ZHANG=([f32]=4096 [f64]=6144)
 declare -A STACK_BUDGET=([f32]=256 [f64]=512)
+# An observer-based controller (`control observer_based`) runs the observer step around the
+# controller's: one more frame on the worst path (step > tsf_observer_step >
+# tsf_step_with_premises > tsf_nearest_scaled) and the estimate's next-state buffer. Its builds
+# get 128 B more (measured: pendulum_observer 528 / 336 B, amrr2019_gyroless 592 / 368 B).
+declare -A STACK_BUDGET_OBSERVER=([f32]=384 [f64]=640)
 
 tsfc=target/release/tsfc
 [ -x "$tsfc" ] || cargo build --release -p tsfc --quiet
@@ -166,8 +171,12 @@ for spec in ${AUDIT_SPECS:-specs/*.tsf}; do
             fi
         fi
         rows+=("| $name | $precision | $text | $reach_text | $rodata | $data | $bss | $stack | ${path//>/ > } | ${library//,/, } | ${doubles//,/, } | ${rules:-none} |")
-        if [ "$stack" -gt "${STACK_BUDGET[$precision]}" ]; then
-            echo "audit: $name ($precision): worst stack path $stack B over the budget ${STACK_BUDGET[$precision]} B" >&2
+        budget=${STACK_BUDGET[$precision]}
+        if grep -qE '^control observer_based' "$spec"; then
+            budget=${STACK_BUDGET_OBSERVER[$precision]}
+        fi
+        if [ "$stack" -gt "$budget" ]; then
+            echo "audit: $name ($precision): worst stack path $stack B over the budget $budget B" >&2
             status=1
         fi
         if [[ "$name" == zhang2013* ]] && [ "$reach_text" -gt "${TEXT_BUDGET_ZHANG[$precision]}" ]; then
@@ -185,7 +194,7 @@ done
     echo "|---|---|---:|---:|---:|---:|---:|---:|---|---|---|---|"
     printf '%s\n' "${rows[@]}"
     echo
-    echo "Budgets: worst stack ${STACK_BUDGET[f32]} B (f32) / ${STACK_BUDGET[f64]} B (f64) for every spec; Zhang's reachable .text ${TEXT_BUDGET_ZHANG[f32]} B (f32) / ${TEXT_BUDGET_ZHANG[f64]} B (f64)."
+    echo "Budgets: worst stack ${STACK_BUDGET[f32]} B (f32) / ${STACK_BUDGET[f64]} B (f64) for every spec (observer-based: ${STACK_BUDGET_OBSERVER[f32]} / ${STACK_BUDGET_OBSERVER[f64]} B); Zhang's reachable .text ${TEXT_BUDGET_ZHANG[f32]} B (f32) / ${TEXT_BUDGET_ZHANG[f64]} B (f64)."
     echo "Compiler: $(arm-none-eabi-gcc --version | head -1); flags: ${cflags[*]}"
     echo "cppcheck: $(cppcheck --version)"
 } | tee "${out_md:-/dev/null}"
