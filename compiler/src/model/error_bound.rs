@@ -18,6 +18,7 @@
 //! recorded as a lower bound ([`ModelErrorBound::sampled_max`]).
 
 mod blend;
+mod grid;
 pub mod premise_range;
 
 use super::consistency::{normalized_weights, StateGraph};
@@ -218,6 +219,7 @@ pub fn bound(
         targets,
         ranges,
         terms: &model.terms,
+        grid: grid::Grid::of(&model.terms),
     };
     let mut sample = Sampler::new(&problem, sampler);
     let score = |mats: &Option<Vec<DMatrix<f64>>>| match mats {
