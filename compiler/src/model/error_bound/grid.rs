@@ -118,7 +118,12 @@ impl Grid {
 
     /// `sum_i h_i v_i` for the rules' values `v` (one per rule), contracted
     /// factor by factor with the normalized degrees `nu`.
-    pub fn blend(&self, nu: &[Vec<Affine>], v: &[f64], noise: &mut Noise) -> Result<Affine, Unbounded> {
+    pub fn blend(
+        &self,
+        nu: &[Vec<Affine>],
+        v: &[f64],
+        noise: &mut Noise,
+    ) -> Result<Affine, Unbounded> {
         let mut t: Vec<Affine> = self
             .cells
             .iter()
