@@ -50,9 +50,11 @@ pub(super) enum Outcome {
 impl Problem<'_> {
     /// The bound on the box `bx`, and whether a function's argument was
     /// clipped to its domain.
-    pub fn evaluate(&self, bx: &[(f64, f64)]) -> (Outcome, bool) {
+    /// With `contracted`, the grid's contracted blend is bounded too
+    /// ([`super::grid`]) and the smaller bound kept per entry.
+    pub fn evaluate(&self, bx: &[(f64, f64)], contracted: bool) -> (Outcome, bool) {
         let mut noise = Noise::new(bx.len() as u32);
-        let outcome = match self.forms(bx, &mut noise) {
+        let outcome = match self.forms(bx, contracted, &mut noise) {
             Ok(Some(m)) => Outcome::Bounded(m),
             Ok(None) => Outcome::Empty,
             Err(Unbounded) => Outcome::Unbounded,
@@ -63,6 +65,7 @@ impl Problem<'_> {
     fn forms(
         &self,
         bx: &[(f64, f64)],
+        contracted: bool,
         noise: &mut Noise,
     ) -> Result<Option<Vec<DMatrix<f64>>>, Unbounded> {
         let inputs: Vec<Form> = bx
@@ -114,7 +117,7 @@ impl Problem<'_> {
         let (s_lo, s_hi) = (lo.max(s_lo), hi.min(s_hi));
         let inv = recip_within(&total, (s_lo, s_hi), noise)?;
         let dense = Dense::new(&weights);
-        let grid = self.grid.as_ref().and_then(|g| {
+        let grid = self.grid.as_ref().filter(|_| contracted).and_then(|g| {
             let degree = |t: &TermSpec| cache.iter().find(|(u, _)| *u == t).map(|(_, d)| d.clone());
             g.normalized(degree, noise).map(|nu| (g, nu))
         });
