@@ -294,10 +294,24 @@ pub fn bound(
         }
         prev = now;
     }
-    // The refinement follows the flat bound; the final sub-boxes are then
-    // bounded with the grid's contracted blend too (the smaller holds).
-    let contracted: Vec<Leaf> = heap
-        .iter()
+    let contracted = with_contracted_blend(&problem, &leaves, &heap);
+    let live: Vec<&Leaf> = contracted.iter().collect();
+    finish(
+        &problem,
+        live,
+        (boxes, clipped, premise),
+        converged,
+        with_d,
+        sample,
+        fail,
+    )
+}
+
+/// The live sub-boxes of the refinement (which follows the flat bound),
+/// bounded with the grid's contracted blend too when the rules are a full
+/// grid: the smaller bound is kept per entry (both enclose the same value).
+fn with_contracted_blend(problem: &Problem, leaves: &[Leaf], heap: &BinaryHeap<Key>) -> Vec<Leaf> {
+    heap.iter()
         .map(|k| {
             let l = &leaves[k.1];
             let mats = match (&l.mats, problem.grid.is_some()) {
@@ -317,17 +331,7 @@ pub fn bound(
                 mats,
             }
         })
-        .collect();
-    let live: Vec<&Leaf> = contracted.iter().collect();
-    finish(
-        &problem,
-        live,
-        (boxes, clipped, premise),
-        converged,
-        with_d,
-        sample,
-        fail,
-    )
+        .collect()
 }
 
 /// `n` intervals, each lo <= hi (no NaN; infinite ends allowed).
