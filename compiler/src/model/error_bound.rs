@@ -295,10 +295,9 @@ pub fn bound(
         prev = now;
     }
     let contracted = with_contracted_blend(&problem, &leaves, &heap);
-    let live: Vec<&Leaf> = contracted.iter().collect();
     finish(
         &problem,
-        live,
+        contracted.iter().collect(),
         (boxes, clipped, premise),
         converged,
         with_d,
