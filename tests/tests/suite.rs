@@ -53,6 +53,7 @@ mod rust_codegen;
 mod sampled_loop;
 mod schema;
 mod sector;
+mod sector_plant;
 mod shipped_specs;
 mod sim_evaluators;
 mod simulation;

@@ -15,9 +15,13 @@
 //! until a round improves the bound by less than
 //! [`BoundLimits::min_improvement`] or [`BoundLimits::max_boxes`] sub-boxes
 //! have been evaluated. The float error at each sub-box's centre is
-//! recorded as a lower bound ([`ModelErrorBound::sampled_max`]).
+//! recorded as a lower bound ([`ModelErrorBound::sampled_max`]). When the
+//! rules are a full grid over two or more premises, the final sub-boxes are
+//! bounded a second time with the blend contracted one premise at a time
+//! (`grid`), and the smaller bound is kept per entry.
 
 mod blend;
+mod grid;
 pub mod premise_range;
 
 use super::consistency::{normalized_weights, StateGraph};
@@ -218,6 +222,7 @@ pub fn bound(
         targets,
         ranges,
         terms: &model.terms,
+        grid: grid::Grid::of(&model.terms),
     };
     let mut sample = Sampler::new(&problem, sampler);
     let score = |mats: &Option<Vec<DMatrix<f64>>>| match mats {
@@ -231,7 +236,7 @@ pub fn bound(
     let mut push = |bx: StateBox, leaves: &mut Vec<Leaf>, heap: &mut BinaryHeap<Key>| {
         boxes += 1;
         sample.at(&bx, &problem);
-        let (outcome, clip) = problem.evaluate(&bx);
+        let (outcome, clip) = problem.evaluate(&bx, false);
         clipped |= clip;
         let mats = match outcome {
             Outcome::Empty => return,
@@ -289,16 +294,43 @@ pub fn bound(
         }
         prev = now;
     }
-    let live: Vec<&Leaf> = heap.iter().map(|k| &leaves[k.1]).collect();
+    let contracted = with_contracted_blend(&problem, &leaves, &heap);
     finish(
         &problem,
-        live,
+        contracted.iter().collect(),
         (boxes, clipped, premise),
         converged,
         with_d,
         sample,
         fail,
     )
+}
+
+/// The live sub-boxes of the refinement (which follows the flat bound),
+/// bounded with the grid's contracted blend too when the rules are a full
+/// grid: the smaller bound is kept per entry (both enclose the same value).
+fn with_contracted_blend(problem: &Problem, leaves: &[Leaf], heap: &BinaryHeap<Key>) -> Vec<Leaf> {
+    heap.iter()
+        .map(|k| {
+            let l = &leaves[k.1];
+            let mats = match (&l.mats, problem.grid.is_some()) {
+                (Some(flat), true) => match problem.evaluate(&l.bx, true).0 {
+                    Outcome::Bounded(g) => Some(
+                        flat.iter()
+                            .zip(&g)
+                            .map(|(f, g)| f.zip_map(g, f64::min))
+                            .collect(),
+                    ),
+                    _ => Some(flat.clone()),
+                },
+                (m, _) => m.clone(),
+            };
+            Leaf {
+                bx: l.bx.clone(),
+                mats,
+            }
+        })
+        .collect()
 }
 
 /// `n` intervals, each lo <= hi (no NaN; infinite ends allowed).

@@ -33,6 +33,8 @@ pub(super) struct Problem<'a> {
     pub ranges: Vec<(f64, f64)>,
     /// Per rule: its premise terms.
     pub terms: &'a [Vec<TermSpec>],
+    /// The rules as a full grid over their premise factors, when they are one.
+    pub grid: Option<super::grid::Grid>,
 }
 
 /// The bound on one box.
@@ -48,9 +50,11 @@ pub(super) enum Outcome {
 impl Problem<'_> {
     /// The bound on the box `bx`, and whether a function's argument was
     /// clipped to its domain.
-    pub fn evaluate(&self, bx: &[(f64, f64)]) -> (Outcome, bool) {
+    /// With `contracted`, the grid's contracted blend is bounded too
+    /// ([`super::grid`]) and the smaller bound kept per entry.
+    pub fn evaluate(&self, bx: &[(f64, f64)], contracted: bool) -> (Outcome, bool) {
         let mut noise = Noise::new(bx.len() as u32);
-        let outcome = match self.forms(bx, &mut noise) {
+        let outcome = match self.forms(bx, contracted, &mut noise) {
             Ok(Some(m)) => Outcome::Bounded(m),
             Ok(None) => Outcome::Empty,
             Err(Unbounded) => Outcome::Unbounded,
@@ -61,6 +65,7 @@ impl Problem<'_> {
     fn forms(
         &self,
         bx: &[(f64, f64)],
+        contracted: bool,
         noise: &mut Noise,
     ) -> Result<Option<Vec<DMatrix<f64>>>, Unbounded> {
         let inputs: Vec<Form> = bx
@@ -112,14 +117,19 @@ impl Problem<'_> {
         let (s_lo, s_hi) = (lo.max(s_lo), hi.min(s_hi));
         let inv = recip_within(&total, (s_lo, s_hi), noise)?;
         let dense = Dense::new(&weights);
+        let grid = self.grid.as_ref().filter(|_| contracted).and_then(|g| {
+            let degree = |t: &TermSpec| cache.iter().find(|(u, _)| *u == t).map(|(_, d)| d.clone());
+            g.normalized(degree, noise).map(|nu| (g, nu))
+        });
         let mut at = self.nz;
         let mut out = Vec::with_capacity(self.targets.len());
         for ((rows, cols), locals) in &self.targets {
             let mut m = DMatrix::zeros(*rows, *cols);
             for e in 0..rows * cols {
                 let exact = forms[at + e].as_ref().map_err(|u| *u)?;
-                m.as_mut_slice()[e] =
-                    entry_bound(&dense, locals, e, exact, (&total, &inv, s_lo), noise)?;
+                let flat = (&total, &inv, s_lo);
+                let by_grid = grid.as_ref().map(|(g, nu)| (*g, nu.as_slice()));
+                m.as_mut_slice()[e] = entry_bound(&dense, locals, e, exact, flat, by_grid, noise)?;
             }
             at += rows * cols;
             out.push(m);
@@ -133,13 +143,17 @@ impl Problem<'_> {
 /// the error is `N / S - (M(x)[e] - C)` with `N = sum_i w_i (M_i[e] - C)`
 /// for any constant C (the centre of M(x)[e]: rules equal to a constant
 /// M(x) give 0), and also `(N - S (M(x)[e] - C)) / S`, bounded by
-/// `max |numerator| / s_lo`; the smaller of the two bounds is returned.
+/// `max |numerator| / s_lo`; with `grid` (the rules as a full grid and its
+/// normalized degrees) also `|blend - (M(x)[e] - C)|` with the blend
+/// contracted factor by factor ([`super::grid`]); the smallest bound is
+/// returned.
 fn entry_bound(
     weights: &Dense,
     locals: &[&DMatrix<f64>],
     e: usize,
     exact: &Affine,
     (s, inv, s_lo): (&Affine, &Affine, f64),
+    grid: Option<(&super::grid::Grid, &[Vec<Affine>])>,
     noise: &mut Noise,
 ) -> Result<f64, Unbounded> {
     let c = exact.center();
@@ -163,7 +177,14 @@ fn entry_bound(
         Affine::combine(&[(1.0, &n.mul(inv, noise)?), (-1.0, &shifted)], 0.0, noise)?.abs_bound();
     let num = Affine::combine(&[(1.0, &n), (-1.0, &s.mul(&shifted, noise)?)], 0.0, noise)?;
     let b = num.abs_bound() / s_lo * (1.0 + 4.0 * f64::EPSILON);
-    Ok(affine::add_up(a.min(b), rounded))
+    // The contracted blend (an unbounded form there leaves the flat bound).
+    let g = grid
+        .and_then(|(g, nu)| {
+            let blend = g.blend(nu, &diffs, noise).ok()?;
+            Affine::combine(&[(1.0, &blend), (-1.0, &shifted)], 0.0, noise).ok()
+        })
+        .map_or(f64::INFINITY, |f| f.abs_bound());
+    Ok(affine::add_up(a.min(b).min(g), rounded))
 }
 
 /// The rules' weights as a dense table over the union of their symbols
