@@ -12,9 +12,11 @@ fn inputs(lo: f64, hi: f64, lo2: f64, hi2: f64) -> (Affine, Affine) {
     (x, y)
 }
 
-/// The value of `f` at `t` (in [-1, 1]^2 noise coordinates of the inputs).
+/// The point of `[lo, hi]` at noise coordinate `t` in [-1, 1], clamped to the
+/// box (`lo + (hi - lo)` can round above `hi`: such a point is not in the box
+/// the form encloses).
 fn at(lo: f64, hi: f64, t: f64) -> f64 {
-    lo + (hi - lo) * 0.5 * (t + 1.0)
+    (lo + (hi - lo) * 0.5 * (t + 1.0)).clamp(lo, hi)
 }
 
 /// Asserts that the range of `form` holds `v`.
