@@ -249,15 +249,35 @@ pub fn bound(
     };
     push(region.clone(), &mut leaves, &mut heap);
     let relevant = deps.iter().filter(|d| **d).count().max(1);
-    let split_axis = |bx: &StateBox| -> Option<usize> {
-        (0..n)
-            .filter(|&k| deps[k] && bx[k].1 > bx[k].0)
-            .map(|k| {
-                let w = (bx[k].1 - bx[k].0) / (region[k].1 - region[k].0);
-                (k, w)
-            })
-            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
-            .map(|(k, _)| k)
+    let each = premise_range::reads_each(&problem.builder, &problem.outputs[..problem.nz]);
+    // An unbounded sub-box is split along the states read by the premises
+    // whose enclosure leaves its range there (where the blend's enclosure
+    // breaks down), when there are such; any other along every state read.
+    let split_axis = |leaf: &Leaf| -> Option<usize> {
+        let bx = &leaf.bx;
+        let unbounded = leaf.mats.is_none().then(|| {
+            premise_range::unproved_reads(
+                &problem.builder,
+                &problem.outputs[..problem.nz],
+                &problem.ranges,
+                bx,
+                &each,
+            )
+        });
+        let widest = |mask: &[bool]| {
+            (0..n)
+                .filter(|&k| mask[k] && deps[k] && bx[k].1 > bx[k].0)
+                .map(|k| {
+                    let w = (bx[k].1 - bx[k].0) / (region[k].1 - region[k].0);
+                    (k, w)
+                })
+                .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+                .map(|(k, _)| k)
+        };
+        unbounded
+            .flatten()
+            .and_then(|mask| widest(&mask))
+            .or_else(|| widest(&deps))
     };
     let top = |heap: &BinaryHeap<Key>| heap.peek().map_or(0.0, |k| k.0);
     let mut prev = top(&heap);
@@ -273,7 +293,7 @@ pub fn bound(
                 break 'rounds;
             }
             let Some(Key(s, i)) = heap.pop() else { break };
-            let Some(k) = split_axis(&leaves[i].bx) else {
+            let Some(k) = split_axis(&leaves[i]) else {
                 // The worst sub-box is a point of the states read: done.
                 heap.push(Key(s, i));
                 converged = true;
