@@ -380,7 +380,9 @@ fn xu_sector_large_set_is_where_the_model_is_the_paper_s() {
     let x0 = DVector::from_column_slice(&XU_X0);
     let l0 = (x0.transpose() * &p * &x0)[(0, 0)];
     assert!(l0 <= level, "x0'Px0 = {l0} > c = {level}");
-    let reported = plant_section.scenario_x0_level.expect("the report's x0'Px0");
+    let reported = plant_section
+        .scenario_x0_level
+        .expect("the report's x0'Px0");
     assert!((reported - l0).abs() <= 1e-12 * l0, "{reported} vs {l0}");
     let claim = plant_section.claim.as_deref().expect("a claim");
     assert!(
