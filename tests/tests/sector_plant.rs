@@ -391,3 +391,27 @@ fn xu_sector_large_set_is_where_the_model_is_the_paper_s() {
     );
     eprintln!("xu2020_sector_large: x0'Px0 = {l0:.6} <= c = {level:.6}; E(P, c) reaches |q| <= {radius:.4}");
 }
+
+/// The model-error bound of `xu2020_sector_large.tsf` on its claim's box:
+/// the premise ranges are proved by splitting only the states the unproved
+/// premise reads (s reads q alone), well inside the work limits, and the
+/// bound is rounding-sized.
+#[test]
+fn xu_sector_large_bound_splits_the_states_of_the_premise_that_leaves() {
+    use tsfc::model::error_bound::premise_range::{PremiseRange, MAX_PREMISE_BOXES};
+    use tsfc::model::error_bound::{bound, BoundLimits, MAX_BOXES};
+    let model = common::shipped(XU_LARGE);
+    let region = model.spec.plant_region.clone().expect("a plant region");
+    let b = bound(&model, &model.spec, &region, &BoundLimits::default())
+        .unwrap_or_else(|d| panic!("{}", d.message));
+    let PremiseRange::Inside { boxes } = b.premise else {
+        panic!("{:?}", b.premise)
+    };
+    assert!(boxes < MAX_PREMISE_BOXES / 4, "{boxes} premise sub-boxes");
+    assert!(b.boxes <= MAX_BOXES);
+    assert!(b.a_norm <= 1e-12 && b.b_norm == 0.0, "{} {}", b.a_norm, b.b_norm);
+    eprintln!(
+        "xu2020_sector_large: ||dA|| <= {:.2e} ({} sub-boxes), premise ranges proved on {boxes}",
+        b.a_norm, b.boxes
+    );
+}
