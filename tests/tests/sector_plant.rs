@@ -409,7 +409,12 @@ fn xu_sector_large_bound_splits_the_states_of_the_premise_that_leaves() {
     };
     assert!(boxes < MAX_PREMISE_BOXES / 4, "{boxes} premise sub-boxes");
     assert!(b.boxes <= MAX_BOXES);
-    assert!(b.a_norm <= 1e-12 && b.b_norm == 0.0, "{} {}", b.a_norm, b.b_norm);
+    assert!(
+        b.a_norm <= 1e-12 && b.b_norm == 0.0,
+        "{} {}",
+        b.a_norm,
+        b.b_norm
+    );
     eprintln!(
         "xu2020_sector_large: ||dA|| <= {:.2e} ({} sub-boxes), premise ranges proved on {boxes}",
         b.a_norm, b.boxes
