@@ -7,7 +7,9 @@
 //! paper's nonlinear plant, written here, with the report's gains, from 16
 //! points of the boundary of E(P, c): V stays <= c, the state stays in the
 //! region; (c) the claimed decay rate (Zhang) and V decreasing (Xu) on
-//! those runs.
+//! those runs; (d) `specs/xu2020_sector_large.tsf`'s claim contains the
+//! paper's x(0), holds from it on the paper's plant, and its certified set
+//! lies where the clamped premise is the paper's q0.
 
 use crate::common::{self, Rng};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
@@ -18,12 +20,25 @@ use tsfc::model::TsModel;
 
 const ZHANG: &str = "zhang2013_sector.tsf";
 const XU: &str = "xu2020_sector.tsf";
+const XU_LARGE: &str = "xu2020_sector_large.tsf";
+
+/// Xu & Huang's x(0) (|q(0)| = 0.66).
+const XU_X0: [f64; 6] = [0.0, 0.0, 0.0, -0.3802, 0.2124, 0.5013];
+
+/// The radius of `xu2020_sector_large.tsf`'s clamp: its premise is
+/// sqrt(1 - q'q) where q'q <= R^2.
+const XU_LARGE_R: f64 = 0.8;
 
 /// The plant-claim compile of a shipped spec (its `plant region`).
 fn compiled(name: &'static str) -> &'static (TsModel, Compiled) {
     static ZHANG_CELL: OnceLock<(TsModel, Compiled)> = OnceLock::new();
     static XU_CELL: OnceLock<(TsModel, Compiled)> = OnceLock::new();
-    let cell = if name == ZHANG { &ZHANG_CELL } else { &XU_CELL };
+    static XU_LARGE_CELL: OnceLock<(TsModel, Compiled)> = OnceLock::new();
+    let cell = match name {
+        ZHANG => &ZHANG_CELL,
+        XU => &XU_CELL,
+        _ => &XU_LARGE_CELL,
+    };
     cell.get_or_init(|| {
         let model = common::shipped(name);
         let request = PlantRequest {
@@ -55,10 +70,11 @@ fn premises(name: &str, x: &[f64]) -> [f64; 4] {
         Vector3::new(x[0], x[1], x[2]),
         Vector3::new(x[3], x[4], x[5]),
     );
-    let s = if name == ZHANG {
-        r.dot(&w)
-    } else {
-        (1.0 - r.dot(&r)).abs().sqrt()
+    let s = match name {
+        ZHANG => r.dot(&w),
+        XU => (1.0 - r.dot(&r)).abs().sqrt(),
+        // sqrt(max(1 - q'q, 1 - R^2)).
+        _ => (1.0 - r.dot(&r)).max(1.0 - XU_LARGE_R * XU_LARGE_R).sqrt(),
     };
     [w[0], w[1], w[2], s]
 }
@@ -181,7 +197,12 @@ fn blend_equals_a(name: &'static str) {
         let rel = (&blend - &a).amax() / a.amax().max(1.0);
         worst = worst.max(rel);
         assert!(rel <= 1e-12, "{name}: blend - A(x) = {rel:e} at {x:?}");
-        // The factorization: A(x) x is the paper's vector field.
+        // The factorization: A(x) x is the paper's vector field (for the
+        // clamped premise where the clamp is inactive, q'q <= R^2).
+        let q2: f64 = x[3..].iter().map(|v| v * v).sum();
+        if name == XU_LARGE && q2 > XU_LARGE_R * XU_LARGE_R {
+            continue;
+        }
         let xv = DVector::from_column_slice(&x);
         let f = plant(name, &x, &Vector3::zeros());
         let e = (&a * &xv - &f).amax();
@@ -257,10 +278,21 @@ fn claim_holds(name: &'static str, dt: f64, steps: usize, end: f64) {
     let bx = region(c);
     let v = |x: &DVector<f64>| (x.transpose() * &p * x)[(0, 0)];
     let mut rng = Rng::new(7);
-    let (mut peak, mut last) = (0.0f64, 0.0f64);
-    for _ in 0..16 {
-        let d = DVector::from_fn(6, |_, _| rng.uniform(-1.0, 1.0));
-        let mut x = &d * (level / v(&d)).sqrt();
+    let mut starts: Vec<DVector<f64>> = (0..16)
+        .map(|_| {
+            let d = DVector::from_fn(6, |_, _| rng.uniform(-1.0, 1.0));
+            &d * (level / v(&d)).sqrt()
+        })
+        .collect();
+    if name == XU_LARGE {
+        // The paper's start is inside the claim (the report says so).
+        let x0 = DVector::from_column_slice(&XU_X0);
+        assert!(v(&x0) <= level, "x0'Px0 = {} > c = {level}", v(&x0));
+        starts.push(x0);
+    }
+    let (mut peak, mut last, mut q2_max) = (0.0f64, 0.0f64, 0.0f64);
+    for start in &starts {
+        let mut x = start.clone();
         let v0 = v(&x);
         // V(t) e^{2 a t}: non-increasing along the run (RK4's error allowed).
         let mut prev = v0;
@@ -287,13 +319,21 @@ fn claim_holds(name: &'static str, dt: f64, steps: usize, end: f64) {
                 );
                 peak = peak.max(x[i].abs() / hi);
             }
+            q2_max = q2_max.max(x.rows(3, 3).norm_squared());
         }
         last = last.max(v(&x) / v0);
         assert!(v(&x) <= end * v0, "{name}: V(T) / V(0) = {}", v(&x) / v0);
     }
     eprintln!(
-        "{name}: 16 runs from the boundary of E(P, {level:.4}): largest |x_i| / bound {peak:.3}, largest V(T)/V(0) {last:.3e} (decay claimed {alpha})"
+        "{name}: {} runs from the boundary of E(P, {level:.4}){}: largest |x_i| / bound {peak:.3}, largest V(T)/V(0) {last:.3e} (decay claimed {alpha}), largest |q| {:.4}",
+        starts.len(),
+        if starts.len() > 16 { " and the paper's x(0)" } else { "" },
+        q2_max.sqrt()
     );
+    if name == XU_LARGE {
+        // The runs stay where the clamped premise is the paper's q0.
+        assert!(q2_max <= XU_LARGE_R * XU_LARGE_R, "|q| = {}", q2_max.sqrt());
+    }
 }
 
 #[test]
@@ -306,4 +346,77 @@ fn zhang_sector_claim_holds_on_the_nonlinear_plant() {
 fn xu_sector_claim_holds_on_the_nonlinear_plant() {
     // No decay rate is claimed: V non-increasing, and well below V(0) after 60 s.
     claim_holds(XU, 0.01, 6000, 0.5);
+}
+
+#[test]
+fn xu_sector_large_blend_equals_a_of_x() {
+    blend_equals_a(XU_LARGE);
+}
+
+#[test]
+fn xu_sector_large_claim_holds_from_the_paper_start() {
+    // Decay 0.005: V(T) <= e^{-2 * 0.005 * 300} V(0) = 0.050 V(0) at T = 300 s.
+    claim_holds(XU_LARGE, 0.05, 6000, (-3.0f64).exp());
+}
+
+/// The claim of `xu2020_sector_large.tsf` is about the paper's plant: its
+/// certified set E(P, c) lies inside |q| <= R (c lambda_max((P^-1)_qq) <= R^2,
+/// computed here from the report's P), where the clamped premise equals
+/// sqrt(1 - q'q), so A(x) x is the paper's vector field on it; it contains
+/// x(0); and the report's claim says so.
+#[test]
+fn xu_sector_large_set_is_where_the_model_is_the_paper_s() {
+    let (_, c) = compiled(XU_LARGE);
+    assert_eq!(c.status, Status::Certified, "{:?}", c.report.diagnosis);
+    let plant_section = &c.report.plant;
+    let rows = plant_section.p.as_ref().expect("P");
+    let p = DMatrix::from_fn(6, 6, |i, j| rows[i][j]);
+    let level = plant_section.level.expect("a level");
+    let x = p.clone().try_inverse().expect("P invertible");
+    let xqq = x.view((3, 3), (3, 3)).into_owned();
+    let top = xqq.symmetric_eigenvalues().max();
+    let radius = (level * top).sqrt();
+    assert!(radius <= XU_LARGE_R, "E(P, c) reaches |q| = {radius}");
+    let x0 = DVector::from_column_slice(&XU_X0);
+    let l0 = (x0.transpose() * &p * &x0)[(0, 0)];
+    assert!(l0 <= level, "x0'Px0 = {l0} > c = {level}");
+    let reported = plant_section
+        .scenario_x0_level
+        .expect("the report's x0'Px0");
+    assert!((reported - l0).abs() <= 1e-12 * l0, "{reported} vs {l0}");
+    let claim = plant_section.claim.as_deref().expect("a claim");
+    assert!(
+        claim.contains("the simulate block's x(0) is in it"),
+        "{claim}"
+    );
+    eprintln!("xu2020_sector_large: x0'Px0 = {l0:.6} <= c = {level:.6}; E(P, c) reaches |q| <= {radius:.4}");
+}
+
+/// The model-error bound of `xu2020_sector_large.tsf` on its claim's box:
+/// the premise ranges are proved by splitting only the states the unproved
+/// premise reads (s reads q alone), well inside the work limits, and the
+/// bound is rounding-sized.
+#[test]
+fn xu_sector_large_bound_splits_the_states_of_the_premise_that_leaves() {
+    use tsfc::model::error_bound::premise_range::{PremiseRange, MAX_PREMISE_BOXES};
+    use tsfc::model::error_bound::{bound, BoundLimits, MAX_BOXES};
+    let model = common::shipped(XU_LARGE);
+    let region = model.spec.plant_region.clone().expect("a plant region");
+    let b = bound(&model, &model.spec, &region, &BoundLimits::default())
+        .unwrap_or_else(|d| panic!("{}", d.message));
+    let PremiseRange::Inside { boxes } = b.premise else {
+        panic!("{:?}", b.premise)
+    };
+    assert!(boxes < MAX_PREMISE_BOXES / 4, "{boxes} premise sub-boxes");
+    assert!(b.boxes <= MAX_BOXES);
+    assert!(
+        b.a_norm <= 1e-12 && b.b_norm == 0.0,
+        "{} {}",
+        b.a_norm,
+        b.b_norm
+    );
+    eprintln!(
+        "xu2020_sector_large: ||dA|| <= {:.2e} ({} sub-boxes), premise ranges proved on {boxes}",
+        b.a_norm, b.boxes
+    );
 }

@@ -249,16 +249,8 @@ pub fn bound(
     };
     push(region.clone(), &mut leaves, &mut heap);
     let relevant = deps.iter().filter(|d| **d).count().max(1);
-    let split_axis = |bx: &StateBox| -> Option<usize> {
-        (0..n)
-            .filter(|&k| deps[k] && bx[k].1 > bx[k].0)
-            .map(|k| {
-                let w = (bx[k].1 - bx[k].0) / (region[k].1 - region[k].0);
-                (k, w)
-            })
-            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
-            .map(|(k, _)| k)
-    };
+    let each = premise_range::reads_each(&problem.builder, &problem.outputs[..problem.nz]);
+    let split_axis = |leaf: &Leaf| split_axis(&problem, leaf, region, &deps, &each);
     let top = |heap: &BinaryHeap<Key>| heap.peek().map_or(0.0, |k| k.0);
     let mut prev = top(&heap);
     let mut converged = false;
@@ -273,7 +265,7 @@ pub fn bound(
                 break 'rounds;
             }
             let Some(Key(s, i)) = heap.pop() else { break };
-            let Some(k) = split_axis(&leaves[i].bx) else {
+            let Some(k) = split_axis(&leaves[i]) else {
                 // The worst sub-box is a point of the states read: done.
                 heap.push(Key(s, i));
                 converged = true;
@@ -304,6 +296,41 @@ pub fn bound(
         sample,
         fail,
     )
+}
+
+/// The state to split `leaf` along: the widest (relative to `region`) of
+/// the states the targets read (`deps`); an unbounded sub-box (where the
+/// blend's enclosure breaks down) along the widest state read by the premises
+/// whose enclosure leaves its range there, when there are such (`each`: the
+/// states each premise reads). `None` when every state read is a point.
+fn split_axis(
+    problem: &Problem,
+    leaf: &Leaf,
+    region: &StateBox,
+    deps: &[bool],
+    each: &[Vec<bool>],
+) -> Option<usize> {
+    let bx = &leaf.bx;
+    let widest = |mask: &[bool]| {
+        (0..bx.len())
+            .filter(|&k| mask[k] && deps[k] && bx[k].1 > bx[k].0)
+            .map(|k| (k, (bx[k].1 - bx[k].0) / (region[k].1 - region[k].0)))
+            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+            .map(|(k, _)| k)
+    };
+    let leaving = leaf.mats.is_none().then(|| {
+        premise_range::unproved_reads(
+            &problem.builder,
+            &problem.outputs[..problem.nz],
+            &problem.ranges,
+            bx,
+            each,
+        )
+    });
+    leaving
+        .flatten()
+        .and_then(|mask| widest(&mask))
+        .or_else(|| widest(deps))
 }
 
 /// The live sub-boxes of the refinement (which follows the flat bound),

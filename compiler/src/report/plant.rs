@@ -32,6 +32,10 @@ pub struct PlantSection {
     /// With a `dynamics` block: the claim is for the design model, the truth
     /// plant is simulated, not certified.
     pub truth_plant: Option<String>,
+    /// x0' P x0 for the simulate block's initial state x0 (null without a
+    /// claim or a simulate block): x0 is in the claim's E(P, c) when it is at
+    /// most `level`.
+    pub scenario_x0_level: Option<f64>,
 }
 
 /// The region as the report writes it (null where unbounded).
@@ -129,6 +133,7 @@ pub fn without_claim(
         claim: None,
         note: Some(note),
         truth_plant: truth_plant(model),
+        scenario_x0_level: None,
     }
 }
 
@@ -215,8 +220,19 @@ pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
             )),
         ),
     };
+    let scenario = scenario_level(model, p);
+    let start = match scenario {
+        Some(l) if l <= level => format!(
+            "; the simulate block's x(0) is in it (x0' P x0 = {l:.6e} <= c)"
+        ),
+        Some(l) => format!(
+            "; the simulate block's x(0) is not (x0' P x0 = {l:.6e} > c: the claim covers that direction up to x0 scaled by {:.6e})",
+            (level / l).sqrt()
+        ),
+        None => String::new(),
+    };
     let claim = format!(
-        "for every x(0) in {set}{with_w} the plant x' = A(x) x + {input} with this controller ({law}) {rate}{performance}, with ||A(x) - A_h(x)|| <= {:.6e} and ||B(x) - B_h(x)|| <= {:.6e}{d} on the region",
+        "for every x(0) in {set}{with_w} the plant x' = A(x) x + {input} with this controller ({law}) {rate}{performance}, with ||A(x) - A_h(x)|| <= {:.6e} and ||B(x) - B_h(x)|| <= {:.6e}{d} on the region{start}",
         c.bound.a,
         c.bound.b
     );
@@ -229,7 +245,15 @@ pub fn with_claim(model: &TsModel, c: &Claimed<'_>) -> Option<PlantSection> {
         claim: Some(claim),
         note: c.note.clone(),
         truth_plant: truth_plant(model),
+        scenario_x0_level: scenario,
     })
+}
+
+/// x0' P x0 for the simulate block's x0, if the spec has one.
+fn scenario_level(model: &TsModel, p: &DMatrix<f64>) -> Option<f64> {
+    let sim = model.spec.simulate.as_ref()?;
+    let x0 = nalgebra::DVector::from_column_slice(&sim.x0);
+    (x0.len() == p.nrows()).then(|| (x0.transpose() * p * &x0)[(0, 0)])
 }
 
 /// The bounds the robust conditions carry to the plant, as a clause of the

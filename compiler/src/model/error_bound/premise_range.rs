@@ -4,8 +4,8 @@
 //! enclosures of z over sub-boxes (outward rounding), not sampled.
 //!
 //! A sub-box whose enclosure of some z leaves the range is bisected along its
-//! widest component (relative to the region's width, among the states the
-//! premises read), breadth first, until every enclosure lies inside the
+//! widest component (relative to the region's width, among the states read
+//! by the premises not yet proved inside on it), breadth first, until every enclosure lies inside the
 //! range ([`PremiseRange::Inside`]), the float value of z at a sub-box's
 //! centre lies outside it ([`PremiseRange::Leaves`], a witness state), or
 //! [`MAX_PREMISE_BOXES`] sub-boxes have been evaluated
@@ -82,19 +82,14 @@ pub fn check(
     ranges: &[(f64, f64)],
     region: &[(f64, f64)],
 ) -> PremiseRange {
-    let reads = affine::depends_on(builder, z);
+    let each = reads_each(builder, z);
     let mut queue = VecDeque::from([region.to_vec()]);
     let mut boxes = 0;
     while let Some(bx) = queue.pop_front() {
         boxes += 1;
-        let forms = enclose(builder, z, &bx);
-        let proved = forms
-            .iter()
-            .zip(ranges)
-            .all(|(f, r)| f.as_ref().is_ok_and(|f| within(f.range(), *r)));
-        if proved {
+        let Some(reads) = unproved_reads(builder, z, ranges, &bx, &each) else {
             continue;
-        }
+        };
         let x: Vec<f64> = bx.iter().map(|(lo, hi)| 0.5 * lo + 0.5 * hi).collect();
         let point: Vec<(f64, f64)> = x.iter().map(|v| (*v, *v)).collect();
         for (k, (f, r)) in enclose(builder, z, &point).iter().zip(ranges).enumerate() {
@@ -120,6 +115,35 @@ pub fn check(
         queue.push_back(right);
     }
     PremiseRange::Inside { boxes }
+}
+
+/// Per premise value, the states it reads.
+pub fn reads_each(builder: &Builder, z: &[Id]) -> Vec<Vec<bool>> {
+    z.iter()
+        .map(|id| affine::depends_on(builder, std::slice::from_ref(id)))
+        .collect()
+}
+
+/// The states read by the premise values whose enclosure over `bx` is not
+/// proved inside its range (`each`: [`reads_each`]); `None` when every one
+/// is proved. Splitting only these states leaves the proved premises proved
+/// (a sub-box's states are the box's) and spends no sub-box on a state only
+/// proved premises read.
+pub fn unproved_reads(
+    builder: &Builder,
+    z: &[Id],
+    ranges: &[(f64, f64)],
+    bx: &[(f64, f64)],
+    each: &[Vec<bool>],
+) -> Option<Vec<bool>> {
+    let mut reads: Option<Vec<bool>> = None;
+    for ((f, r), dep) in enclose(builder, z, bx).iter().zip(ranges).zip(each) {
+        if !f.as_ref().is_ok_and(|f| within(f.range(), *r)) {
+            let acc = reads.get_or_insert_with(|| vec![false; bx.len()]);
+            acc.iter_mut().zip(dep).for_each(|(a, d)| *a |= *d);
+        }
+    }
+    reads
 }
 
 /// A sub-box: per state, `[lo, hi]`.
