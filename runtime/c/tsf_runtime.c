@@ -286,11 +286,16 @@ static void tsf_mul_add_64(uint64_t a, uint64_t b, uint64_t c, uint64_t *hi, uin
 
 /* Leading zeros of the 128-bit (hi, lo), not both 0. */
 static int tsf_leading_zeros_128(uint64_t hi, uint64_t lo) {
-    uint64_t v = hi != 0u ? hi : lo;
-    int n = hi != 0u ? 0 : 64;
+    uint64_t v = hi;
+    int n = 0;
     int step;
+    if (hi == 0u) {
+        v = lo;
+        n = 64;
+    }
     for (step = 32; step > 0; step = step / 2) {
-        const unsigned sh = (unsigned)(64 - step);
+        const int keep = 64 - step;
+        const unsigned sh = (unsigned)keep;
         if ((v >> sh) == 0u) {
             v = v << (unsigned)step;
             n = n + step;
@@ -342,13 +347,15 @@ static void tsf_fraction_pio2(uint64_t mh, uint64_t ml, double *y0, double *y1) 
     const int lz = tsf_leading_zeros_128(mh, ml);
     uint64_t a, b;
     if (lz >= 64) {
-        a = ml << (unsigned)(lz - 64);
+        const int over = lz - 64;
+        a = ml << (unsigned)over;
         b = 0u;
     } else if (lz == 0) {
         a = mh;
         b = ml;
     } else {
-        a = (mh << (unsigned)lz) | (ml >> (unsigned)(64 - lz));
+        const int rest = 64 - lz;
+        a = (mh << (unsigned)lz) | (ml >> (unsigned)rest);
         b = ml << (unsigned)lz;
     }
     {
@@ -356,7 +363,8 @@ static void tsf_fraction_pio2(uint64_t mh, uint64_t ml, double *y0, double *y1) 
         /* a - hi, exact and below 2^11 in magnitude; hi may be 2^64. */
         const uint64_t hu = hi >= 0x1p64 ? 0u : (uint64_t)hi;
         const uint64_t du = a - hu;
-        const double d = (du >> 63) != 0u ? -(double)(0u - du) : (double)du;
+        const uint64_t nd = 0u - du;
+        const double d = (du >> 63) != 0u ? -(double)nd : (double)du;
         const double dw = d * 0x1p64;
         const double bd = (double)b;
         const double lo = dw + bd;
@@ -387,7 +395,8 @@ static int tsf_rem_pio2_large(double x, double *y0, double *y1) {
     const uint64_t m = (bits & 0x000fffffffffffffull) | 0x0010000000000000ull;
     const int q = e - 2;
     const int k = q >= 0 ? q / 64 : -((63 - q) / 64);
-    const unsigned s = (unsigned)(q - 64 * k);
+    const int shift = q - (64 * k);
+    const unsigned s = (unsigned)shift;
     uint64_t p2h, p2l, p1h, p1l, p0h, p0l;
     uint64_t fh, fl;
     int n, neg = 0;

@@ -8,32 +8,29 @@
 //! seeded arguments over the double range.
 
 use crate::c_codegen::{c_compiler, sanitizers_work, Rng, SANITIZE};
-use crate::c_single::{assert_c_is_the_runtime, OPTIMISED};
+use crate::c_single::{assert_c_is_the_runtime, bits_driver, OPTIMISED};
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 use tsf_runtime::math;
 
-const DRIVER: &str = r#"#include "tsf_runtime.h"
-#include <stdio.h>
-#include <string.h>
-
-static unsigned long long bits(double v) {
-    unsigned long long b;
-    memcpy(&b, &v, sizeof b);
-    return b;
+/// The driver of the double functions [`NAMES`].
+fn driver() -> String {
+    bits_driver("double", "unsigned long long", "%llx", &NAMES)
 }
 
-int main(void) {
-    unsigned long long b;
-    while (scanf("%llx", &b) == 1) {
-        double v;
-        memcpy(&v, &b, sizeof v);
-        printf("%llx %llx %llx %llx %llx %llx %llx\n", bits(tsf_exp(v)), bits(tsf_sqrt(v)),
-               bits(tsf_atan(v)), bits(tsf_sin(v)), bits(tsf_cos(v)), bits(tsf_sinc(v)),
-               bits(tsf_exprel(v)));
-    }
-    return 0;
-}
-"#;
+/// Zeros, NaNs, infinities, the smallest subnormal and normal, the largest
+/// finite values.
+pub(crate) const SPECIAL_F64: [f64; 10] = [
+    0.0,
+    -0.0,
+    f64::NAN,
+    -f64::NAN,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    5e-324,
+    f64::MIN_POSITIVE,
+    f64::MAX,
+    -f64::MAX,
+];
 
 /// The functions the driver prints, in its order.
 const NAMES: [&str; 7] = ["exp", "sqrt", "atan", "sin", "cos", "sinc", "exprel"];
@@ -55,18 +52,9 @@ fn rust_bits(b: u64) -> Vec<u64> {
 
 /// Special values and the edges of every branch, with their neighbours.
 fn edge_arguments() -> Vec<f64> {
-    let mut args = vec![
-        0.0,
-        -0.0,
-        f64::NAN,
-        -f64::NAN,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::MAX,
-        -f64::MAX,
-        f64::MIN_POSITIVE,
+    let mut args = SPECIAL_F64.to_vec();
+    args.extend([
         -f64::MIN_POSITIVE,
-        f64::from_bits(1),
         -f64::from_bits(1),
         f64::from_bits(0x000f_ffff_ffff_ffff), // largest subnormal
         709.782_712_893_384,                   // exp's overflow limit
@@ -95,7 +83,7 @@ fn edge_arguments() -> Vec<f64> {
         6_381_956_970_095_103.0 * 2f64.powi(797),
         1e22,
         1e300,
-    ];
+    ]);
     for k in -64..=64 {
         args.push(f64::from(k) * FRAC_PI_4);
         args.push(f64::from(k) * FRAC_PI_2 * 1024.0);
@@ -153,7 +141,7 @@ fn c_double_functions_are_the_runtimes() {
     assert!(args.len() >= 1_000_000, "{} arguments", args.len());
     let n = assert_c_is_the_runtime(
         "double",
-        DRIVER,
+        &driver(),
         &args,
         &NAMES,
         &rust_bits,
@@ -182,7 +170,7 @@ fn c_double_functions_are_clean_under_sanitizers() {
     flags.extend(["-O1", "-ffp-contract=off"]);
     let n = assert_c_is_the_runtime(
         "double_sanitized",
-        DRIVER,
+        &driver(),
         &args,
         &NAMES,
         &rust_bits,

@@ -10,28 +10,37 @@ use tsf_runtime::math;
 /// The flags of the bit-identity tests: optimised, no contraction into FMA.
 pub(crate) const OPTIMISED: [&str; 2] = ["-O2", "-ffp-contract=off"];
 
-const DRIVER: &str = r#"#include "tsf_runtime.h"
+/// A C driver that reads one hex bit pattern of a `real` (`float` or
+/// `double`; `word` its unsigned integer type, `conv` that type's hex
+/// conversion) per line and prints the hex bit patterns of the runtime's
+/// `tsf_<name>` at it for each of `names`, space-separated.
+pub(crate) fn bits_driver(real: &str, word: &str, conv: &str, names: &[&str]) -> String {
+    let formats = vec![conv; names.len()].join(" ");
+    let calls: Vec<String> = names.iter().map(|n| format!("bits(tsf_{n}(v))")).collect();
+    format!(
+        r#"#include "tsf_runtime.h"
 #include <stdio.h>
 #include <string.h>
 
-static unsigned bits(float v) {
-    unsigned b;
+static {word} bits({real} v) {{
+    {word} b;
     memcpy(&b, &v, sizeof b);
     return b;
-}
+}}
 
-int main(void) {
-    unsigned b;
-    while (scanf("%x", &b) == 1) {
-        float v;
+int main(void) {{
+    {word} b;
+    while (scanf("{conv}", &b) == 1) {{
+        {real} v;
         memcpy(&v, &b, sizeof v);
-        printf("%08x %08x %08x %08x %08x %08x %08x\n", bits(tsf_expf(v)), bits(tsf_sqrtf(v)),
-               bits(tsf_atanf(v)), bits(tsf_sinf(v)), bits(tsf_cosf(v)), bits(tsf_sincf(v)),
-               bits(tsf_exprelf(v)));
-    }
+        printf("{formats}\n", {});
+    }}
     return 0;
+}}
+"#,
+        calls.join(", ")
+    )
 }
-"#;
 
 /// The seven functions of the runtime at the f32 of bit pattern `b`.
 fn rust_bits(b: u64) -> Vec<u64> {
@@ -165,7 +174,13 @@ fn c_float_functions_are_the_runtimes() {
     let bits: Vec<u64> = args.iter().map(|v| u64::from(v.to_bits())).collect();
     let names = ["expf", "sqrtf", "atanf", "sinf", "cosf", "sincf", "exprelf"];
     let n = assert_c_is_the_runtime(
-        "single", DRIVER, &bits, &names, &rust_bits, f32_value, &OPTIMISED,
+        "single",
+        &bits_driver("float", "unsigned", "%x", &names),
+        &bits,
+        &names,
+        &rust_bits,
+        f32_value,
+        &OPTIMISED,
     );
     println!(
         "{n} arguments x {} functions: C and the runtime bit-identical",

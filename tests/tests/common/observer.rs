@@ -4,11 +4,12 @@
 //! the test oscillator spec that certifies its sampled loop, seeded outputs
 //! with fault values, and RK4 of a 2-state plant with the command held.
 
+use super::runtime_eval;
 use super::Rng;
 use std::path::{Path, PathBuf};
 use std::process::Output;
-use tsf_runtime::{math, FactoredController, Observer, Term};
-use tsfc::tables::sym::{Func, Sym};
+use tsf_runtime::{FactoredController, Observer, Term};
+use tsfc::tables::sym::Sym;
 use tsfc::tables::{PremiseCode, Tables};
 
 /// A two-rule unstable oscillator x1'' = x1 + 0.1 sin(x1) + u with only x1
@@ -140,33 +141,6 @@ pub fn outputs(count: usize, seed: u64) -> Vec<f64> {
             _ => rng.uniform(-1.5, 1.5),
         })
         .collect()
-}
-
-/// `e` at `v` with the Rust runtime's elementary functions (`math::sin`
-/// etc.): what the generated Rust's `Real::sin` and the generated C's
-/// `tsf_sin` compute, operand by operand in the generators' order.
-pub fn runtime_eval(e: &Sym, v: &[f64]) -> f64 {
-    match e {
-        Sym::Const(c) => *c,
-        Sym::X(k) => v.get(*k).copied().unwrap_or(f64::NAN),
-        Sym::Add(a, b) => runtime_eval(a, v) + runtime_eval(b, v),
-        Sym::Mul(a, b) => runtime_eval(a, v) * runtime_eval(b, v),
-        Sym::Div(a, b) => runtime_eval(a, v) / runtime_eval(b, v),
-        Sym::Neg(a) => -runtime_eval(a, v),
-        Sym::Call(f, a) => {
-            let a = runtime_eval(a, v);
-            match f {
-                Func::Sin => math::sin(a),
-                Func::Cos => math::cos(a),
-                Func::Exp => math::exp(a),
-                Func::Sqrt => math::sqrt(a),
-                Func::Atan => math::atan(a),
-                Func::Abs => a.abs(),
-                Func::Sinc => math::sinc(a),
-                Func::Exprel => math::exprel(a),
-            }
-        }
-    }
 }
 
 /// The premises `exprs` of the runtime's premise state `v`, by [`runtime_eval`].
