@@ -156,6 +156,426 @@ static double tsf_atan_f64(double x) {
     return signbit(x) ? -r : r;
 }
 
+/* ------------------------------------------- binary64 exp, sin and cos */
+
+/* tsf-runtime's math::exp, math::sin and math::cos (runtime/src/math/mod.rs),
+   operation by operation in binary64, one operation per statement, with the
+   runtime's constants as hex floats (the bit patterns of math::SIN_S etc.):
+   bit for bit the Rust runtime's results, no libm call. The Payne-Hanek
+   reduction's 128-bit integers are pairs of 64-bit words (C99 has no wider
+   integer). Bit patterns through memcpy. */
+
+static uint64_t tsf_f64_bits(double v) {
+    uint64_t b;
+    (void)memcpy(&b, &v, sizeof b);
+    return b;
+}
+
+static double tsf_f64_from_bits(uint64_t b) {
+    double v;
+    (void)memcpy(&v, &b, sizeof v);
+    return v;
+}
+
+/* 2^k for -1022 <= k <= 1023 (k clamped), from the exponent bits. */
+static double tsf_pow2(int k) {
+    const int c = k < -1022 ? -1022 : (k > 1023 ? 1023 : k);
+    const int biased = c + 1023;
+    const uint64_t field = (uint64_t)biased;
+    return tsf_f64_from_bits(field << 52);
+}
+
+/* math::EXP_P: Taylor coefficients of r coth(r/2) - 2, 1/6 ... -691/653837184000. */
+static const double tsf_exp_p[6] = {
+    0x1.5555555555555p-3,  -0x1.6c16c16c16c17p-9, 0x1.1566abc011567p-14,
+    -0x1.bbd779334ef0bp-20, 0x1.66a8f2bf70ebep-25, -0x1.22805d644267fp-30
+};
+
+/* e^x: NaN -> NaN, x > EXP_OVERFLOW -> inf, x <= EXP_UNDERFLOW -> 0,
+   |x| < 2^-28 -> 1 + x; k = trunc(x/ln2 +- 1/2), hi = x - k LN2_HI,
+   lo = k LN2_LO, r = hi - lo, c = r - s P(s) (s = r r, Horner from 0),
+   y = 1 - ((lo - r c/(2 - c)) - hi), times 2^k in one or two products. */
+double tsf_exp(double x) {
+    if (isnan(x) != 0) {
+        return x;
+    }
+    if (x > 0x1.62e42fefa39efp+9) {
+        return HUGE_VAL;
+    }
+    if (x <= -0x1.74910d52d3052p+9) {
+        return 0.0;
+    }
+    if (fabs(x) < 0x1p-28) {
+        return 1.0 + x;
+    }
+    {
+        const double half = x < 0.0 ? -0.5 : 0.5;
+        const double xl = x * 0x1.71547652b82fep+0;
+        const double kr = xl + half;
+        const int k = (int)kr;
+        const double kf = (double)k;
+        const double kh = kf * 0x1.62e42fefa38p-1;
+        const double hi = x - kh;
+        const double lo = kf * 0x1.ef35793c7673p-45;
+        const double r = hi - lo;
+        const double s = r * r;
+        double p = 0.0;
+        int j;
+        for (j = 5; j >= 0; j--) {
+            const double sp = s * p;
+            p = tsf_exp_p[j] + sp;
+        }
+        {
+            const double sp = s * p;
+            const double c = r - sp;
+            const double rc = r * c;
+            const double q = rc / (2.0 - c);
+            const double y = 1.0 - ((lo - q) - hi);
+            if (k > 1023) {
+                const double y2 = y * 2.0;
+                return y2 * tsf_pow2(k - 1);
+            }
+            if (k < -1021) {
+                const double ys = y * tsf_pow2(k + 1000);
+                return ys * tsf_pow2(-1000);
+            }
+            return y * tsf_pow2(k);
+        }
+    }
+}
+
+/* 2/pi, 1280 bits, most significant first (math::TWO_OVER_PI); the float
+   reduction reads the first four words. */
+static const uint64_t tsf_two_over_pi[20] = {
+    0xA2F9836E4E441529ull, 0xFC2757D1F534DDC0ull, 0xDB6295993C439041ull, 0xFE5163ABDEBBC561ull,
+    0xB7246E3A424DD2E0ull, 0x06492EEA09D1921Cull, 0xFE1DEB1CB129A73Eull, 0xE88235F52EBB4484ull,
+    0xE99C7026B45F7E41ull, 0x3991D639835339F4ull, 0x9C845F8BBDF9283Bull, 0x1FF897FFDE05980Full,
+    0xEF2F118B5A0A6D1Full, 0x6D367ECF27CB09B7ull, 0x4F463F669E5FEA2Dull, 0x7527BAC7EBE5F17Bull,
+    0x3D0739F78A5292EAull, 0x6BFB5FB11F8D5D08ull, 0x56033046FC7B6BABull, 0xF0CFBC209AF4361Dull
+};
+
+/* Word k of tsf_two_over_pi, 0 outside the table (k = -1: the integer part). */
+static uint64_t tsf_two_over_pi_word(int k) {
+    return (k >= 0 && k < 20) ? tsf_two_over_pi[k] : 0u;
+}
+
+/* Biased exponent field of x. */
+static int tsf_exponent_bits(double x) {
+    const uint64_t field = (tsf_f64_bits(x) >> 52) & 0x7ffu;
+    return (int)field;
+}
+
+/* a b = (*hi 2^64 + *lo) exactly, from 32-bit halves. */
+static void tsf_mul_64(uint64_t a, uint64_t b, uint64_t *hi, uint64_t *lo) {
+    const uint64_t a0 = a & 0xffffffffu, a1 = a >> 32;
+    const uint64_t b0 = b & 0xffffffffu, b1 = b >> 32;
+    const uint64_t p00 = a0 * b0, p01 = a0 * b1, p10 = a1 * b0, p11 = a1 * b1;
+    const uint64_t mid = (p00 >> 32) + (p01 & 0xffffffffu) + (p10 & 0xffffffffu);
+    *lo = (mid << 32) | (p00 & 0xffffffffu);
+    *hi = p11 + (p01 >> 32) + (p10 >> 32) + (mid >> 32);
+}
+
+/* (*hi, *lo) = a b + c, the 128-bit product plus a 64-bit word (no overflow:
+   a < 2^53). */
+static void tsf_mul_add_64(uint64_t a, uint64_t b, uint64_t c, uint64_t *hi, uint64_t *lo) {
+    uint64_t h, l;
+    tsf_mul_64(a, b, &h, &l);
+    *lo = l + c;
+    *hi = h + (*lo < l ? 1u : 0u);
+}
+
+/* Leading zeros of the 128-bit (hi, lo), not both 0. */
+static int tsf_leading_zeros_128(uint64_t hi, uint64_t lo) {
+    uint64_t v = hi;
+    int n = 0;
+    int step;
+    if (hi == 0u) {
+        v = lo;
+        n = 64;
+    }
+    for (step = 32; step > 0; step = step / 2) {
+        const int keep = 64 - step;
+        const unsigned sh = (unsigned)keep;
+        if ((v >> sh) == 0u) {
+            v = v << (unsigned)step;
+            n = n + step;
+        }
+    }
+    return n;
+}
+
+/* Veltkamp split: a = *hi + *lo with a 26-bit *hi. */
+static void tsf_split(double a, double *hi, double *lo) {
+    const double c = 134217729.0 * a;
+    const double d = c - a;
+    *hi = c - d;
+    *lo = a - *hi;
+}
+
+/* Dekker: a b = *p + *e exactly, no fused multiply-add. */
+static void tsf_two_prod(double a, double b, double *p, double *e) {
+    double ah, al, bh, bl;
+    *p = a * b;
+    tsf_split(a, &ah, &al);
+    tsf_split(b, &bh, &bl);
+    {
+        const double hh = ah * bh;
+        const double d1 = hh - *p;
+        const double hl = ah * bl;
+        const double d2 = d1 + hl;
+        const double lh = al * bh;
+        const double d3 = d2 + lh;
+        const double ll = al * bl;
+        *e = d3 + ll;
+    }
+}
+
+/* The 64 bits of 2/pi that math::rem_pio2_large's word(j) reads: words k + j
+   and k + j + 1 shifted by s. */
+static uint64_t tsf_two_over_pi_at(int k, unsigned s) {
+    const uint64_t a = tsf_two_over_pi_word(k);
+    if (s == 0u) {
+        return a;
+    }
+    return (a << s) | (tsf_two_over_pi_word(k + 1) >> (64u - s));
+}
+
+/* |f| (the 128-bit fraction (mh, ml), not 0) times pi/2 as y0 + y1: the top
+   64 normalised bits a, the next 64 b, hi = a, lo = (a - hi) 2^64 + b,
+   scaled, then the Dekker product with PIO2_HI + PIO2_LO. */
+static void tsf_fraction_pio2(uint64_t mh, uint64_t ml, double *y0, double *y1) {
+    const int lz = tsf_leading_zeros_128(mh, ml);
+    uint64_t a, b;
+    if (lz >= 64) {
+        const int over = lz - 64;
+        a = ml << (unsigned)over;
+        b = 0u;
+    } else if (lz == 0) {
+        a = mh;
+        b = ml;
+    } else {
+        const int rest = 64 - lz;
+        a = (mh << (unsigned)lz) | (ml >> (unsigned)rest);
+        b = ml << (unsigned)lz;
+    }
+    {
+        const double hi = (double)a;
+        /* a - hi, exact and below 2^11 in magnitude; hi may be 2^64. */
+        const uint64_t hu = hi >= 0x1p64 ? 0u : (uint64_t)hi;
+        const uint64_t du = a - hu;
+        const uint64_t nd = 0u - du;
+        const double d = (du >> 63) != 0u ? -(double)nd : (double)du;
+        const double dw = d * 0x1p64;
+        const double bd = (double)b;
+        const double lo = dw + bd;
+        const double fh = hi * tsf_pow2(-64 - lz);
+        const double fl = lo * tsf_pow2(-128 - lz);
+        double ph, pe;
+        tsf_two_prod(fh, 0x1.921fb54442d18p+0, &ph, &pe);
+        {
+            const double t1 = fh * 0x1.1a62633145c07p-54;
+            const double t2 = fl * 0x1.921fb54442d18p+0;
+            const double t3 = t1 + t2;
+            const double tail = pe + t3;
+            const double s = ph + tail;
+            const double back = s - ph;
+            *y0 = s;
+            *y1 = tail - back;
+        }
+    }
+}
+
+/* math::rem_pio2_large: Payne-Hanek for finite |x| >= 2^20 pi/2. |x| = m 2^e;
+   the 192 bits W of 2/pi from bit e - 2 on, P = m W in 64-bit limbs; the
+   quadrant is bits 190-191, the top 128 of the 190 fraction bits are rounded
+   to the nearest quadrant and multiplied by pi/2. Returns n, writes y0, y1. */
+static int tsf_rem_pio2_large(double x, double *y0, double *y1) {
+    const uint64_t bits = tsf_f64_bits(x);
+    const int e = tsf_exponent_bits(x) - 1075;
+    const uint64_t m = (bits & 0x000fffffffffffffull) | 0x0010000000000000ull;
+    const int q = e - 2;
+    const int k = q >= 0 ? q / 64 : -((63 - q) / 64);
+    const int shift = q - (64 * k);
+    const unsigned s = (unsigned)shift;
+    uint64_t p2h, p2l, p1h, p1l, p0h, p0l;
+    uint64_t fh, fl;
+    int n, neg = 0;
+    double v0 = 0.0, v1 = 0.0;
+    tsf_mul_64(m, tsf_two_over_pi_at(k + 2, s), &p2h, &p2l);
+    tsf_mul_add_64(m, tsf_two_over_pi_at(k + 1, s), p2h, &p1h, &p1l);
+    tsf_mul_add_64(m, tsf_two_over_pi_at(k, s), p1h, &p0h, &p0l);
+    (void)p0h;
+    n = (int)(p0l >> 62);
+    fh = ((p0l & 0x3fffffffffffffffull) << 2) | (p1l >> 62);
+    fl = (p1l << 2) | (p2l >> 62);
+    if ((fh >> 63) != 0u) {
+        n = n + 1;
+        neg = 1;
+        fl = (~fl) + 1u;
+        fh = (~fh) + (fl == 0u ? 1u : 0u);
+    }
+    if (fh != 0u || fl != 0u) {
+        tsf_fraction_pio2(fh, fl, &v0, &v1);
+        if (neg != 0) {
+            v0 = -v0;
+            v1 = -v1;
+        }
+    }
+    if (x < 0.0) {
+        *y0 = -v0;
+        *y1 = -v1;
+        return -n;
+    }
+    *y0 = v0;
+    *y1 = v1;
+    return n;
+}
+
+/* math::rem_pio2: x = n pi/2 + (y0 + y1) for finite |x| > pi/4. Cody-Waite
+   below 2^20 pi/2 (fdlibm's three-step split of pi/2, each step only when
+   more bits cancelled), Payne-Hanek above. Returns n, writes y0, y1. */
+static int tsf_rem_pio2(double x, double *y0, double *y1) {
+    if (fabs(x) >= 0x1.921fb54ebfd3ap+20) {
+        return tsf_rem_pio2_large(x, y0, y1);
+    }
+    {
+        const double half = x < 0.0 ? -0.5 : 0.5;
+        const double xn = x * 0x1.45f306dc9c883p-1;
+        const double nr = xn + half;
+        const int n = (int)nr;
+        const double fn = (double)n;
+        const int j = tsf_exponent_bits(x);
+        const double n1 = fn * 0x1.921fb544p+0;
+        double r = x - n1;
+        double w = fn * 0x1.0b4611a626331p-34;
+        double y = r - w;
+        if (j - tsf_exponent_bits(y) > 16) {
+            double t = r;
+            const double n2t = fn * 0x1.3198a2e037073p-69;
+            w = fn * 0x1.0b4611a6p-34;
+            r = t - w;
+            w = n2t - ((t - r) - w);
+            y = r - w;
+            if (j - tsf_exponent_bits(y) > 49) {
+                const double n3t = fn * 0x1.b839a252049c1p-104;
+                t = r;
+                w = fn * 0x1.3198a2ep-69;
+                r = t - w;
+                w = n3t - ((t - r) - w);
+                y = r - w;
+            }
+        }
+        *y0 = y;
+        *y1 = (r - y) - w;
+        return n;
+    }
+}
+
+/* sin(x + y), |x + y| <= ~pi/4 (fdlibm/musl __sin, math::kernel_sin). */
+static double tsf_kernel_sin(double x, double y) {
+    const double z = x * x;
+    const double w = z * z;
+    const double a1 = z * 0x1.71de357b1fe7dp-19;
+    const double a2 = -0x1.a01a019c161d5p-13 + a1;
+    const double a3 = z * a2;
+    const double a4 = 0x1.111111110f8a6p-7 + a3;
+    const double b1 = z * 0x1.5d93a5acfd57cp-33;
+    const double b2 = -0x1.ae5e68a2b9cebp-26 + b1;
+    const double zw = z * w;
+    const double b3 = zw * b2;
+    const double r = a4 + b3;
+    const double v = z * x;
+    const double hy = 0.5 * y;
+    const double vr = v * r;
+    const double d = hy - vr;
+    const double zd = z * d;
+    const double e = zd - y;
+    const double vs = v * -0x1.5555555555549p-3;
+    const double f = e - vs;
+    return x - f;
+}
+
+/* cos(x + y), |x + y| <= ~pi/4 (fdlibm/musl __cos, math::kernel_cos). */
+static double tsf_kernel_cos(double x, double y) {
+    const double z = x * x;
+    const double w = z * z;
+    const double a1 = z * 0x1.a01a019cb159p-16;
+    const double a2 = -0x1.6c16c16c15177p-10 + a1;
+    const double a3 = z * a2;
+    const double a4 = 0x1.555555555554cp-5 + a3;
+    const double a5 = z * a4;
+    const double b1 = z * -0x1.8fae9be8838d4p-37;
+    const double b2 = 0x1.1ee9ebdb4b1c4p-29 + b1;
+    const double b3 = z * b2;
+    const double b4 = -0x1.27e4f809c52adp-22 + b3;
+    const double ww = w * w;
+    const double b5 = ww * b4;
+    const double r = a5 + b5;
+    const double hz = 0.5 * z;
+    const double t = 1.0 - hz;
+    const double zr = z * r;
+    const double xy = x * y;
+    const double g = zr - xy;
+    const double one_t = 1.0 - t;
+    const double h = one_t - hz;
+    const double k = h + g;
+    return t + k;
+}
+
+/* NaN/inf -> NaN; |x| < 2^-26 -> x; |x| <= pi/4 -> kernel; else rem_pio2 and
+   [ks, kc, -ks, -kc][n mod 4]. */
+double tsf_sin(double x) {
+    double y0, y1;
+    int n;
+    if (isfinite(x) == 0) {
+        return NAN;
+    }
+    if (fabs(x) < 0x1p-26) {
+        return x;
+    }
+    if (fabs(x) <= 0x1.921fb54442d18p-1) {
+        return tsf_kernel_sin(x, 0.0);
+    }
+    n = tsf_rem_pio2(x, &y0, &y1);
+    switch ((unsigned)n & 3u) {
+    case 0u:
+        return tsf_kernel_sin(y0, y1);
+    case 1u:
+        return tsf_kernel_cos(y0, y1);
+    case 2u:
+        return -tsf_kernel_sin(y0, y1);
+    default:
+        return -tsf_kernel_cos(y0, y1);
+    }
+}
+
+/* NaN/inf -> NaN; |x| < 2^-27 -> 1; |x| <= pi/4 -> kernel; else rem_pio2 and
+   [kc, -ks, -kc, ks][n mod 4]. */
+double tsf_cos(double x) {
+    double y0, y1;
+    int n;
+    if (isfinite(x) == 0) {
+        return NAN;
+    }
+    if (fabs(x) < 0x1p-27) {
+        return 1.0;
+    }
+    if (fabs(x) <= 0x1.921fb54442d18p-1) {
+        return tsf_kernel_cos(x, 0.0);
+    }
+    n = tsf_rem_pio2(x, &y0, &y1);
+    switch ((unsigned)n & 3u) {
+    case 0u:
+        return tsf_kernel_cos(y0, y1);
+    case 1u:
+        return -tsf_kernel_sin(y0, y1);
+    case 2u:
+        return -tsf_kernel_cos(y0, y1);
+    default:
+        return tsf_kernel_sin(y0, y1);
+    }
+}
+
 /* ---------------------------------------------------------------- modes */
 
 int tsf_select_mode(uint8_t mode, int k, uint8_t *flags) {
@@ -206,8 +626,8 @@ static const double tsf_exprel_c[15] = {
 
 /* tsf-runtime's math::exprel: |v| < 0.5 (math::EXPREL_SMALL) the degree-14
    Taylor polynomial by Horner, one product per statement (bit for bit the
-   Rust runtime's); otherwise (exp(v) - 1)/v with libm's exp (as tsf_exp);
-   +inf gives +inf, -inf 0, NaN NaN. */
+   Rust runtime's); otherwise (tsf_exp(v) - 1)/v; +inf gives +inf, -inf 0,
+   NaN NaN. */
 static double tsf_exprel_f64(double v) {
     if (fabs(v) < 0.5) {
         double p = tsf_exprel_c[14];
@@ -221,41 +641,29 @@ static double tsf_exprel_f64(double v) {
     if (v == HUGE_VAL) {
         return v; /* +inf: (inf - 1)/inf would be NaN */
     }
-    return (exp(v) - 1.0) / v;
+    return (tsf_exp(v) - 1.0) / v;
 }
 
 /* ------------------------------------------- elementary functions, double */
 
-/* libm's functions (the Rust runtime's math::exp etc. differ by a few ulp;
-   sqrt and fabs not at all), the runtime's atan and exprel. */
-double tsf_exp(double v) {
-    return exp(v);
-}
-
+/* The runtime's functions (above), libm's sqrt and fabs (correctly rounded
+   and exact: the same bits as math::sqrt and the runtime's fabs). */
 double tsf_sqrt(double v) {
     return sqrt(v);
-}
-
-double tsf_sin(double v) {
-    return sin(v);
-}
-
-double tsf_cos(double v) {
-    return cos(v);
 }
 
 double tsf_fabs(double v) {
     return fabs(v);
 }
 
-/* sin(v)/v with the runtime's small-argument branch (|v| < 2^-13:
-   1 - v*v/6, truncation error < 2^-59). */
+/* math::sinc: |v| < 2^-13 (math::SINC_SMALL): 1 - v*v/6 (truncation error
+   < 2^-59); otherwise tsf_sin(v)/v. */
 double tsf_sinc(double v) {
     if (fabs(v) < 0x1p-13) {
         const double d2 = v * v;
         return 1.0 - d2 / 6.0;
     }
-    return sin(v) / v;
+    return tsf_sin(v) / v;
 }
 
 double tsf_exprel(double v) {
@@ -460,15 +868,6 @@ float tsf_atanf(float x) {
         r = hi + lt;
     }
     return signbit(x) ? -r : r;
-}
-
-/* 2/pi, 256 bits, most significant first (math::TWO_OVER_PI's first words). */
-static const uint64_t tsf_two_over_pi[4] = {
-    0xA2F9836E4E441529ull, 0xFC2757D1F534DDC0ull, 0xDB6295993C439041ull, 0xFE5163ABDEBBC561ull
-};
-
-static uint64_t tsf_two_over_pi_word(int k) {
-    return (k >= 0 && k < 4) ? tsf_two_over_pi[k] : 0u;
 }
 
 /* 64 bits of 2/pi from 0-based bit position pos (negative: leading zeros). */

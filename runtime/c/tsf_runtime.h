@@ -15,12 +15,14 @@
  * double and tsf_<f>f on float (types likewise: tsf_term and tsf_termf).
  * Generated code picks its instance with TSF_REAL_FN(<its real type>, name).
  *
- * Elementary functions: in double, tsf_atan is tsf-runtime's math::atan, bit
- * for bit; exp, sqrt, sin, cos and fabs are libm's (libm and the Rust runtime
- * differ by a few ulp per call, sqrt and fabs not at all). In float, every
- * tsf_<f>f is tsf-runtime's binary32 math::<f>f bit for bit, evaluated in
- * float arithmetic only (sqrtf and fabsf are C's, correctly rounded), so a
- * float build links no double-precision routine. Products
+ * Elementary functions: in double, tsf_exp, tsf_sin, tsf_cos, tsf_sinc,
+ * tsf_exprel and tsf_atan are tsf-runtime's math::exp etc. bit for bit (its
+ * fdlibm-style arithmetic, with Cody-Waite and Payne-Hanek reduction, no
+ * libm call); tsf_sqrt and tsf_fabs are C's sqrt and fabs (correctly rounded
+ * and exact, so the same bits). In float, every tsf_<f>f is tsf-runtime's
+ * binary32 math::<f>f bit for bit, evaluated in float arithmetic only
+ * (sqrtf and fabsf are C's, correctly rounded), so a float build links no
+ * double-precision routine. Products
  * are separate statements, so contraction within an expression cannot fuse
  * them; for bit-exact runtime order also avoid contraction across statements
  * (GCC outside ISO modes: -ffp-contract=off).
@@ -142,8 +144,8 @@ typedef struct tsf_adaptive_lawf {
 /* Elementary functions of premise code (see the top of this file).
    tsf_sinc(v) = sin(v)/v, 1 - v*v/6 for |v| < 2^-13 (math::SINC_SMALL).
    tsf_exprel(v) = (e^v - 1)/v, 1 at 0: for |v| < 0.5 (math::EXPREL_SMALL)
-   the runtime's degree-14 Taylor polynomial (bit for bit), otherwise
-   (exp(v) - 1)/v with libm's exp; +inf -> +inf, -inf -> 0. */
+   the runtime's degree-14 Taylor polynomial, otherwise (tsf_exp(v) - 1)/v;
+   +inf -> +inf, -inf -> 0. All bit for bit the Rust runtime's. */
 double tsf_exp(double v);
 double tsf_sqrt(double v);
 double tsf_sin(double v);

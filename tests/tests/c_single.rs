@@ -7,31 +7,43 @@ use crate::c_codegen::{build, c_compiler, run_driver, work_dir, write_runtime, R
 use std::fmt::Write as _;
 use tsf_runtime::math;
 
-const DRIVER: &str = r#"#include "tsf_runtime.h"
+/// The flags of the bit-identity tests: optimised, no contraction into FMA.
+pub(crate) const OPTIMISED: [&str; 2] = ["-O2", "-ffp-contract=off"];
+
+/// A C driver that reads one hex bit pattern of a `real` (`float` or
+/// `double`; `word` its unsigned integer type, `conv` that type's hex
+/// conversion) per line and prints the hex bit patterns of the runtime's
+/// `tsf_<name>` at it for each of `names`, space-separated.
+pub(crate) fn bits_driver(real: &str, word: &str, conv: &str, names: &[&str]) -> String {
+    let formats = vec![conv; names.len()].join(" ");
+    let calls: Vec<String> = names.iter().map(|n| format!("bits(tsf_{n}(v))")).collect();
+    format!(
+        r#"#include "tsf_runtime.h"
 #include <stdio.h>
 #include <string.h>
 
-static unsigned bits(float v) {
-    unsigned b;
+static {word} bits({real} v) {{
+    {word} b;
     memcpy(&b, &v, sizeof b);
     return b;
-}
+}}
 
-int main(void) {
-    unsigned b;
-    while (scanf("%x", &b) == 1) {
-        float v;
+int main(void) {{
+    {word} b;
+    while (scanf("{conv}", &b) == 1) {{
+        {real} v;
         memcpy(&v, &b, sizeof v);
-        printf("%08x %08x %08x %08x %08x %08x %08x\n", bits(tsf_expf(v)), bits(tsf_sqrtf(v)),
-               bits(tsf_atanf(v)), bits(tsf_sinf(v)), bits(tsf_cosf(v)), bits(tsf_sincf(v)),
-               bits(tsf_exprelf(v)));
-    }
+        printf("{formats}\n", {});
+    }}
     return 0;
+}}
+"#,
+        calls.join(", ")
+    )
 }
-"#;
 
-/// The seven functions of the runtime at `v`, as bit patterns (NaN as one pattern).
-fn rust_bits(v: f32) -> [u32; 7] {
+/// The seven functions of the runtime at the f32 of bit pattern `b`.
+fn rust_bits(b: u64) -> Vec<u64> {
     let fs: [fn(f32) -> f32; 7] = [
         math::expf,
         math::sqrtf,
@@ -41,27 +53,79 @@ fn rust_bits(v: f32) -> [u32; 7] {
         math::sincf,
         math::exprelf,
     ];
-    fs.map(|f| canonical(f(v).to_bits()))
+    let v = f32::from_bits(b as u32);
+    fs.iter().map(|f| u64::from(f(v).to_bits())).collect()
 }
 
-/// Every NaN as the one quiet NaN (C and Rust may differ in NaN payloads).
-fn canonical(b: u32) -> u32 {
-    if f32::from_bits(b).is_nan() {
-        0x7fc0_0000
+/// The value of an f32 bit pattern, widened (exactly) for messages and NaN tests.
+fn f32_value(b: u64) -> f64 {
+    f64::from(f32::from_bits(b as u32))
+}
+
+/// `b` unless it is a NaN of `value`'s format: every NaN is one pattern (C
+/// and Rust may differ in NaN payloads).
+fn canonical(b: u64, value: fn(u64) -> f64) -> u64 {
+    if value(b).is_nan() {
+        u64::MAX
     } else {
         b
     }
 }
 
+/// The functions `names` of a C runtime driver against the Rust runtime, bit
+/// for bit: builds `driver` (one hex bit pattern in per line, the functions'
+/// hex bit patterns out, space-separated) with the runtime source in the
+/// work directory `tag` (C99, strict warnings, then `flags`), runs it on
+/// `args` and asserts every output word equals `rust(arg)`'s (NaNs as one
+/// pattern; `value` reads a bit pattern). Returns the count of arguments.
+pub(crate) fn assert_c_is_the_runtime(
+    tag: &str,
+    driver: &str,
+    args: &[u64],
+    names: &[&str],
+    rust: &dyn Fn(u64) -> Vec<u64>,
+    value: fn(u64) -> f64,
+    flags: &[&str],
+) -> usize {
+    let cc = c_compiler();
+    let dir = work_dir(tag);
+    let runtime = write_runtime(&dir);
+    let drv = dir.join(format!("{tag}_drive.c"));
+    std::fs::write(&drv, driver).expect("write driver");
+    let exe = dir.join(format!("{tag}_drive"));
+    build(&cc, &[drv, runtime], &exe, flags);
+    let mut input = String::new();
+    for b in args {
+        let _ = writeln!(input, "{b:x}");
+    }
+    let input_path = dir.join(format!("{tag}_args.txt"));
+    std::fs::write(&input_path, input).expect("write args");
+    let out = run_driver(&exe, &input_path);
+    let mut lines = 0usize;
+    for (line, &b) in out.lines().zip(args) {
+        let c: Vec<u64> = line
+            .split(' ')
+            .map(|w| canonical(u64::from_str_radix(w, 16).expect("bits"), value))
+            .collect();
+        let r: Vec<u64> = rust(b).into_iter().map(|w| canonical(w, value)).collect();
+        for (k, name) in names.iter().enumerate() {
+            assert_eq!(
+                c.get(k).copied(),
+                r.get(k).copied(),
+                "{name}({:e}) = {:e} in C, {:e} in the runtime",
+                value(b),
+                value(c.get(k).copied().unwrap_or(0)),
+                value(r.get(k).copied().unwrap_or(0))
+            );
+        }
+        lines += 1;
+    }
+    assert_eq!(lines, args.len(), "one line per argument");
+    lines
+}
+
 #[test]
 fn c_float_functions_are_the_runtimes() {
-    let cc = c_compiler();
-    let dir = work_dir("c_single");
-    let runtime = write_runtime(&dir);
-    let drv = dir.join("single_drive.c");
-    std::fs::write(&drv, DRIVER).expect("write driver");
-    let exe = dir.join("single_drive");
-    build(&cc, &[drv, runtime], &exe, &["-O2", "-ffp-contract=off"]);
     let mut args: Vec<f32> = vec![
         0.0,
         -0.0,
@@ -107,36 +171,19 @@ fn c_float_functions_are_the_runtimes() {
         // Any bit pattern: every exponent, subnormals, NaNs.
         args.push(f32::from_bits((rng.next_u64() >> 32) as u32));
     }
-    let mut input = String::new();
-    for v in &args {
-        let _ = writeln!(input, "{:x}", v.to_bits());
-    }
-    let input_path = dir.join("single_args.txt");
-    std::fs::write(&input_path, input).expect("write args");
-    let out = run_driver(&exe, &input_path);
+    let bits: Vec<u64> = args.iter().map(|v| u64::from(v.to_bits())).collect();
     let names = ["expf", "sqrtf", "atanf", "sinf", "cosf", "sincf", "exprelf"];
-    let mut lines = 0usize;
-    for (line, &v) in out.lines().zip(&args) {
-        let c: Vec<u32> = line
-            .split(' ')
-            .map(|w| canonical(u32::from_str_radix(w, 16).expect("bits")))
-            .collect();
-        let r = rust_bits(v);
-        for (k, name) in names.iter().enumerate() {
-            assert_eq!(
-                c.get(k).copied(),
-                Some(r[k]),
-                "{name}({v:e}) = {:e} in C, {:e} in the runtime",
-                f32::from_bits(c.get(k).copied().unwrap_or(0)),
-                f32::from_bits(r[k])
-            );
-        }
-        lines += 1;
-    }
-    assert_eq!(lines, args.len(), "one line per argument");
+    let n = assert_c_is_the_runtime(
+        "single",
+        &bits_driver("float", "unsigned", "%x", &names),
+        &bits,
+        &names,
+        &rust_bits,
+        f32_value,
+        &OPTIMISED,
+    );
     println!(
-        "{} arguments x {} functions: C and the runtime bit-identical",
-        args.len(),
+        "{n} arguments x {} functions: C and the runtime bit-identical",
         names.len()
     );
 }

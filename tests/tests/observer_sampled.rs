@@ -7,7 +7,9 @@
 //! observer ships its own test (`observer_shipped`).
 
 use crate::common;
-use common::observer::{osc_spec_at as spec_at, rk4_held, runtime_observer, runtime_terms, tsfc};
+use common::observer::{
+    independent_loop, osc_spec_at as spec_at, runtime_observer, runtime_terms, tsfc, HeldPlant,
+};
 
 use nalgebra::DMatrix;
 use serde_json::Value;
@@ -96,21 +98,21 @@ fn sampled_observer_loop_certifies_generates_and_converges() {
     };
     let terms = runtime_terms(t);
     let obs = runtime_observer::<2, 1, 1, 1, 2, 2>(t, &terms);
-    let (mut x, mut xhat, h) = ([0.5, 0.0], [xhat0[0], xhat0[1]], 0.001);
-    let mut worst: f64 = 0.0;
-    for (tt, xs, us) in &samples {
-        let y = [x[0]];
-        let v = obs.premise_state(&xhat, &y);
-        let u = obs
-            .step_with_premises(&mut xhat, &y, &[exprs[0].eval(&v)])
-            .u[0];
-        worst = worst
-            .max((xs[0] - x[0]).abs())
-            .max((xs[1] - x[1]).abs())
-            .max((us - u).abs() / (1.0 + u.abs()));
-        rk4_held(&mut x, u, h, 10, plant);
-        assert!(tt.is_finite());
-    }
+    assert!(samples.iter().all(|(tt, _, _)| tt.is_finite()));
+    let held = HeldPlant {
+        f: plant,
+        h: 0.001,
+        steps: 10,
+    };
+    let samples = samples.iter().map(|(_, x, u)| (x.as_slice(), *u));
+    let run = independent_loop(
+        &obs,
+        exprs,
+        samples,
+        held,
+        ([0.5, 0.0], [xhat0[0], xhat0[1]]),
+    );
+    let (worst, x, xhat) = (run.worst, run.x, run.xhat);
     assert!(worst < 1e-8, "simulator vs independent loop: {worst:e}");
     assert!(
         x[0].abs() < 1e-3 && (x[0] - xhat[0]).abs() < 1e-3,

@@ -9,7 +9,7 @@
 //! block matrix exponential), independently of tsfc's LMI code.
 
 use crate::common;
-use crate::common::observer::{rk4_held, runtime_observer, runtime_terms};
+use crate::common::observer::{independent_loop, runtime_observer, runtime_terms, HeldPlant};
 use nalgebra::DMatrix;
 use serde_json::Value;
 use tsfc::tables::PremiseCode;
@@ -126,22 +126,15 @@ fn shipped_pendulum_observer_converges_from_a_wrong_estimate_like_the_simulator(
     };
     let terms = runtime_terms(t);
     let obs = runtime_observer::<2, 1, 1, 1, 2, 2>(t, &terms);
-    let (mut x, mut xhat) = (x0, [xhat0[0], xhat0[1]]);
-    let (mut worst, mut theta_max, mut u_max): (f64, f64, f64) = (0.0, 0.0, 0.0);
-    for (xs, us) in &samples {
-        let y = [x[0]];
-        let v = obs.premise_state(&xhat, &y);
-        let u = obs
-            .step_with_premises(&mut xhat, &y, &[exprs[0].eval(&v)])
-            .u[0];
-        worst = worst
-            .max((xs[0] - x[0]).abs())
-            .max((xs[1] - x[1]).abs())
-            .max((us - u).abs() / (1.0 + u.abs()));
-        theta_max = theta_max.max(x[0].abs());
-        u_max = u_max.max(u.abs());
-        rk4_held(&mut x, u, T / 10.0, 10, pendulum);
-    }
+    let plant = HeldPlant {
+        f: pendulum,
+        h: T / 10.0,
+        steps: 10,
+    };
+    let samples = samples.iter().map(|(x, u)| (x.as_slice(), *u));
+    let run = independent_loop(&obs, exprs, samples, plant, (x0, [xhat0[0], xhat0[1]]));
+    let (worst, theta_max, u_max) = (run.worst, run.max_abs_x1, run.max_abs_u);
+    let (x, xhat) = (run.x, run.xhat);
     assert!(worst < 1e-8, "simulator vs independent loop: {worst:e}");
     // The trajectory stays inside the rules' range, where the T-S model
     // is the pendulum.

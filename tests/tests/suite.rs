@@ -5,6 +5,7 @@ mod adaptive;
 mod adaptive_codegen;
 mod amrr;
 mod c_codegen;
+mod c_double;
 mod c_single;
 mod common;
 mod compat;

@@ -8,8 +8,8 @@
 //! section 2.2): every operation is `fl(a op b) = (a op b)(1 + d)`, `|d| <= u`,
 //! no underflow; `gamma_k = k u / (1 - k u)`; `exp` within
 //! [`F32_ELEMENTARY_ULP`] ulp, i.e. relative `2 u` per ulp (the runtime's
-//! `expf` is measured within half of that; libm's `exp` in a double build is
-//! assumed within it). Clamping into `[0, 1]` never increases the error of a
+//! `expf` is measured within half of that, and so is its `exp`, which the
+//! C runtime's `tsf_exp` repeats bit for bit). Clamping into `[0, 1]` never increases the error of a
 //! degree whose exact value is in `[0, 1]`.
 
 use super::stored::unit_roundoff;

@@ -23,11 +23,10 @@
 //! | `exprel` | <= 2 ulp | `(exp(v) - 1)/v`; its Taylor polynomial (degree 14) for `|v| < 0.5` |
 //! | `f32` variants | `sqrtf` 0 ulp; `expf`, `atanf` <= 1; `sinf`, `cosf` <= 2; `sincf`, `exprelf` <= 3 (f32 ulp) | binary32 arithmetic only (`single.rs`) |
 //!
-//! C's `<math.h>` `exp`/`atan` are usually within 1 ulp of the true value as
-//! well, so a C mirror that calls libm instead of this arithmetic can differ
-//! from the runtime by up to 2 ulp (~4.4e-16 relative) per elementary call;
-//! through the product t-norm, normalisation and blend this stays far below
-//! the 1e-12 relative tolerance of the C-vs-Rust conformance tests.
+//! The C runtime (`runtime/c/tsf_runtime.c`) mirrors this arithmetic operation
+//! by operation, with the same constants, so its `tsf_exp`, `tsf_sin`, ...
+//! equal these functions bit for bit (C's `sqrt` and `fabs` are correctly
+//! rounded and exact, so it calls them).
 
 /// `ln 2` split: `LN2_HI` has 42 significant bits, so `k * LN2_HI` is exact for
 /// `|k| < 2^11`; `LN2_HI + LN2_LO` equals `ln 2` to ~1e-30.
@@ -665,8 +664,8 @@ pub const SINC_SMALL: f64 = 1.220703125e-4; // 2^-13
 ///
 /// `|v| < 2^-13` ([`SINC_SMALL`]): `1 - (v*v)/6` (Taylor, truncation error
 /// `< v^4/120 < 2^-59`, so < 1 ulp); otherwise `sin(v)/v` (< 2 ulp). NaN
-/// and `+-inf` give NaN (as `sin`). The C generator emits the same branch
-/// around libm's `sin`.
+/// and `+-inf` give NaN (as `sin`). The C runtime's `tsf_sinc` is the same
+/// branch around its mirror of [`sin`].
 pub fn sinc(v: f64) -> f64 {
     if fabs(v) < SINC_SMALL {
         1.0 - (v * v) / 6.0
@@ -708,8 +707,7 @@ pub const EXPREL_COEFFS: [f64; 15] = [
 /// multiply-add). Its truncation error is below
 /// `0.5^15/16! / (1 - 0.5/17) < 1.6e-18` absolute, and `exprel(v) >= 0.78`
 /// there, so below `2^-58` relative (under 2^-54 as required). Otherwise
-/// `(exp(v) - 1)/v` with [`exp`] (the C runtime calls libm's `exp` there, as
-/// `tsf_exp` does). NaN gives NaN, `+inf` gives `+inf`, `-inf` gives 0;
+/// `(exp(v) - 1)/v` with [`exp`] (the C runtime's `tsf_exp` mirrors it). NaN gives NaN, `+inf` gives `+inf`, `-inf` gives 0;
 /// once `exp(v)` overflows (`v > 709.78`) the result is `+inf` (the true
 /// value overflows a little later, near `v = 716`).
 pub fn exprel(v: f64) -> f64 {

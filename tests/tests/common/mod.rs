@@ -6,8 +6,10 @@ pub mod plant;
 pub mod schema;
 
 use std::path::{Path, PathBuf};
+use tsf_runtime::math;
 use tsfc::driver::frontend::{self, Source};
 use tsfc::model::TsModel;
+use tsfc::tables::sym::{Func, Sym};
 
 /// Path of a shipped spec.
 pub fn spec_path(name: &str) -> PathBuf {
@@ -235,4 +237,31 @@ pub fn chromium() -> Option<PathBuf> {
         .split(':')
         .map(|d| Path::new(d).join("chromium"))
         .find(|p| p.is_file())
+}
+
+/// `e` at `v` with the Rust runtime's elementary functions (`math::sin`
+/// etc.): what the generated Rust's `Real::sin` and the generated C's
+/// `tsf_sin` compute, operand by operand in the generators' order.
+pub fn runtime_eval(e: &Sym, v: &[f64]) -> f64 {
+    match e {
+        Sym::Const(c) => *c,
+        Sym::X(k) => v.get(*k).copied().unwrap_or(f64::NAN),
+        Sym::Add(a, b) => runtime_eval(a, v) + runtime_eval(b, v),
+        Sym::Mul(a, b) => runtime_eval(a, v) * runtime_eval(b, v),
+        Sym::Div(a, b) => runtime_eval(a, v) / runtime_eval(b, v),
+        Sym::Neg(a) => -runtime_eval(a, v),
+        Sym::Call(f, a) => {
+            let a = runtime_eval(a, v);
+            match f {
+                Func::Sin => math::sin(a),
+                Func::Cos => math::cos(a),
+                Func::Exp => math::exp(a),
+                Func::Sqrt => math::sqrt(a),
+                Func::Atan => math::atan(a),
+                Func::Abs => a.abs(),
+                Func::Sinc => math::sinc(a),
+                Func::Exprel => math::exprel(a),
+            }
+        }
+    }
 }

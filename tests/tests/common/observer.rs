@@ -4,10 +4,12 @@
 //! the test oscillator spec that certifies its sampled loop, seeded outputs
 //! with fault values, and RK4 of a 2-state plant with the command held.
 
+use super::runtime_eval;
 use super::Rng;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 use tsf_runtime::{FactoredController, Observer, Term};
+use tsfc::tables::sym::Sym;
 use tsfc::tables::{PremiseCode, Tables};
 
 /// A two-rule unstable oscillator x1'' = x1 + 0.1 sin(x1) + u with only x1
@@ -139,6 +141,73 @@ pub fn outputs(count: usize, seed: u64) -> Vec<f64> {
             _ => rng.uniform(-1.5, 1.5),
         })
         .collect()
+}
+
+/// The premises `exprs` of the runtime's premise state `v`, by [`runtime_eval`].
+pub fn runtime_premises<const P: usize>(exprs: &[Sym], v: &[f64]) -> [f64; P] {
+    assert_eq!(exprs.len(), P, "premise expressions");
+    std::array::from_fn(|p| runtime_eval(&exprs[p], v))
+}
+
+/// A 2-state plant held over a sample period: `steps` RK4 steps of `h`.
+#[derive(Clone, Copy)]
+pub struct HeldPlant {
+    /// Its vector field `f(x, u)`.
+    pub f: fn([f64; 2], f64) -> [f64; 2],
+    /// RK4 step.
+    pub h: f64,
+    /// RK4 steps per sample.
+    pub steps: usize,
+}
+
+/// What [`independent_loop`] saw.
+pub struct LoopRun {
+    /// Largest gap to the simulator's samples: states absolute, the command
+    /// relative to `1 + |u|`.
+    pub worst: f64,
+    /// The plant state after the last sample.
+    pub x: [f64; 2],
+    /// The estimate after the last sample.
+    pub xhat: [f64; 2],
+    /// Largest `|x1|` at a sample.
+    pub max_abs_x1: f64,
+    /// Largest `|u|`.
+    pub max_abs_u: f64,
+}
+
+/// The loop of a 2-state, single-output observer design rebuilt outside the
+/// simulator: per sample (state, command) of the simulator, y = x1, the
+/// runtime observer's premise state, its premises by [`runtime_eval`],
+/// `step_with_premises`, the gap to the sample, then the plant held over the
+/// period. Starts from the plant state `x` and the estimate `xhat`.
+pub fn independent_loop<'s, const P: usize, const R: usize, const D: usize>(
+    obs: &Observer<'_, f64, 2, 1, 1, P, R, D>,
+    exprs: &[Sym],
+    samples: impl IntoIterator<Item = (&'s [f64], f64)>,
+    plant: HeldPlant,
+    (mut x, mut xhat): ([f64; 2], [f64; 2]),
+) -> LoopRun {
+    let (mut worst, mut max_abs_x1, mut max_abs_u): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    for (xs, us) in samples {
+        let y = [x[0]];
+        let v = obs.premise_state(&xhat, &y);
+        let z = runtime_premises::<P>(exprs, &v);
+        let u = obs.step_with_premises(&mut xhat, &y, &z).u[0];
+        worst = worst
+            .max((xs[0] - x[0]).abs())
+            .max((xs[1] - x[1]).abs())
+            .max((us - u).abs() / (1.0 + u.abs()));
+        max_abs_x1 = max_abs_x1.max(x[0].abs());
+        max_abs_u = max_abs_u.max(u.abs());
+        rk4_held(&mut x, u, plant.h, plant.steps, plant.f);
+    }
+    LoopRun {
+        worst,
+        x,
+        xhat,
+        max_abs_x1,
+        max_abs_u,
+    }
 }
 
 /// `steps` RK4 steps of `h` of the 2-state plant `f(x, u)` with `u` held.

@@ -68,9 +68,8 @@ impl Gen<'_> {
 // flag; no rule fired -> the nearest rule centre's gain alone and a flag;
 // |u_s| <= u_max_s always; rules with h_j == 0 are skipped in the blend;
 // each distinct premise term is evaluated once per step.
-// exp, sqrt, sin and cos come from libm here and from tsf-runtime in Rust:
-// results agree to ~1e-15 relative (a few ulp per call; tested to 1e-12);
-// atan is the runtime's, bit for bit.
+// The elementary functions (exp, sin, cos, sinc, exprel, atan, sqrt, fabs)
+// are tsf-runtime's, bit for bit (tsf_runtime.c mirrors its arithmetic).
 //
 // Products are separate statements, so contraction within an expression
 // (clang's default) cannot fuse them; for bit-exact runtime order also avoid

@@ -26,11 +26,11 @@
 //! runtime's order (sums accumulated from 0 in index order, products in
 //! their own statements so that a compiler allowed to contract `a*b + c`
 //! within an expression, like clang's default `-ffp-contract=on`, cannot
-//! fuse them). `atan` is the Rust runtime's, bit for bit; `exp`, `sqrt`,
-//! `sin`, `cos` and `fabs` are libm's, always evaluated in `double` and
-//! rounded once to `<NAME>_REAL`, exactly like the runtime's `f32` functions;
-//! libm and the runtime differ by a few ulp per call, `sqrt` and `fabs` not
-//! at all.
+//! fuse them). The elementary functions are the Rust runtime's, bit for bit,
+//! in both precisions: `tsf_runtime.c` mirrors `math::exp`, `sin`, `cos`,
+//! `sinc`, `exprel`, `atan` (binary64) and their binary32 `f` variants
+//! operation by operation (no libm call); `sqrt` and `fabs` are C's (correctly
+//! rounded and exact, so the same bits).
 
 use super::header::marker;
 use super::{Backend, CodegenError, GeneratedFile};
