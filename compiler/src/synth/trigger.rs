@@ -776,7 +776,13 @@ impl Runner<'_> {
             settings.tol_gap_rel = settings.tol_gap_rel.max(tol);
             settings.tol_gap_abs = settings.tol_gap_abs.max(tol);
         }
-        let sol = self.solve_with(&built.problem, what, &settings)?;
+        let mut sol = self.solve_with(&built.problem, what, &settings)?;
+        if sol.status != SolveStatus::Solved
+            && settings.equilibrate != self.settings.solver.equilibrate
+        {
+            settings.equilibrate = self.settings.solver.equilibrate;
+            sol = self.solve_with(&built.problem, what, &settings)?;
+        }
         if sol.status != SolveStatus::Solved {
             return Ok(None);
         }
