@@ -17,6 +17,7 @@ use super::pair_stability;
 use super::search::Runner;
 use super::solved::{names, Solved};
 use super::trigger;
+use super::trigger_scale::LoopedSolve;
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use tsf_lang::limits::MAX_MISMATCH_RULES;
@@ -164,7 +165,9 @@ pub(super) fn write_sampling(sampling: (f64, f64), advice: f64) -> String {
 impl Runner<'_> {
     /// One sampled-loop SDP: the design, or None when not solved.
     fn sampled_attempt(&mut self, plan: &TriggerPlan) -> Result<Option<SampledDesign>, SynthError> {
-        let Some((built, all)) = self.solve_looped(plan, "sampled-loop problem", None)? else {
+        let Some((built, all)) =
+            self.solve_looped(plan, "sampled-loop problem", LoopedSolve::default())?
+        else {
             return Ok(None);
         };
         Ok(Some(SampledDesign {

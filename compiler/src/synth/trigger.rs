@@ -28,8 +28,8 @@ use super::objective::BuildError;
 use super::reduction::Reduction;
 use super::search::Runner;
 use super::solved::{names, Solved as _};
-use super::trigger_scale::unscale_values;
 pub use super::trigger_scale::{lyapunov_scale, scaled_plan};
+use super::trigger_scale::{unscale_values, LoopedSolve};
 use super::vertices::{self, PlantVertex};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
@@ -745,14 +745,15 @@ pub const XI_FACTOR: f64 = 4.0;
 impl Runner<'_> {
     /// Builds and solves the looped-functional problem of `plan` (reduced):
     /// the built problem and every variable's value, or None when not solved.
+    /// `how`: gap tolerance and equilibration ([`LoopedSolve`]).
     pub(super) fn solve_looped(
         &mut self,
         plan: &TriggerPlan,
         what: &str,
-        gap_tol: Option<f64>,
+        how: LoopedSolve,
     ) -> Result<Option<Solved>, SynthError> {
         let model = self.model;
-        self.solve_looped_on(model, plan, what, gap_tol)
+        self.solve_looped_on(model, plan, what, how)
     }
 
     /// [`Runner::solve_looped`] for `model` (e.g. [`super::observer::sampled`]).
@@ -761,17 +762,27 @@ impl Runner<'_> {
         model: &TsModel,
         plan: &TriggerPlan,
         what: &str,
-        gap_tol: Option<f64>,
+        how: LoopedSolve,
     ) -> Result<Option<Solved>, SynthError> {
         let t0 = Instant::now();
         let built = build(model, plan, self.settings.eps, true)?;
         self.log.build_time += t0.elapsed();
         let mut settings = self.settings.solver.clone();
+        if how.rescaled {
+            settings.equilibrate = false;
+        }
+        let gap_tol = how.gap_tol;
         if let Some(tol) = gap_tol {
             settings.tol_gap_rel = settings.tol_gap_rel.max(tol);
             settings.tol_gap_abs = settings.tol_gap_abs.max(tol);
         }
-        let sol = self.solve_with(&built.problem, what, &settings)?;
+        let mut sol = self.solve_with(&built.problem, what, &settings)?;
+        if sol.status != SolveStatus::Solved
+            && settings.equilibrate != self.settings.solver.equilibrate
+        {
+            settings.equilibrate = self.settings.solver.equilibrate;
+            sol = self.solve_with(&built.problem, what, &settings)?;
+        }
         if sol.status != SolveStatus::Solved {
             return Ok(None);
         }
@@ -800,9 +811,11 @@ impl Runner<'_> {
     ) -> Result<Option<TriggerDesign>, SynthError> {
         let sigma = lyapunov_scale(plan);
         let solved = scaled_plan(plan, sigma);
-        let Some((built, mut all)) =
-            self.solve_looped(&solved, "trigger problem", Some(TRIGGER_GAP_TOL))?
-        else {
+        let how = LoopedSolve {
+            gap_tol: Some(TRIGGER_GAP_TOL),
+            rescaled: sigma > 1.0,
+        };
+        let Some((built, mut all)) = self.solve_looped(&solved, "trigger problem", how)? else {
             return Ok(None);
         };
         unscale_values(&mut all, sigma);

@@ -6,6 +6,24 @@ use super::solved::names;
 use super::trigger::joint_level;
 use nalgebra::DMatrix;
 
+/// How [`super::search::Runner::solve_looped`] runs the solver on a looped-functional SDP.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct LoopedSolve {
+    /// Floor of the duality-gap tolerances (relative and absolute), if any.
+    pub gap_tol: Option<f64>,
+    /// The problem was rescaled by tsfc ([`lyapunov_scale`] > 1,
+    /// [`scaled_plan`]): Clarabel's equilibration (Ruiz scaling) is turned
+    /// off, as it only costs iterations on top of that scaling (Xu & Huang
+    /// two-step: 32 -> 21); when that run does not solve, the SDP is solved
+    /// again with it (a saturated arm spec of tests/tests/event_trigger.rs
+    /// certifies nu = 0.0125 only so). Unscaled problems (premise regions, where the
+    /// level is xi's own; plain sampled loops; the sampled observer loop)
+    /// keep it, with the solver's unscaled retry: without it the same
+    /// regional trigger SDP stopped "Solved" up to 19 % above a gamma the
+    /// equilibrated run certified (docs/limits.md, "solver scaling").
+    pub rescaled: bool,
+}
+
 /// Largest scale [`lyapunov_scale`] returns.
 const MAX_LYAPUNOV_SCALE: f64 = 1e12;
 

@@ -58,6 +58,7 @@ use crate::synth::reduction::Reduction;
 use crate::synth::sampling::{longest_scale, plan_for};
 use crate::synth::search::Runner;
 use crate::synth::solved::{names, Solved as _};
+use crate::synth::trigger_scale::LoopedSolve;
 use crate::synth::Design;
 use nalgebra::DMatrix;
 
@@ -266,7 +267,8 @@ impl Runner<'_> {
             return Ok(None);
         }
         let what = "sampled observer-loop problem";
-        let Some((built, all)) = self.solve_looped_on(aug, &plan, what, None)? else {
+        let Some((built, all)) = self.solve_looped_on(aug, &plan, what, LoopedSolve::default())?
+        else {
             return Ok(None);
         };
         Ok(Some(SampledObserver {
