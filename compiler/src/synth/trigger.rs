@@ -23,7 +23,8 @@ use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
 pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
-use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
+use super::loop_error::{robust_lambda, uncertain, LoopMultipliers, Selectors};
+use super::observer::drift;
 use super::objective::BuildError;
 use super::reduction::Reduction;
 use super::search::Runner;
@@ -258,7 +259,7 @@ fn lambda(
     }
     // With a model error the gains must be known (N_b is data).
     let robust =
-        match (plan.model_error.is_zero(), f) {
+        match (!uncertain(plan), f) {
             (true, _) => None,
             (false, Factor::Val(f)) => Some(Selectors {
                 ex: &ex,
@@ -394,10 +395,10 @@ pub(super) fn impose(
         (None, None)
     };
     vars.xi = xi;
-    if !plan.model_error.is_zero() {
+    if uncertain(plan) {
         vars.robust = [
-            plan.model_error.declare(&mut problem, 1)?,
-            plan.model_error.declare(&mut problem, 2)?,
+            super::loop_error::declare(plan, &mut problem, 1)?,
+            super::loop_error::declare(plan, &mut problem, 2)?,
         ];
     }
     let mut reductions = Vec::new();
@@ -426,7 +427,8 @@ pub(super) fn impose(
     if reduce && h_min < h_max {
         reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * pairs)));
     }
-    let (kept, kept_ctrl) = if reduce {
+    // Paired vertices (drift) keep every pair: a repeated rule is not implied.
+    let (kept, kept_ctrl) = if reduce && plan.drift.is_none() {
         (
             vertices::kept_plant_rules(&plant),
             vertices::distinct_controller_rules(&ctrl),
@@ -451,6 +453,13 @@ pub(super) fn impose(
     }
     for &h in hs {
         for rr in [1u8, 2] {
+            if let Some(d) = &plan.drift {
+                let prefix = format!("trigger r={rr} h={h}");
+                drift::impose_pairs(&mut problem, d.per_rule, &prefix, eps, |i, q| {
+                    lambda(model, plan, &vars, (&plant[i], ctrl[q]), h, rr)
+                })?;
+                continue;
+            }
             for &i in &kept {
                 for &j in &kept_ctrl {
                     let name = format!("trigger r={rr} h={h} {tag}[{},{}]", i + 1, j + 1);
@@ -551,6 +560,7 @@ fn impose_regions(
             eps,
         )?;
     }
+    drift::impose_faces(problem, nonstrict, plan, vars.p, eps)?;
     for (name, e) in &plan.contain {
         nonstrict_psd(
             problem,
@@ -723,6 +733,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         g: out.g.columns(sig.offset, sig.len).into_owned(),
         region,
         model_error: super::loop_error::LoopError::of(model),
+        drift: None,
     };
     // A region's vertex sets, checked before any SDP (too many is a refusal).
     vertices::describe(model, &plan).map_err(|e| match e {

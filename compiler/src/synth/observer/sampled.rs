@@ -49,7 +49,9 @@
 //! The certificate rebuilds the conditions from the shipped F_l and tables
 //! (and from their stored rounding: [`crate::synth::loops::observer`]).
 
+use super::drift::Drift;
 use super::ObserverDesign;
+use crate::model::region::drift::{drift_bound, largest_input, state_box};
 use crate::model::TsModel;
 use crate::synth::advice::{about, round_down};
 use crate::synth::design::{SynthError, TriggerPlan};
@@ -232,13 +234,17 @@ impl SampledObserver {
     }
 }
 
+/// The input bounds U tried by the drift route, as fractions of the largest
+/// one that leaves a sample box, in order.
+pub const INPUT_FRACTIONS: [f64; 4] = [0.5, 0.25, 0.75, 0.125];
+
 /// The plan of the sampled observer loop at `period` with `phi`.
 fn plan_at(
     model: &TsModel,
     d: &Design,
     o: &ObserverDesign,
-    period: f64,
-    phi: f64,
+    (period, phi): (f64, f64),
+    drift: Option<&Drift>,
 ) -> (TriggerPlan, ObserverSteps) {
     let steps = ObserverSteps::of(model, &o.c, &o.gains, period);
     let mut plan = plan_for(model, d, (period, period));
@@ -248,11 +254,15 @@ fn plan_at(
     plan.contain = Vec::new();
     plan.c = DMatrix::zeros(0, 2 * model.n);
     plan.gains = pair_gains(&d.gains, &o.c, &steps, period);
+    plan.drift = drift.cloned();
     (plan, steps)
 }
 
 impl Runner<'_> {
-    /// One SDP of the sampled observer loop at `period` and `alpha`.
+    /// The sampled observer loop at `period` and `alpha`: free vertices, or
+    /// with a state box on every state the drift route ([`super::drift`]),
+    /// whose input bound U is tried at [`INPUT_FRACTIONS`] of the largest
+    /// that leaves a sample box (the first that certifies is kept).
     fn observer_attempt(
         &mut self,
         aug: &TsModel,
@@ -261,12 +271,42 @@ impl Runner<'_> {
         period: f64,
         alpha: f64,
     ) -> Result<Option<SampledObserver>, SynthError> {
-        let (plan, steps) = plan_at(self.model, d, o, period, 2.0 * alpha);
+        let Some(region) = state_box(self.model) else {
+            return self.observer_solve(aug, d, o, (period, alpha), None);
+        };
+        let most = largest_input(self.model, &region, period);
+        let fractions: &[f64] = if most.is_finite() { &INPUT_FRACTIONS } else { &[1.0] };
+        for f in fractions {
+            let Ok(bound) = drift_bound(self.model, period, most * f) else {
+                continue;
+            };
+            if std::env::var("TSFC_DRIFT_DEBUG").is_ok() { eprintln!("drift T={period} alpha={alpha} {bound:?}"); }
+            let mut drift = Drift::of(self.model, bound);
+            if let Ok(k) = std::env::var("TSFC_DRIFT_SCALE") { let k: f64 = k.parse().unwrap(); drift.terms.iter_mut().for_each(|t| t.bound *= k); }
+            if std::env::var("TSFC_DRIFT_NOFACES").is_ok() { drift.faces.clear(); drift.input_bound = f64::INFINITY; }
+            if let Some(s) = self.observer_solve(aug, d, o, (period, alpha), Some(&drift))? {
+                return Ok(Some(s));
+            }
+        }
+        Ok(None)
+    }
+
+    /// One SDP of the sampled observer loop at `period` and `alpha`.
+    fn observer_solve(
+        &mut self,
+        aug: &TsModel,
+        d: &Design,
+        o: &ObserverDesign,
+        (period, alpha): (f64, f64),
+        drift: Option<&Drift>,
+    ) -> Result<Option<SampledObserver>, SynthError> {
+        let (plan, steps) = plan_at(self.model, d, o, (period, 2.0 * alpha), drift);
         if !steps.finite() {
             return Ok(None);
         }
         let what = "sampled observer-loop problem";
         let Some((built, all)) = self.solve_looped_on(aug, &plan, what, None)? else {
+            if std::env::var("TSFC_DRIFT_DEBUG").is_ok() { eprintln!("  -> {:?}", self.log.last_status); }
             return Ok(None);
         };
         Ok(Some(SampledObserver {
