@@ -60,45 +60,8 @@ pub struct LoopError {
     pub d: f64,
 }
 
-/// The multipliers of one r (Lambda_1 or Lambda_2): of dA, dB, dD, then one
-/// per scalar term of the membership drift ([`ScalarTerm`]).
-pub type LoopMultipliers = Vec<Option<Var>>;
-
-/// A scalar uncertainty with fixed directions: the loop's derivative gains
-/// delta (A_t x(t) + B_t v(t_k)) with |delta| <= `bound`, v the held input of
-/// the loop (the membership drift of
-/// [`crate::synth::observer::drift`]: delta = h_t(t) - h_t(t_k), A_t, B_t the
-/// differences of two rules). One Petersen multiplier per term: tighter than
-/// norm bounds of dA and dB, because the input part is weighted by B_t.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ScalarTerm {
-    /// The bound of |delta|.
-    pub bound: f64,
-    /// A_t (n x n).
-    pub a: DMatrix<f64>,
-    /// B_t (n x inputs of the loop).
-    pub b: DMatrix<f64>,
-}
-
-/// Whether the loop's blocks carry an uncertainty (a model error or a
-/// membership drift).
-pub fn uncertain(plan: &TriggerPlan) -> bool {
-    !plan.model_error.is_zero() || plan.drift.as_ref().is_some_and(|d| !d.terms.is_empty())
-}
-
-/// Declares the multipliers of Lambda_r: those of the nonzero model-error
-/// bounds ([`LoopError::declare`]), then one per drift term, named
-/// `trigger drift r={r} eps_{t}`.
-pub fn declare(plan: &TriggerPlan, problem: &mut Problem, r: u8) -> Result<LoopMultipliers, LmiError> {
-    let mut out = plan.model_error.declare(problem, r)?;
-    for (t, term) in plan.drift.iter().flat_map(|d| &d.terms).enumerate() {
-        out.push(match term.bound > 0.0 {
-            true => Some(problem.scalar(&format!("trigger drift r={r} eps_{}", t + 1))?),
-            false => None,
-        });
-    }
-    Ok(out)
-}
+/// The multipliers of one r (Lambda_1 or Lambda_2): of dA, dB, dD.
+pub type LoopMultipliers = [Option<Var>; 3];
 
 impl LoopError {
     /// The model's error bound (zero without one).
@@ -129,43 +92,46 @@ impl LoopError {
                 false => Ok(None),
             }
         };
-        Ok(vec![one(self.a, "a")?, one(self.b, "b")?, one(self.d, "d")?])
+        Ok([one(self.a, "a")?, one(self.b, "b")?, one(self.d, "d")?])
     }
 }
 
 /// `block` (K x K) made robust to the terms He(G' Delta_t Ñ_t) with
-/// `left` = G' (K x n) and, per term, Ñ_t (w_t x K, `None` when the loop has
-/// no such signal), its multiplier and its bound a_t:
-/// [[block + sum eps_t a_t^2 Ñ_t' Ñ_t, G', ..], [*, -eps_t I]] for each term
-/// with a nonzero bound and a multiplier.
+/// `left` = G' (K x n) and `right[t]` = Ñ_t (w_t x K, `None` when the loop has
+/// no such signal): [[block + sum eps_t a_t^2 Ñ_t' Ñ_t, G', ..], [*, -eps_t I]]
+/// for each term with a nonzero bound and a multiplier.
 pub fn robust_block(
     block: Expr,
     left: Expr,
-    terms: &[(Option<DMatrix<f64>>, Option<Var>, f64)],
+    right: [Option<DMatrix<f64>>; 3],
+    eps: &LoopMultipliers,
+    err: &LoopError,
 ) -> Result<Expr, LmiError> {
     let n = left.shape().1;
-    let active: Vec<(&DMatrix<f64>, Var, f64)> = terms
-        .iter()
-        .filter_map(|(nt, e, bound)| match (nt, e, *bound > 0.0) {
-            (Some(nt), Some(e), true) => Some((nt, *e, *bound)),
-            _ => None,
-        })
-        .collect();
+    let bounds = [err.a, err.b, err.d];
     let mut top = block;
-    for (nt, e, bound) in &active {
-        top = top.add(Expr::scaled(*e, &(nt.transpose() * *nt * (bound * bound)))?)?;
+    let mut columns = 0;
+    for ((nt, e), bound) in right.iter().zip(eps).zip(bounds) {
+        if let (Some(nt), Some(e), true) = (nt, e, bound > 0.0) {
+            top = top.add(Expr::scaled(*e, &(nt.transpose() * nt * (bound * bound)))?)?;
+            columns += 1;
+        }
     }
-    if active.is_empty() {
+    if columns == 0 {
         return Ok(top);
     }
-    let size = active.len() + 1;
+    let size = columns + 1;
     let mut grid: Vec<Vec<Option<Expr>>> = vec![vec![None; size]];
     grid[0][0] = Some(top);
-    for (c, (_, e, _)) in active.iter().enumerate() {
-        grid[0][c + 1] = Some(left.clone());
-        let mut row = vec![None; size];
-        row[c + 1] = Some(Expr::scaled(*e, &(-DMatrix::identity(n, n)))?);
-        grid.push(row);
+    let mut c = 0;
+    for ((nt, e), bound) in right.iter().zip(eps).zip(bounds) {
+        if let (Some(_), Some(e), true) = (nt, e, bound > 0.0) {
+            c += 1;
+            grid[0][c] = Some(left.clone());
+            let mut row = vec![None; size];
+            row[c] = Some(Expr::scaled(*e, &(-DMatrix::identity(n, n)))?);
+            grid.push(row);
+        }
     }
     Expr::sym_blocks(grid)
 }
@@ -210,21 +176,16 @@ pub(super) fn robust_lambda(
         full.columns_mut(0, k).copy_from(nt);
         full
     };
-    let err = &plan.model_error;
-    let mut right = vec![
-        (Some(pad(sel.ex)), err.a),
-        (Some(pad(&sel.sat_u)), err.b),
-        (sel.tau.as_ref().map(pad), err.d),
+    let right = [
+        Some(pad(sel.ex)),
+        Some(pad(&sel.sat_u)),
+        sel.tau.as_ref().map(pad),
     ];
-    for term in plan.drift.iter().flat_map(|d| &d.terms) {
-        let n_t = &term.a * sel.ex + &term.b * &sel.sat_u;
-        right.push((Some(pad(&n_t)), term.bound));
-    }
-    let eps = &v.robust[usize::from(r - 1)];
-    let terms: Vec<_> = right
-        .into_iter()
-        .enumerate()
-        .map(|(t, (nt, bound))| (nt, eps.get(t).copied().flatten(), bound))
-        .collect();
-    robust_block(top, left, &terms)
+    robust_block(
+        top,
+        left,
+        right,
+        &v.robust[usize::from(r - 1)],
+        &plan.model_error,
+    )
 }

@@ -23,7 +23,7 @@ use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
 pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
-use super::loop_error::{robust_lambda, uncertain, LoopMultipliers, Selectors};
+use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
 use super::observer::drift;
 use super::objective::BuildError;
 use super::reduction::Reduction;
@@ -259,7 +259,7 @@ fn lambda(
     }
     // With a model error the gains must be known (N_b is data).
     let robust =
-        match (!uncertain(plan), f) {
+        match (plan.model_error.is_zero(), f) {
             (true, _) => None,
             (false, Factor::Val(f)) => Some(Selectors {
                 ex: &ex,
@@ -395,10 +395,10 @@ pub(super) fn impose(
         (None, None)
     };
     vars.xi = xi;
-    if uncertain(plan) {
+    if !plan.model_error.is_zero() {
         vars.robust = [
-            super::loop_error::declare(plan, &mut problem, 1)?,
-            super::loop_error::declare(plan, &mut problem, 2)?,
+            plan.model_error.declare(&mut problem, 1)?,
+            plan.model_error.declare(&mut problem, 2)?,
         ];
     }
     let mut reductions = Vec::new();
@@ -455,8 +455,8 @@ pub(super) fn impose(
         for rr in [1u8, 2] {
             if let Some(d) = &plan.drift {
                 let prefix = format!("trigger r={rr} h={h}");
-                drift::impose_pairs(&mut problem, d.per_rule, &prefix, eps, |i, q| {
-                    lambda(model, plan, &vars, (&plant[i], ctrl[q]), h, rr)
+                drift::impose_pairs(&mut problem, d, &plant, &prefix, eps, |pv, q| {
+                    lambda(model, plan, &vars, (pv, ctrl[q]), h, rr)
                 })?;
                 continue;
             }

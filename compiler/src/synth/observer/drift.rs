@@ -47,10 +47,22 @@ use crate::model::region::Face;
 use crate::model::TsModel;
 use crate::synth::blocks::{nonstrict_psd, region_block};
 use crate::synth::design::TriggerPlan;
-use crate::synth::loop_error::ScalarTerm;
 use crate::synth::trigger::Factor;
+use crate::synth::vertices::PlantVertex;
 use nalgebra::DMatrix;
 use tsf_lmi::{Expr, LmiError, Problem};
+
+/// One drift term: delta (A_t x(t) + B_t v_k) with |delta| <= `bound`, v_k
+/// the held input (u_k, xhat') of the augmented loop.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScalarTerm {
+    /// The bound of |delta|: delta_t^max.
+    pub bound: f64,
+    /// diag(A_t - A_1, 0) (2n x 2n).
+    pub a: DMatrix<f64>,
+    /// [B_t - B_1, 0; 0, 0] (2n x (m + n)).
+    pub b: DMatrix<f64>,
+}
 
 /// The drift data of a sampled observer plan.
 #[derive(Debug, Clone, PartialEq)]
@@ -116,28 +128,63 @@ impl Drift {
     }
 }
 
-/// Imposes the paired vertex conditions of one (r, h) with the basic
-/// relaxation of the double sum (Tanaka & Wang 2001, Theorem 2.2): with
-/// Lambda_jl = `lambda(j, q)` for plant j and controller vertex q = (j, l),
-/// Lambda_jj < 0 and Lambda_jl + Lambda_lj < 0 (j < l), named
-/// `{prefix} D[j,l]`. Sufficient: the loop's block is
-/// sum_{j,l} h_j(t_k) h_l(t_k) Lambda_jl (linear in the pair data in its
-/// Schur form; the robust columns' eps a^2 N'N are convex in N, so the blend
-/// is bounded by the weighted sum) and the weights are symmetric.
+/// The corners of the drift box: every sign pattern of the terms' bounds
+/// (2^terms corners, each a vector of delta_t).
+fn corners(terms: &[ScalarTerm]) -> Vec<Vec<f64>> {
+    (0..1usize << terms.len())
+        .map(|mask| {
+            terms
+                .iter()
+                .enumerate()
+                .map(|(t, term)| if mask >> t & 1 == 1 { term.bound } else { -term.bound })
+                .collect()
+        })
+        .collect()
+}
+
+/// Plant vertex `pv` moved by the drift `delta`: (A + sum delta_t A_t,
+/// B + sum delta_t B_t).
+fn drifted(pv: &PlantVertex, terms: &[ScalarTerm], delta: &[f64]) -> PlantVertex {
+    let mut out = pv.clone();
+    for (term, d) in terms.iter().zip(delta) {
+        out.a += &term.a * *d;
+        out.b += &term.b * *d;
+    }
+    out
+}
+
+/// Imposes the paired vertex conditions of one (r, h): for every corner v of
+/// the drift box and with Lambda_jl(v) = `lambda(plant j drifted by v, q)`,
+/// q = (j, l) the controller vertex, the basic relaxation of the double sum
+/// (Tanaka & Wang 2001, Theorem 2.2): Lambda_jj(v) < 0 and
+/// Lambda_jl(v) + Lambda_lj(v) < 0 (j < l), named `{prefix} D[j,l] v{v}`.
+/// Sufficient: at time t the loop's block is
+/// sum_{j,l} h_j(t_k) h_l(t_k) Lambda_jl(delta(t)) with the weights
+/// symmetric, and each Lambda_jl is affine in the plant data (the r = 1 term
+/// h Phi' Y Phi convex), so convex in delta: the corners bound the box.
 pub(in crate::synth) fn impose_pairs(
     problem: &mut Problem,
-    per_rule: usize,
+    drift: &Drift,
+    plant: &[PlantVertex],
     prefix: &str,
     eps: f64,
-    mut lambda: impl FnMut(usize, usize) -> Result<Expr, LmiError>,
+    mut lambda: impl FnMut(&PlantVertex, usize) -> Result<Expr, LmiError>,
 ) -> Result<(), LmiError> {
-    for j in 0..per_rule {
-        for l in j..per_rule {
-            let mut e = lambda(j, j * per_rule + l)?;
-            if l != j {
-                e = e.add(lambda(l, l * per_rule + j)?)?;
+    let r = drift.per_rule;
+    for (v, delta) in corners(&drift.terms).iter().enumerate() {
+        let moved: Vec<PlantVertex> = plant
+            .iter()
+            .map(|pv| drifted(pv, &drift.terms, delta))
+            .collect();
+        for j in 0..r {
+            for l in j..r {
+                let mut e = lambda(&moved[j], j * r + l)?;
+                if l != j {
+                    e = e.add(lambda(&moved[l], l * r + j)?)?;
+                }
+                let name = format!("{prefix} D[{},{}] v{}", j + 1, l + 1, v + 1);
+                problem.nsd(&name, e, eps)?;
             }
-            problem.nsd(&format!("{prefix} D[{},{}]", j + 1, l + 1), e, eps)?;
         }
     }
     Ok(())

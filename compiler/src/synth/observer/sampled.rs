@@ -227,8 +227,15 @@ impl SampledObserver {
         } else {
             "is asymptotically stable (the decay rate of the spec is not certified for the sampled loop)".into()
         };
+        let start = match &self.plan.drift {
+            Some(d) => format!(
+                " from every (x(0), xhat(0)) in E(P, 1), which lies in the sample box and where |u| <= {:.6}; the plant's memberships drift by at most {:?} within a period (paired plant/observer vertices)",
+                d.input_bound, d.bound.delta
+            ),
+            None => String::new(),
+        };
         format!(
-            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}; the measurement noise is not bounded by it",
+            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}{start}; the measurement noise is not bounded by it",
             self.period
         )
     }
@@ -280,10 +287,7 @@ impl Runner<'_> {
             let Ok(bound) = drift_bound(self.model, period, most * f) else {
                 continue;
             };
-            if std::env::var("TSFC_DRIFT_DEBUG").is_ok() { eprintln!("drift T={period} alpha={alpha} {bound:?}"); }
-            let mut drift = Drift::of(self.model, bound);
-            if let Ok(k) = std::env::var("TSFC_DRIFT_SCALE") { let k: f64 = k.parse().unwrap(); drift.terms.iter_mut().for_each(|t| t.bound *= k); }
-            if std::env::var("TSFC_DRIFT_NOFACES").is_ok() { drift.faces.clear(); drift.input_bound = f64::INFINITY; }
+            let drift = Drift::of(self.model, bound);
             if let Some(s) = self.observer_solve(aug, d, o, (period, alpha), Some(&drift))? {
                 return Ok(Some(s));
             }
@@ -306,7 +310,6 @@ impl Runner<'_> {
         }
         let what = "sampled observer-loop problem";
         let Some((built, all)) = self.solve_looped_on(aug, &plan, what, None)? else {
-            if std::env::var("TSFC_DRIFT_DEBUG").is_ok() { eprintln!("  -> {:?}", self.log.last_status); }
             return Ok(None);
         };
         Ok(Some(SampledObserver {
