@@ -36,7 +36,7 @@ use crate::tape::affine;
 use serde::Serialize;
 
 /// Largest number of sub-boxes of the drift grid.
-pub const MAX_DRIFT_BOXES: usize = 1024;
+pub const MAX_DRIFT_BOXES: usize = 16384;
 /// Relative outward widening of the rates (rounding of the sums).
 const WIDEN: f64 = 1e-12;
 
