@@ -32,7 +32,11 @@ fn pendulum(x: [f64; 2], u: f64) -> [f64; 2] {
 /// h_1 of the textbook's rules: (sinc(theta) - 2/pi) / (1 - 2/pi) on
 /// |theta| <= 90 deg.
 fn h1(theta: f64) -> f64 {
-    let s = if theta == 0.0 { 1.0 } else { theta.sin() / theta };
+    let s = if theta == 0.0 {
+        1.0
+    } else {
+        theta.sin() / theta
+    };
     (s - 2.0 / PI) / (1.0 - 2.0 / PI)
 }
 
@@ -50,8 +54,10 @@ fn compile(dir: &std::path::Path) -> Value {
     for f in ["pendulum_observer_88.rs", "pendulum_observer_88.c"] {
         assert!(dir.join(f).exists(), "{f}: {stderr}");
     }
-    serde_json::from_slice(&std::fs::read(dir.join("pendulum_observer_88.report.json")).expect("report"))
-        .expect("json")
+    serde_json::from_slice(
+        &std::fs::read(dir.join("pendulum_observer_88.report.json")).expect("report"),
+    )
+    .expect("json")
 }
 
 fn num(v: &Value) -> f64 {
@@ -130,7 +136,10 @@ fn pendulum_88_paired_drift_conditions_rederived_from_the_report() {
     let samples: Vec<Vec<f64>> = serde_json::from_value(drift["samples"].clone()).expect("box");
     for (k, b) in samples.iter().enumerate() {
         let reach = p_inv[(k, k)].sqrt();
-        assert!(reach <= b[1].min(-b[0]), "state {k}: E(P, 1) reaches {reach}, box {b:?}");
+        assert!(
+            reach <= b[1].min(-b[0]),
+            "state {k}: E(P, 1) reaches {reach}, box {b:?}"
+        );
     }
     let u_bound = num(&drift["input_bound"]);
     for f in &gains {
@@ -145,7 +154,11 @@ fn pendulum_88_paired_drift_conditions_rederived_from_the_report() {
         .flat_map(|th| [(th, th + step), (th, th - step)])
         .map(|(a, b)| (h1(a) - h1(b)).abs())
         .fold(0.0, f64::max);
-    assert!(sampled <= delta[0] && delta[0] < 1.5 * sampled, "sampled {sampled} vs bound {}", delta[0]);
+    assert!(
+        sampled <= delta[0] && delta[0] < 1.5 * sampled,
+        "sampled {sampled} vs bound {}",
+        delta[0]
+    );
 }
 
 /// (a) The nonlinear pendulum with the generated tables (runtime observer
@@ -158,7 +171,11 @@ fn pendulum_88_drift_bounds_hold_along_simulated_runs() {
     let report = compile(&common::fresh_dir("observer_drift", "runs"));
     let s = &report["sampled_loop"];
     let drift = &s["drift"];
-    let (t, delta, steps) = (num(&drift["period"]), nums(&drift["delta"]), nums(&drift["steps"]));
+    let (t, delta, steps) = (
+        num(&drift["period"]),
+        nums(&drift["delta"]),
+        nums(&drift["steps"]),
+    );
     let region: Vec<Vec<f64>> = serde_json::from_value(drift["region"].clone()).expect("R");
     let p = mat(&s["P"]);
     let prepared = tsfc::driver::prepare(&common::spec_path(SPEC)).expect("prepared");
@@ -179,11 +196,16 @@ fn pendulum_88_drift_bounds_hold_along_simulated_runs() {
             vmax = vmax.max((xk.transpose() * &p * &xk)[(0, 0)]);
             let y = [x[0]];
             let pv = obs.premise_state(&xhat, &y);
-            let u = obs.step_with_premises(&mut xhat, &y, &[exprs[0].eval(&pv)]).u[0];
+            let u = obs
+                .step_with_premises(&mut xhat, &y, &[exprs[0].eval(&pv)])
+                .u[0];
             let th_k = x[0];
             for _ in 0..10 {
                 rk4_held(&mut x, u, t / 10.0, 1, pendulum);
-                assert!(x[0].abs() <= region[0][1] && x[1].abs() <= region[1][1], "left R: {x:?}");
+                assert!(
+                    x[0].abs() <= region[0][1] && x[1].abs() <= region[1][1],
+                    "left R: {x:?}"
+                );
                 dth = dth.max((x[0] - th_k).abs());
                 dh = dh.max((h1(x[0]) - h1(th_k)).abs());
             }

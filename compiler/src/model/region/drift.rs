@@ -115,7 +115,10 @@ pub fn drift_bound(model: &TsModel, period: f64, input: f64) -> Result<DriftBoun
         .zip(&steps)
         .map(|((lo, hi), d)| (lo + d, hi - d))
         .collect();
-    if let Some(s) = samples.iter().position(|(lo, hi)| !(*lo < 0.0 && *hi > 0.0)) {
+    if let Some(s) = samples
+        .iter()
+        .position(|(lo, hi)| !(*lo < 0.0 && *hi > 0.0))
+    {
         return Err(format!(
             "state {} moves up to {:.6} within a period (|x'| <= {:.6} with |u| <= {input}), more than its box leaves around 0: widen the box, shorten the period or lower the input bound",
             s + 1,
@@ -130,7 +133,10 @@ pub fn drift_bound(model: &TsModel, period: f64, input: f64) -> Result<DriftBoun
     let split: Vec<usize> = (0..model.n).filter(|&s| reads[s]).collect();
     let per = match split.len() {
         0 => 1,
-        k => (MAX_DRIFT_BOXES as f64).powf(1.0 / k as f64).floor().max(1.0) as usize,
+        k => (MAX_DRIFT_BOXES as f64)
+            .powf(1.0 / k as f64)
+            .floor()
+            .max(1.0) as usize,
     };
     let ranges: Vec<(f64, f64)> = model
         .premises
@@ -161,7 +167,14 @@ pub fn drift_bound(model: &TsModel, period: f64, input: f64) -> Result<DriftBoun
             let w = (hi - lo) / per as f64;
             let c = rest % per;
             rest /= per;
-            b[s] = (lo + w * c as f64, if c + 1 == per { hi } else { lo + w * (c + 1) as f64 });
+            b[s] = (
+                lo + w * c as f64,
+                if c + 1 == per {
+                    hi
+                } else {
+                    lo + w * (c + 1) as f64
+                },
+            );
         }
         let grown: Vec<(f64, f64)> = b
             .iter()

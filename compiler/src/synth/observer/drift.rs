@@ -19,17 +19,17 @@
 //! sum_i h_i(t_k) A_i = sum_{j,l} h_j(t_k) h_l(t_k) A_j and likewise for
 //! B_i u_k, u_k = sum_l h_l(t_k) F_l xhat_k (the controller's memberships
 //! are those of t_k, as in the free design). With sum_i delta_i = 0 the
-//! drift term is sum_{t >= 2} delta_t (Abar_t - Abar_1) xi(t)
-//! + delta_t (Bbar_t - Bbar_1) v_k: one scalar uncertainty per rule t >= 2,
-//! |delta_t| <= delta_t^max, with fixed directions
-//! ([`crate::synth::loop_error::ScalarTerm`]). So the vertices are
-//! (plant j, (observer j, controller l)) only (plant and observer on the same
-//! rule, as in the continuous design), each made robust to the drift terms by
-//! one Petersen multiplier per term and per r (the layout of
-//! [`crate::synth::loop_error`]; N_t = (Abar_t - Abar_1) E_x
-//! + (Bbar_t - Bbar_1) K_jl E_s). Lambda stays convex in the pair data and
-//! the robust column is convex in N_t (eps a^2 N' N), so the vertex
-//! conditions cover every blend h_j(t_k) h_l(t_k).
+//! drift term is the sum over t >= 2 of delta_t ((Abar_t - Abar_1) xi(t) +
+//! (Bbar_t - Bbar_1) v_k): one scalar uncertainty per rule t >= 2,
+//! |delta_t| <= delta_t^max, with fixed directions ([`ScalarTerm`]). So the
+//! vertices are (plant j, (observer j, controller l)) only (plant and
+//! observer on the same rule, as in the continuous design), with the plant
+//! moved by the drift: each condition is affine in the plant data (the r = 1
+//! term h Phi' Y Phi convex), so imposing it at the 2^(r-1) corners of the
+//! drift box covers every delta in it exactly (a polytope, not a norm bound:
+//! no Petersen multiplier, no conservatism from it), and the basic relaxation
+//! of the double sum over (j, l) covers every blend h_j(t_k) h_l(t_k)
+//! ([`impose_pairs`]).
 //!
 //! The bound delta_t^max holds while x stays in the region R
 //! ([`crate::model::region::drift`]): x(t_k) in the sample box R' and
@@ -112,7 +112,10 @@ impl Drift {
             .iter()
             .enumerate()
             .map(|(s, (lo, hi))| Face {
-                name: names.get(s).cloned().unwrap_or_else(|| format!("x{}", s + 1)),
+                name: names
+                    .get(s)
+                    .cloned()
+                    .unwrap_or_else(|| format!("x{}", s + 1)),
                 row: DMatrix::from_fn(1, 2 * n, |_, c| if c == s { 1.0 } else { 0.0 }),
                 bound: (-lo).min(*hi),
             })
@@ -136,7 +139,13 @@ fn corners(terms: &[ScalarTerm]) -> Vec<Vec<f64>> {
             terms
                 .iter()
                 .enumerate()
-                .map(|(t, term)| if mask >> t & 1 == 1 { term.bound } else { -term.bound })
+                .map(|(t, term)| {
+                    if mask >> t & 1 == 1 {
+                        term.bound
+                    } else {
+                        -term.bound
+                    }
+                })
                 .collect()
         })
         .collect()
@@ -205,7 +214,13 @@ pub(in crate::synth) fn impose_faces(
     let one = || Expr::constant(&DMatrix::identity(1, 1));
     for f in &d.faces {
         let e = region_block(p.expr()?, Expr::constant(&(&f.row / f.bound))?, one()?)?;
-        nonstrict_psd(problem, nonstrict, &format!("observer drift region {}", f.name), e, eps)?;
+        nonstrict_psd(
+            problem,
+            nonstrict,
+            &format!("observer drift region {}", f.name),
+            e,
+            eps,
+        )?;
     }
     if d.input_bound.is_finite() {
         for (q, k) in plan.gains.iter().enumerate().take(d.per_rule) {

@@ -282,7 +282,11 @@ impl Runner<'_> {
             return self.observer_solve(aug, d, o, (period, alpha), None);
         };
         let most = largest_input(self.model, &region, period);
-        let fractions: &[f64] = if most.is_finite() { &INPUT_FRACTIONS } else { &[1.0] };
+        let fractions: &[f64] = if most.is_finite() {
+            &INPUT_FRACTIONS
+        } else {
+            &[1.0]
+        };
         for f in fractions {
             let Ok(bound) = drift_bound(self.model, period, most * f) else {
                 continue;

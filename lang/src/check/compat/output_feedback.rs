@@ -99,8 +99,14 @@ impl Checker<'_> {
             .collect();
         if !missing.is_empty() {
             self.err(
-                Diagnostic::error(first.span, format!("the sampled observer loop's region leaves {} unbounded", missing.join(", ")))
-                    .with_help(help),
+                Diagnostic::error(
+                    first.span,
+                    format!(
+                        "the sampled observer loop's region leaves {} unbounded",
+                        missing.join(", ")
+                    ),
+                )
+                .with_help(help),
             );
         }
     }
