@@ -427,7 +427,6 @@ pub(super) fn impose(
     if reduce && h_min < h_max {
         reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * pairs)));
     }
-    // Paired vertices (drift) keep every pair: a repeated rule is not implied.
     let (kept, kept_ctrl) = if reduce && plan.drift.is_none() {
         (
             vertices::kept_plant_rules(&plant),
@@ -454,8 +453,8 @@ pub(super) fn impose(
     for &h in hs {
         for rr in [1u8, 2] {
             if let Some(d) = &plan.drift {
-                let prefix = format!("trigger r={rr} h={h}");
-                drift::impose_pairs(&mut problem, d, &plant, &prefix, eps, |pv, q| {
+                let pre = format!("trigger r={rr} h={h}"); // paired: no pair dropped
+                drift::impose_pairs(&mut problem, d, &plant, &pre, eps, |pv, q| {
                     lambda(model, plan, &vars, (pv, ctrl[q]), h, rr)
                 })?;
                 continue;
