@@ -9,6 +9,7 @@
 //! block matrix exponential), independently of tsfc's LMI code.
 
 use crate::common;
+use crate::common::looped::{mat, max_eig, Looped};
 use crate::common::observer::{independent_loop, runtime_observer, runtime_terms, HeldPlant};
 use nalgebra::DMatrix;
 use serde_json::Value;
@@ -162,101 +163,21 @@ fn shipped_pendulum_observer_converges_from_a_wrong_estimate_like_the_simulator(
     );
 }
 
-fn mat(v: &Value) -> DMatrix<f64> {
-    let rows: Vec<Vec<f64>> = serde_json::from_value(v.clone()).expect("a matrix");
-    let (r, c) = (rows.len(), rows.first().map_or(0, Vec::len));
-    DMatrix::from_fn(r, c, |i, j| rows[i][j])
-}
-
-/// The exact zero-order hold of x' = A x + G w over `t` (Van Loan's block
-/// exponential, nalgebra's `exp`): (Phi, Gamma).
-fn zoh(a: &DMatrix<f64>, g: &DMatrix<f64>, t: f64) -> (DMatrix<f64>, DMatrix<f64>) {
-    let (n, k) = (a.nrows(), g.ncols());
-    let mut m = DMatrix::zeros(n + k, n + k);
-    m.view_mut((0, 0), (n, n)).copy_from(&(a * t));
-    m.view_mut((0, n), (n, k)).copy_from(&(g * t));
-    let e = m.exp();
-    (
-        e.view((0, 0), (n, n)).into_owned(),
-        e.view((0, n), (n, k)).into_owned(),
-    )
-}
-
-fn max_eig(m: &DMatrix<f64>) -> f64 {
-    let s = (m + m.transpose()) / 2.0;
-    s.symmetric_eigenvalues().max()
-}
-
 /// The worst (largest) eigenvalue over the looped-functional conditions of
 /// the sampled observer loop at every vertex (plant i, observer j,
-/// controller l), built here from the report alone: Abar_i = diag(A_i, 0),
-/// Bbar_i = diag(B_i, I), K_jl = [0, F_l; Gy_j C / T, (Phi_j - I) / T +
-/// Gu_j F_l / T] with (Phi_j, Gu_j, Gy_j) the ZOH of the reported L_j;
-/// psi = [xi(t); xi(t_k)], Phi = Abar Ex + Bbar K Es,
-/// Xi = He(Ex' P Phi) + phi Ex' P Ex + He((Ex' L1 + Es' L2)(Ex - Es)),
-/// r = 1: Xi + T Phi' Y Phi; r = 2: [Xi, sqrt(T)(Ex' L1 + Es' L2); *, -e^{-phi T} Y].
+/// controller l), built from the report alone ([`Looped`]).
 fn worst_looped(report: &Value, gains: &[DMatrix<f64>], phi: f64) -> f64 {
-    let s = &report["sampled_loop"];
-    let t = s["sampling"][0].as_f64().expect("T");
-    let (p, y) = (mat(&s["P"]), mat(&s["Y"]));
-    let (l1, l2) = (mat(&s["L"][0]), mat(&s["L"][1]));
-    let c = mat(&report["observer"]["C"]);
-    let models = report["local_models"].as_array().expect("local models");
-    let (n, m) = (c.ncols(), gains[0].nrows());
-    let big = 2 * n;
-    let ex = DMatrix::from_fn(big, 2 * big, |r, k| f64::from(u8::from(k == r)));
-    let es = DMatrix::from_fn(big, 2 * big, |r, k| f64::from(u8::from(k == r + big)));
-    let free = ex.transpose() * &l1 + es.transpose() * &l2;
+    let lp = Looped::of(report);
     let mut worst = f64::NEG_INFINITY;
-    let steps: Vec<_> = models
-        .iter()
-        .zip(report["observer"]["gains"].as_array().expect("L"))
-        .map(|(md, lj)| {
-            let (a, b, l) = (mat(&md["A"]), mat(&md["B"]), mat(&lj["L"]));
-            let mut g = DMatrix::zeros(n, m + c.nrows());
-            g.view_mut((0, 0), (n, m)).copy_from(&b);
-            g.view_mut((0, m), (n, c.nrows())).copy_from(&l);
-            let (ph, gam) = zoh(&(&a - &l * &c), &g, t);
-            (
-                ph,
-                gam.columns(0, m).into_owned(),
-                gam.columns(m, c.nrows()).into_owned(),
-            )
-        })
-        .collect();
-    for md in models {
-        let (a, b) = (mat(&md["A"]), mat(&md["B"]));
-        let mut abar = DMatrix::zeros(big, big);
-        abar.view_mut((0, 0), (n, n)).copy_from(&a);
-        let mut bbar = DMatrix::zeros(big, m + n);
-        bbar.view_mut((0, 0), (n, m)).copy_from(&b);
-        bbar.view_mut((n, m), (n, n)).fill_with_identity();
-        for (ph, gu, gy) in &steps {
+    for (a, b) in &lp.models {
+        let plant = lp.plant(a, b);
+        for j in 0..lp.rules() {
             for f in gains {
-                let mut k = DMatrix::zeros(m + n, big);
-                k.view_mut((0, n), (m, n)).copy_from(f);
-                k.view_mut((m, 0), (n, n)).copy_from(&(gy * &c / t));
-                let drift = (ph - DMatrix::identity(n, n) + gu * f) / t;
-                k.view_mut((m, n), (n, n)).copy_from(&drift);
-                let flow = &abar * &ex + &bbar * &k * &es;
-                let he = |q: DMatrix<f64>| &q + q.transpose();
-                let xi = he(ex.transpose() * &p * &flow)
-                    + ex.transpose() * &p * &ex * phi
-                    + he(&free * (&ex - &es));
-                let r1 = &xi + flow.transpose() * &y * &flow * t;
-                let mut r2 = DMatrix::zeros(3 * big, 3 * big);
-                r2.view_mut((0, 0), (2 * big, 2 * big)).copy_from(&xi);
-                r2.view_mut((0, 2 * big), (2 * big, big))
-                    .copy_from(&(&free * t.sqrt()));
-                r2.view_mut((2 * big, 0), (big, 2 * big))
-                    .copy_from(&(free.transpose() * t.sqrt()));
-                r2.view_mut((2 * big, 2 * big), (big, big))
-                    .copy_from(&(-(-phi * t).exp() * &y));
+                let (r1, r2) = lp.blocks(&plant, &lp.gain(j, f), phi);
                 worst = worst.max(max_eig(&r1)).max(max_eig(&r2));
             }
         }
     }
-    assert!(-max_eig(&-&p) > 0.0 && -max_eig(&-&y) > 0.0, "P, Y > 0");
     worst
 }
 

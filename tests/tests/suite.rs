@@ -38,6 +38,7 @@ mod nonlinear_region;
 mod objectives;
 mod observer;
 mod observer_code;
+mod observer_drift;
 mod observer_hinf;
 mod observer_sampled;
 mod observer_shipped;

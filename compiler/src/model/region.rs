@@ -13,6 +13,7 @@
 //! A `region` naming a state bounds that state instead (faces |x_k| <= b_k),
 //! and the premises it reads are enclosed over the state box ([`states`]).
 
+pub mod drift;
 pub mod states;
 
 use super::premise::TermSpec;

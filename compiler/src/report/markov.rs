@@ -164,6 +164,7 @@ pub fn sampled_loop(model: &TsModel, design: &Design) -> Option<SampledReport> {
         p: rows(s.p.first()?),
         y: Some(rows(&s.y)),
         l: None,
+        drift: None,
         modes: Some(
             modes
                 .modes

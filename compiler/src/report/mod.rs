@@ -209,6 +209,11 @@ pub struct SampledReport {
     /// the first mode's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub modes: Option<Vec<markov::ModeSampledReport>>,
+    /// The sampled observer loop on a region: the membership drift bound
+    /// (region R, input bound U, rates, steps, sample box R', delta per rule)
+    /// its paired vertices are imposed with.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift: Option<crate::model::region::drift::DriftBound>,
 }
 
 /// The `sampled_loop` section of the sampled observer loop: the looped
@@ -228,6 +233,7 @@ fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
             .zip(get(names::LOOP_L2))
             .map(|(a, b)| [a, b]),
         modes: None,
+        drift: s.plan.drift.as_ref().map(|d| d.bound.clone()),
     })
 }
 
@@ -554,6 +560,7 @@ pub fn report(
                     y: None,
                     l: None,
                     modes: None,
+                    drift: None,
                 })
                 .or_else(|| markov::sampled_loop(model, d))
                 .or_else(|| observer_sampled_loop(d))

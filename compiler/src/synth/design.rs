@@ -400,6 +400,10 @@ pub struct TriggerPlan {
     /// The model error the loop's blocks carry ([`crate::synth::loop_error`];
     /// zero: the nominal blocks).
     pub model_error: crate::synth::loop_error::LoopError,
+    /// The membership drift of the sampled observer loop on a region
+    /// ([`crate::synth::observer::drift`]): plant and observer vertices
+    /// paired, the drift terms, the sample box. `None`: free vertices.
+    pub drift: Option<crate::synth::observer::drift::Drift>,
 }
 
 impl TriggerPlan {

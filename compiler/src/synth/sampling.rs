@@ -74,6 +74,7 @@ pub fn plan_for(model: &TsModel, design: &Design, sampling: (f64, f64)) -> Trigg
         g: DMatrix::zeros(0, 0),
         region: None,
         model_error: super::loop_error::LoopError::of(model),
+        drift: None,
     }
 }
 

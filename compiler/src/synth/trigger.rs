@@ -25,6 +25,7 @@ pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
 use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
 use super::objective::BuildError;
+use super::observer::drift;
 use super::reduction::Reduction;
 use super::search::Runner;
 use super::solved::{names, Solved as _};
@@ -426,7 +427,7 @@ pub(super) fn impose(
     if reduce && h_min < h_max {
         reductions.push(Reduction::Implied(format!("trigger: the {} LMIs at h = h_min = {h_min} are implied by those at h_max = {h_max} (Lambda_r(h) = Xi + h Pi_r with Pi_r >= 0) and left out of the solved problem; the certificate checks them", 2 * pairs)));
     }
-    let (kept, kept_ctrl) = if reduce {
+    let (kept, kept_ctrl) = if reduce && plan.drift.is_none() {
         (
             vertices::kept_plant_rules(&plant),
             vertices::distinct_controller_rules(&ctrl),
@@ -451,6 +452,13 @@ pub(super) fn impose(
     }
     for &h in hs {
         for rr in [1u8, 2] {
+            if let Some(d) = &plan.drift {
+                let pre = format!("trigger r={rr} h={h}"); // paired: no pair dropped
+                drift::impose_pairs(&mut problem, d, &plant, &pre, eps, |pv, q| {
+                    lambda(model, plan, &vars, (pv, ctrl[q]), h, rr)
+                })?;
+                continue;
+            }
             for &i in &kept {
                 for &j in &kept_ctrl {
                     let name = format!("trigger r={rr} h={h} {tag}[{},{}]", i + 1, j + 1);
@@ -551,6 +559,7 @@ fn impose_regions(
             eps,
         )?;
     }
+    drift::impose_faces(problem, nonstrict, plan, vars.p, eps)?;
     for (name, e) in &plan.contain {
         nonstrict_psd(
             problem,
@@ -723,6 +732,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         g: out.g.columns(sig.offset, sig.len).into_owned(),
         region,
         model_error: super::loop_error::LoopError::of(model),
+        drift: None,
     };
     // A region's vertex sets, checked before any SDP (too many is a refusal).
     vertices::describe(model, &plan).map_err(|e| match e {

@@ -276,7 +276,7 @@ impl Checker<'_> {
     fn trigger(&mut self, kind: &Ident, settings: &[Setting], n: usize) -> Option<Trigger> {
         let allowed: &[&str] = match kind.node.as_str() {
             "continuous" => &[],
-            "periodic" => &["every", "design"],
+            "periodic" => &["every", "design", "region"],
             "jittered" => &["every", "jitter"],
             "aperiodic" => &["sampling", "threshold", "weight", "region"],
             "mixed" => &["on", "beta", "rho", "monitor", "sampling"],

@@ -1,6 +1,7 @@
 //! Helpers shared by the end-to-end tests.
 #![allow(dead_code)] // each test crate uses a subset
 
+pub mod looped;
 pub mod observer;
 pub mod plant;
 pub mod schema;

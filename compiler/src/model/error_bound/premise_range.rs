@@ -73,6 +73,15 @@ fn enclose(builder: &Builder, z: &[Id], bx: &[(f64, f64)]) -> Vec<Form> {
     affine::enclose(builder, z, &inputs, &mut noise)
 }
 
+/// Intervals of the premise values `z` over the one box `bx` (affine
+/// arithmetic, outward rounding, no subdivision); `None` where unbounded.
+pub fn on_box(builder: &Builder, z: &[Id], bx: &[(f64, f64)]) -> Vec<Option<(f64, f64)>> {
+    enclose(builder, z, bx)
+        .into_iter()
+        .map(|f| f.ok().map(|f| f.range()))
+        .collect()
+}
+
 /// Checks that every premise value `z` (outputs of `builder`, declared
 /// `ranges`) stays in range over `region` (states no premise reads are
 /// never split).

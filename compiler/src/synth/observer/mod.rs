@@ -17,6 +17,7 @@
 //!   ([`static_output`]); the core's conditions then hold for F_j = K_j C.
 
 pub mod augmented;
+pub mod drift;
 pub mod gains;
 pub mod hinf;
 pub mod sampled;

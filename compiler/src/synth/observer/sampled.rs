@@ -49,7 +49,9 @@
 //! The certificate rebuilds the conditions from the shipped F_l and tables
 //! (and from their stored rounding: [`crate::synth::loops::observer`]).
 
+use super::drift::Drift;
 use super::ObserverDesign;
+use crate::model::region::drift::{drift_bound, largest_input, state_box};
 use crate::model::TsModel;
 use crate::synth::advice::{about, round_down};
 use crate::synth::design::{SynthError, TriggerPlan};
@@ -226,20 +228,31 @@ impl SampledObserver {
         } else {
             "is asymptotically stable (the decay rate of the spec is not certified for the sampled loop)".into()
         };
+        let start = match &self.plan.drift {
+            Some(d) => format!(
+                " from every (x(0), xhat(0)) in E(P, 1), which lies in the sample box and where |u| <= {:.6}; the plant's memberships drift by at most {:?} within a period (paired plant/observer vertices)",
+                d.input_bound, d.bound.delta
+            ),
+            None => String::new(),
+        };
         format!(
-            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}; the measurement noise is not bounded by it",
+            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}{start}; the measurement noise is not bounded by it",
             self.period
         )
     }
 }
+
+/// The input bounds U tried by the drift route, as fractions of the largest
+/// one that leaves a sample box, in order.
+pub const INPUT_FRACTIONS: [f64; 4] = [0.5, 0.25, 0.75, 0.125];
 
 /// The plan of the sampled observer loop at `period` with `phi`.
 fn plan_at(
     model: &TsModel,
     d: &Design,
     o: &ObserverDesign,
-    period: f64,
-    phi: f64,
+    (period, phi): (f64, f64),
+    drift: Option<&Drift>,
 ) -> (TriggerPlan, ObserverSteps) {
     let steps = ObserverSteps::of(model, &o.c, &o.gains, period);
     let mut plan = plan_for(model, d, (period, period));
@@ -249,11 +262,15 @@ fn plan_at(
     plan.contain = Vec::new();
     plan.c = DMatrix::zeros(0, 2 * model.n);
     plan.gains = pair_gains(&d.gains, &o.c, &steps, period);
+    plan.drift = drift.cloned();
     (plan, steps)
 }
 
 impl Runner<'_> {
-    /// One SDP of the sampled observer loop at `period` and `alpha`.
+    /// The sampled observer loop at `period` and `alpha`: free vertices, or
+    /// with a state box on every state the drift route ([`super::drift`]),
+    /// whose input bound U is tried at [`INPUT_FRACTIONS`] of the largest
+    /// that leaves a sample box (the first that certifies is kept).
     fn observer_attempt(
         &mut self,
         aug: &TsModel,
@@ -262,7 +279,37 @@ impl Runner<'_> {
         period: f64,
         alpha: f64,
     ) -> Result<Option<SampledObserver>, SynthError> {
-        let (plan, steps) = plan_at(self.model, d, o, period, 2.0 * alpha);
+        let Some(region) = state_box(self.model) else {
+            return self.observer_solve(aug, d, o, (period, alpha), None);
+        };
+        let most = largest_input(self.model, &region, period);
+        let fractions: &[f64] = if most.is_finite() {
+            &INPUT_FRACTIONS
+        } else {
+            &[1.0]
+        };
+        for f in fractions {
+            let Ok(bound) = drift_bound(self.model, period, most * f) else {
+                continue;
+            };
+            let drift = Drift::of(self.model, bound);
+            if let Some(s) = self.observer_solve(aug, d, o, (period, alpha), Some(&drift))? {
+                return Ok(Some(s));
+            }
+        }
+        Ok(None)
+    }
+
+    /// One SDP of the sampled observer loop at `period` and `alpha`.
+    fn observer_solve(
+        &mut self,
+        aug: &TsModel,
+        d: &Design,
+        o: &ObserverDesign,
+        (period, alpha): (f64, f64),
+        drift: Option<&Drift>,
+    ) -> Result<Option<SampledObserver>, SynthError> {
+        let (plan, steps) = plan_at(self.model, d, o, (period, 2.0 * alpha), drift);
         if !steps.finite() {
             return Ok(None);
         }

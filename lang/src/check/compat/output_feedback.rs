@@ -70,6 +70,47 @@ impl Checker<'_> {
         }
     }
 
+    /// `region` settings of the sampled observer loop (the membership drift
+    /// route): each names a state, and together they bound every state.
+    fn drift_region(&mut self, spec: &Spec) {
+        let bounds = &spec.trigger_region;
+        let Some(first) = bounds.first() else {
+            return;
+        };
+        let help = "the sampled observer certificate on a region bounds the membership drift over a period from a box on every state: write `region x = lo .. hi;` for each state (docs/language.md, The sampled loop)";
+        if let Some(b) = bounds.iter().find(|b| b.state.is_none()) {
+            self.err(
+                Diagnostic::error(b.span, format!("`region {}` names a premise variable; the sampled observer loop's region bounds states", b.premise))
+                    .with_help(help),
+            );
+            return;
+        }
+        let n = spec.n();
+        let mut bounded = vec![false; n];
+        for b in bounds {
+            if let Some((at, len)) = b.state {
+                bounded[at..at + len].iter_mut().for_each(|v| *v = true);
+            }
+        }
+        let names = Signal::names_of(&spec.states);
+        let missing: Vec<&str> = (0..n)
+            .filter(|&k| !bounded[k])
+            .map(|k| names[k].as_str())
+            .collect();
+        if !missing.is_empty() {
+            self.err(
+                Diagnostic::error(
+                    first.span,
+                    format!(
+                        "the sampled observer loop's region leaves {} unbounded",
+                        missing.join(", ")
+                    ),
+                )
+                .with_help(help),
+            );
+        }
+    }
+
     /// Every state component a premise reads must be recovered from y.
     fn premises_measured(&mut self, spec: &Spec, c: &crate::eval::Mat) {
         let n = spec.n();
@@ -112,6 +153,9 @@ impl Checker<'_> {
                 refuse(self, t.span, "this triggering law", "output feedback is certified for the continuous loop and for `trigger periodic { every = T; }` (the sampled loop) in this build");
             }
             let periodic = matches!(t.node, Trigger::Periodic { .. });
+            if periodic && spec.control.kind == ControlKind::ObserverBased {
+                self.drift_region(spec);
+            }
             let saturated = spec.saturation.is_some();
             if let (true, true, true, Some(input)) = (
                 periodic,

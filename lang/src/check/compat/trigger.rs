@@ -250,7 +250,16 @@ impl Checker<'_> {
                 return;
             }
         }
-        if event && around.modes.is_none() {
+        // The sampled observer loop's drift route: checked with the spec
+        // (`output_feedback.rs`: every state bounded, states only).
+        let observer = matches!(
+            draft.trigger.as_ref().map(|t| &t.node),
+            Some(Trigger::Periodic { .. })
+        ) && draft
+            .control
+            .as_ref()
+            .is_some_and(|c| c.kind == crate::spec::ControlKind::ObserverBased);
+        if (event || observer) && around.modes.is_none() {
             return;
         }
         let mut d = Diagnostic::error(
@@ -262,7 +271,7 @@ impl Checker<'_> {
             Some(m) => d
                 .with_secondary(m, "modes here")
                 .with_note("with `modes` the loop is certified on the whole premise range"),
-            None => d.with_note("the regional certificate is the two-step or co-designed event trigger's (docs/language.md, Regional certificate)"),
+            None => d.with_note("the regional certificate is the two-step or co-designed event trigger's (docs/language.md, Regional certificate), or the sampled observer loop's (`control observer_based;` with `trigger periodic`)"),
         };
         self.err(d.with_help("remove `region` (the certificate then holds on the whole premise range), or use `threshold nu = ..; weight = synthesize;` (or `synthesize codesign`) with an L-inf objective and the saturation region"));
     }

@@ -1,0 +1,281 @@
+//! Issue 36: the textbook 88-degree observer pendulum
+//! (`pendulum_observer_88.tsf`) certified for its sampled observer by a bound
+//! of the membership drift on a region (paired plant/observer vertices,
+//! `synth/observer/drift.rs`). Checked independently of tsfc's LMI code:
+//! (a) the nonlinear pendulum (RK4 here) with the generated tables and the
+//! runtime observer, from states on the boundary of the certified set
+//! E(P, 1): the drift of h_1 and of theta within every period stay below the
+//! reported bounds, and the state stays in the region; (b) the paired
+//! conditions rebuilt from the report with eigenvalues, which fail with a
+//! larger drift or with the controller switched off.
+
+use crate::common;
+use crate::common::looped::{mat, max_eig, Looped};
+use crate::common::observer::{rk4_held, runtime_observer, runtime_terms};
+use crate::common::Rng;
+use nalgebra::{DMatrix, DVector};
+use serde_json::Value;
+use std::f64::consts::PI;
+use tsfc::tables::PremiseCode;
+
+const SPEC: &str = "pendulum_observer_88.tsf";
+
+/// The nonlinear pendulum on a cart (g = 9.8, m = 2, M = 8, l = 0.5).
+fn pendulum(x: [f64; 2], u: f64) -> [f64; 2] {
+    let (g, m, mc, l) = (9.8, 2.0, 8.0, 0.5);
+    let a = 1.0 / (m + mc);
+    let (th, om) = (x[0], x[1]);
+    let num = g * th.sin() - a * m * l * om * om * (2.0 * th).sin() / 2.0 - a * th.cos() * u;
+    [om, num / (4.0 * l / 3.0 - a * m * l * th.cos().powi(2))]
+}
+
+/// h_1 of the textbook's rules: (sinc(theta) - 2/pi) / (1 - 2/pi) on
+/// |theta| <= 90 deg.
+fn h1(theta: f64) -> f64 {
+    let s = if theta == 0.0 {
+        1.0
+    } else {
+        theta.sin() / theta
+    };
+    (s - 2.0 / PI) / (1.0 - 2.0 / PI)
+}
+
+/// `tsfc compile` of the spec: exit 0, code written, the report.
+fn compile(dir: &std::path::Path) -> Value {
+    let out = std::process::Command::new(common::tsfc_binary())
+        .arg("compile")
+        .arg(common::spec_path(SPEC))
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .expect("run tsfc");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    for f in ["pendulum_observer_88.rs", "pendulum_observer_88.c"] {
+        assert!(dir.join(f).exists(), "{f}: {stderr}");
+    }
+    serde_json::from_slice(
+        &std::fs::read(dir.join("pendulum_observer_88.report.json")).expect("report"),
+    )
+    .expect("json")
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().expect("a number")
+}
+
+fn nums(v: &Value) -> Vec<f64> {
+    v.as_array().expect("an array").iter().map(num).collect()
+}
+
+/// The worst eigenvalue of the paired conditions with the drift `delta` (of
+/// h_2; the two-rule drift term delta (A_2 - A_1, B_2 - B_1)) at both signs:
+/// Lambda_jj and Lambda_jl + Lambda_lj, plant j drifted, K of observer j and
+/// controller l.
+fn worst_paired(report: &Value, gains: &[DMatrix<f64>], delta: f64, phi: f64) -> f64 {
+    let lp = Looped::of(report);
+    let r = lp.rules();
+    let (a1, b1) = lp.models[0].clone();
+    let mut worst = f64::NEG_INFINITY;
+    for sign in [-1.0, 1.0] {
+        let d = sign * delta;
+        let plant = |j: usize| {
+            let (a, b) = &lp.models[j];
+            let (a2, b2) = &lp.models[1];
+            lp.plant(&(a + (a2 - &a1) * d), &(b + (b2 - &b1) * d))
+        };
+        for j in 0..r {
+            for l in j..r {
+                let (mut r1, mut r2) = lp.blocks(&plant(j), &lp.gain(j, &gains[l]), phi);
+                if l != j {
+                    let (s1, s2) = lp.blocks(&plant(l), &lp.gain(l, &gains[j]), phi);
+                    r1 += s1;
+                    r2 += s2;
+                }
+                worst = worst.max(max_eig(&r1)).max(max_eig(&r2));
+            }
+        }
+    }
+    worst
+}
+
+fn report_gains(report: &Value) -> Vec<DMatrix<f64>> {
+    report["gains"]
+        .as_array()
+        .expect("gains")
+        .iter()
+        .map(|g| mat(&g["F"]))
+        .collect()
+}
+
+/// (b) The paired conditions rebuilt from the report (P, Y, L1, L2, the
+/// local models, F_l, L_j, C, T, the reported drift bound): negative at the
+/// certified rate 0.5; E(P, 1) inside the sample box and |u| <= U; the
+/// reported drift at least the largest sampled |h_1(theta + step) -
+/// h_1(theta)| on the sample box. Not vacuous: ten times the drift, or
+/// F = 0, fail.
+#[test]
+fn pendulum_88_paired_drift_conditions_rederived_from_the_report() {
+    let report = compile(&common::fresh_dir("observer_drift", "lmis"));
+    let s = &report["sampled_loop"];
+    let covers = s["covers"].as_str().expect("covers");
+    assert!(covers.contains("decays at rate 0.5"), "{covers}");
+    assert!(covers.contains("E(P, 1)"), "{covers}");
+    let drift = &s["drift"];
+    let delta = nums(&drift["delta"]);
+    let gains = report_gains(&report);
+    let worst = worst_paired(&report, &gains, delta[1], 1.0);
+    assert!(worst < 0.0, "a paired condition is not negative: {worst:e}");
+    let larger = worst_paired(&report, &gains, 10.0 * delta[1], 1.0);
+    assert!(larger > 0.0, "ten times the drift passes: {larger:e}");
+    let off: Vec<DMatrix<f64>> = gains.iter().map(|g| g * 0.0).collect();
+    let open = worst_paired(&report, &off, delta[1], 1.0);
+    assert!(open > 0.0, "open loop passes: {open:e}");
+    // E(P, 1) inside the sample box and the input bound: r P^-1 r' <= b^2.
+    let p_inv = mat(&s["P"]).try_inverse().expect("P invertible");
+    let samples: Vec<Vec<f64>> = serde_json::from_value(drift["samples"].clone()).expect("box");
+    for (k, b) in samples.iter().enumerate() {
+        let reach = p_inv[(k, k)].sqrt();
+        assert!(
+            reach <= b[1].min(-b[0]),
+            "state {k}: E(P, 1) reaches {reach}, box {b:?}"
+        );
+    }
+    let u_bound = num(&drift["input_bound"]);
+    for f in &gains {
+        let row = DVector::from_vec(vec![0.0, 0.0, f[(0, 0)], f[(0, 1)]]);
+        let reach = (row.transpose() * &p_inv * &row)[(0, 0)].sqrt();
+        assert!(reach <= u_bound, "|u| reaches {reach} > U = {u_bound}");
+    }
+    // The drift bound covers the sampled drift on the sample box.
+    let (step, th_box) = (nums(&drift["steps"])[0], samples[0][1]);
+    let sampled = (0..=20_000)
+        .map(|k| -th_box + 2.0 * th_box * f64::from(k) / 20_000.0)
+        .flat_map(|th| [(th, th + step), (th, th - step)])
+        .map(|(a, b)| (h1(a) - h1(b)).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        sampled <= delta[0] && delta[0] < 1.5 * sampled,
+        "sampled {sampled} vs bound {}",
+        delta[0]
+    );
+}
+
+/// (a) The nonlinear pendulum with the generated tables (runtime observer
+/// every T, RK4 at T / 10) from 40 states on the boundary of E(P, 1)
+/// (xi = (x, xhat), random directions): within every period
+/// |h_1(t) - h_1(t_k)| and |theta(t) - theta(t_k)| stay below the reported
+/// bounds, and |theta| <= 88 deg, |omega| <= 1 (the region) throughout.
+#[test]
+fn pendulum_88_drift_bounds_hold_along_simulated_runs() {
+    let report = compile(&common::fresh_dir("observer_drift", "runs"));
+    let s = &report["sampled_loop"];
+    let drift = &s["drift"];
+    let (t, delta, steps) = (
+        num(&drift["period"]),
+        nums(&drift["delta"]),
+        nums(&drift["steps"]),
+    );
+    let region: Vec<Vec<f64>> = serde_json::from_value(drift["region"].clone()).expect("R");
+    let p = mat(&s["P"]);
+    let prepared = tsfc::driver::prepare(&common::spec_path(SPEC)).expect("prepared");
+    let tables = &prepared.tables;
+    let PremiseCode::Exprs(exprs) = &tables.premise else {
+        panic!("sinc premise")
+    };
+    let terms = runtime_terms(tables);
+    let obs = runtime_observer::<2, 1, 1, 1, 2, 2>(tables, &terms);
+    let mut rng = Rng::new(36);
+    let (mut dh, mut dth, mut vmax): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    for _ in 0..40 {
+        let v = DVector::from_fn(4, |_, _| rng.uniform(-1.0, 1.0));
+        let xi = &v / (v.transpose() * &p * &v)[(0, 0)].sqrt();
+        let (mut x, mut xhat) = ([xi[0], xi[1]], [xi[2], xi[3]]);
+        for _ in 0..1000 {
+            let xk = nalgebra::dvector![x[0], x[1], xhat[0], xhat[1]];
+            vmax = vmax.max((xk.transpose() * &p * &xk)[(0, 0)]);
+            let y = [x[0]];
+            let pv = obs.premise_state(&xhat, &y);
+            let u = obs
+                .step_with_premises(&mut xhat, &y, &[exprs[0].eval(&pv)])
+                .u[0];
+            let th_k = x[0];
+            for _ in 0..10 {
+                rk4_held(&mut x, u, t / 10.0, 1, pendulum);
+                assert!(
+                    x[0].abs() <= region[0][1] && x[1].abs() <= region[1][1],
+                    "left R: {x:?}"
+                );
+                dth = dth.max((x[0] - th_k).abs());
+                dh = dh.max((h1(x[0]) - h1(th_k)).abs());
+            }
+        }
+    }
+    assert!(dth <= steps[0], "theta drift {dth} > {}", steps[0]);
+    assert!(dh <= delta[0], "membership drift {dh} > {}", delta[0]);
+    assert!(dh > 0.0 && dth > 0.0, "the runs moved");
+    eprintln!("max |theta(t) - theta(t_k)| = {dth:e} (bound {:e}), max |h1 drift| = {dh:e} (bound {:e}), max V(t_k) = {vmax}", steps[0], delta[0]);
+}
+
+/// The spec's scenario starts inside the certified set (x0 and xhat0
+/// stacked: xi' P xi <= 1), and `tsfc simulate` converges from it on the
+/// nonlinear pendulum (the estimate starts wrong).
+#[test]
+fn pendulum_88_scenario_starts_in_the_certified_set_and_converges() {
+    let report = compile(&common::fresh_dir("observer_drift", "scenario"));
+    let p = mat(&report["sampled_loop"]["P"]);
+    let prepared = tsfc::driver::prepare(&common::spec_path(SPEC)).expect("prepared");
+    let sim = prepared.model.spec.simulate.as_ref().expect("simulate");
+    let (x0, xhat0) = (sim.x0.clone(), sim.xhat0.clone().expect("xhat0").node);
+    assert_ne!(x0, xhat0, "a wrong initial estimate");
+    let xi = DVector::from_vec([x0, xhat0].concat());
+    let level = (xi.transpose() * &p * &xi)[(0, 0)];
+    assert!(level < 1.0, "the scenario is outside E(P, 1): {level}");
+    let dir = common::fresh_dir("observer_drift", "simulate");
+    let out = std::process::Command::new(common::tsfc_binary())
+        .arg("simulate")
+        .arg(common::spec_path(SPEC))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("run tsfc");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let metrics: Value = serde_json::from_slice(
+        &std::fs::read(dir.join("pendulum_observer_88.metrics.json")).expect("metrics"),
+    )
+    .expect("json");
+    assert_eq!(metrics["converged"], Value::Bool(true), "{metrics}");
+    assert!(dir.join("pendulum_observer_88.estimate.svg").exists());
+}
+
+/// Wrong uses of the region of the sampled observer loop are check-time
+/// errors at the setting (file:line:col): a state left unbounded, and a
+/// periodic region without an observer.
+#[test]
+fn pendulum_88_region_misuse_is_a_check_error_at_the_setting() {
+    let text = std::fs::read_to_string(common::spec_path(SPEC)).expect("spec");
+    let cases = [
+        (
+            text.replace("region omega = -1 .. 1;", ""),
+            "region theta",
+            "leaves omega unbounded",
+        ),
+        (
+            text.replace("control observer_based(decay = 10);", "")
+                .replace("measure y = theta noise <= 0.001;", ""),
+            "region theta",
+            "`region` needs an event trigger",
+        ),
+    ];
+    for (spec, at, want) in cases {
+        let errors = common::errors_of("pendulum_observer_88.tsf", &spec);
+        let e = errors
+            .iter()
+            .find(|e| e.message.contains(want))
+            .unwrap_or_else(|| panic!("no `{want}` error: {errors:?}"));
+        let line = spec[..e.span.start].lines().count();
+        let written = spec.lines().nth(line.max(1) - 1).expect("the line");
+        assert!(written.contains(at), "{want}: at line {line} `{written}`");
+    }
+}
