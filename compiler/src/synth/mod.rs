@@ -42,6 +42,7 @@ pub mod signal_trigger;
 pub mod solved;
 pub mod transmissions;
 pub mod trigger;
+pub mod trigger_request;
 mod trigger_scale;
 pub mod vertices;
 

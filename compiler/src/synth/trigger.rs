@@ -29,13 +29,16 @@ use super::observer::drift;
 use super::reduction::Reduction;
 use super::search::Runner;
 use super::solved::{names, Solved as _};
+pub use super::trigger_request::{
+    certified_threshold, codesign_rounds, transmission_points, wanted,
+};
 pub use super::trigger_scale::{lyapunov_scale, scaled_plan};
 use super::trigger_scale::{unscale_values, LoopedSolve};
 use super::vertices::{self, PlantVertex};
 use crate::model::TsModel;
 use nalgebra::DMatrix;
 use std::time::Instant;
-use tsf_lang::spec::{InitialSet, Trigger, TriggerSynthesis, Weight};
+use tsf_lang::spec::{InitialSet, Trigger};
 use tsf_lmi::{Expr, LmiError, Problem, Relation, SolveStatus, Var};
 
 /// The variables of the sampled-loop problem (`None`: the part is absent).
@@ -635,43 +638,6 @@ fn peak(
     Ok(())
 }
 
-/// Whether the spec asks for a synthesized trigger weight with the two-step
-/// method (`weight = synthesize;`, the default, or `weight = synthesize two_step;`)
-/// or by co-design (`weight = synthesize codesign;`, which starts from it).
-pub fn wanted(model: &TsModel) -> bool {
-    matches!(
-        model.spec.trigger.as_ref().map(|t| &t.node),
-        Some(Trigger::Aperiodic {
-            weight: Weight::Synthesize,
-            ..
-        })
-    ) && matches!(
-        model.spec.trigger_synthesis,
-        None | Some(TriggerSynthesis::TwoStep)
-            | Some(TriggerSynthesis::Codesign { .. })
-            | Some(TriggerSynthesis::Transmissions { .. })
-    )
-}
-
-/// The rounds of `weight = synthesize codesign(rounds = ..);`, if the spec asks for co-design.
-pub fn codesign_rounds(model: &TsModel) -> Option<u32> {
-    match model.spec.trigger_synthesis {
-        Some(TriggerSynthesis::Codesign { rounds }) if wanted(model) => Some(rounds),
-        _ => None,
-    }
-}
-
-/// The points of `weight = synthesize transmissions(points = ..);`, if the
-/// spec asks for a few-transmissions design.
-pub fn transmission_points(model: &TsModel) -> Option<(u32, Option<f64>)> {
-    match model.spec.trigger_synthesis {
-        Some(TriggerSynthesis::Transmissions { points, gamma }) if wanted(model) => {
-            Some((points, gamma))
-        }
-        _ => None,
-    }
-}
-
 /// The trigger problem for the gains of `design` (threshold 0: the caller sets nu).
 pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthError> {
     let unsupported = |m: &str| SynthError::Unsupported(format!("event-trigger synthesis: {m}"));
@@ -996,14 +962,3 @@ pub const INTERPRETATIONS: [&str; 5] = [
 
 /// Relative width at which the diagnostic nu bisection stops.
 const TRIGGER_NU_REL_TOL: f64 = 0.05;
-
-/// The threshold the trigger LMIs are solved for: the adaptive law's ceiling,
-/// else the static nu, else 0 (no threshold: every sample transmitted).
-pub fn certified_threshold(model: &TsModel) -> f64 {
-    match model.spec.trigger.as_ref().map(|t| &t.node) {
-        Some(Trigger::Aperiodic {
-            threshold: Some(t), ..
-        }) => t.ceiling(),
-        _ => 0.0,
-    }
-}
