@@ -77,12 +77,7 @@ fn sampled(
 ) -> [(DMatrix<f64>, f64); 2] {
     let spec = &model.spec;
     let mut rng = SplitMix64::new(seed);
-    let ranges: Vec<(f64, f64)> = model
-        .premises
-        .slots
-        .iter()
-        .flat_map(|s| std::iter::repeat_n(s.range, s.dim))
-        .collect();
+    let ranges = model.premises.component_ranges();
     let mut out = [
         (DMatrix::zeros(model.n, model.n), 0.0),
         (DMatrix::zeros(model.n, model.m), 0.0),

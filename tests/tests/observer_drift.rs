@@ -40,24 +40,9 @@ fn h1(theta: f64) -> f64 {
     (s - 2.0 / PI) / (1.0 - 2.0 / PI)
 }
 
-/// `tsfc compile` of the spec: exit 0, code written, the report.
+/// `tsfc compile` of the shipped spec into `dir`: exit 0, code written, the report.
 fn compile(dir: &std::path::Path) -> Value {
-    let out = std::process::Command::new(common::tsfc_binary())
-        .arg("compile")
-        .arg(common::spec_path(SPEC))
-        .arg("--out")
-        .arg(dir)
-        .output()
-        .expect("run tsfc");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{stderr}");
-    for f in ["pendulum_observer_88.rs", "pendulum_observer_88.c"] {
-        assert!(dir.join(f).exists(), "{f}: {stderr}");
-    }
-    serde_json::from_slice(
-        &std::fs::read(dir.join("pendulum_observer_88.report.json")).expect("report"),
-    )
-    .expect("json")
+    common::observer::compile_code(SPEC, dir)
 }
 
 fn num(v: &Value) -> f64 {

@@ -47,28 +47,9 @@ fn report_gains(report: &Value) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// `tsfc compile` of the shipped spec into `dir`: exit 0, its report.
+/// `tsfc compile` of the shipped spec into `dir`: exit 0, code written, the report.
 fn compile(dir: &std::path::Path) -> Value {
-    let out = std::process::Command::new(common::tsfc_binary())
-        .arg("compile")
-        .arg(common::spec_path(SPEC))
-        .arg("--out")
-        .arg(dir)
-        .output()
-        .expect("run tsfc");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{stderr}");
-    for f in [
-        "pendulum_observer.rs",
-        "pendulum_observer.c",
-        "pendulum_observer.h",
-    ] {
-        assert!(dir.join(f).exists(), "{f}: {stderr}");
-    }
-    serde_json::from_slice(
-        &std::fs::read(dir.join("pendulum_observer.report.json")).expect("report"),
-    )
-    .expect("JSON")
+    common::observer::compile_code(SPEC, dir)
 }
 
 /// `tsfc compile` certifies the sampled loop at the spec's period and

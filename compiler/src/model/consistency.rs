@@ -146,11 +146,7 @@ pub(super) fn check(
     if targets.is_empty() || (rules.iter().all(|r| r.at.is_none()) && spec.sector.is_none()) {
         return None;
     }
-    let ranges: Vec<(f64, f64)> = layout
-        .slots
-        .iter()
-        .flat_map(|s| std::iter::repeat_n(s.range, s.dim))
-        .collect();
+    let ranges = layout.component_ranges();
     let grid = axes(&bounds(spec, rules, spec.n()));
     let mut idx = vec![0usize; grid.len()];
     let mut worst = Consistency {

@@ -197,12 +197,7 @@ pub fn bound(
         .iter()
         .map(|(_, l)| l.iter().map(|m| m.norm()).fold(f64::MIN_POSITIVE, f64::max))
         .collect();
-    let ranges: Vec<(f64, f64)> = model
-        .premises
-        .slots
-        .iter()
-        .flat_map(|s| std::iter::repeat_n(s.range, s.dim))
-        .collect();
+    let ranges = model.premises.component_ranges();
     let deps = affine::depends_on(&graph.builder, &graph.outputs);
     let region: &StateBox = &pinned(region, &deps).map_err(|k| {
         fail(format!(

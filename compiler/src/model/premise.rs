@@ -40,6 +40,14 @@ impl PremiseLayout {
         self.slots.is_empty()
     }
 
+    /// The declared range of every component of z, in order.
+    pub fn component_ranges(&self) -> Vec<(f64, f64)> {
+        self.slots
+            .iter()
+            .flat_map(|s| std::iter::repeat_n(s.range, s.dim))
+            .collect()
+    }
+
     /// Name of component `k` of z (`w1`, or `q[2]` for vector premises).
     pub fn component_name(&self, k: usize) -> String {
         for s in &self.slots {

@@ -51,6 +51,21 @@ pub fn tsfc(args: &[&str], spec: &Path, out: &Path) -> Output {
         .expect("run tsfc")
 }
 
+/// `tsfc compile` of the shipped spec `name` (`<stem>.tsf`) into `dir`: exit
+/// 0, the Rust and C code written, the report.
+pub fn compile_code(name: &str, dir: &Path) -> serde_json::Value {
+    let out = tsfc(&["compile"], &super::spec_path(name), dir);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let stem = name.trim_end_matches(".tsf");
+    for ext in ["rs", "c", "h"] {
+        let f = dir.join(format!("{stem}.{ext}"));
+        assert!(f.exists(), "{}: {stderr}", f.display());
+    }
+    let report = std::fs::read(dir.join(format!("{stem}.report.json"))).expect("report");
+    serde_json::from_slice(&report).expect("JSON")
+}
+
 /// A matrix of `A` rows and `B` columns from its rows (sizes checked).
 pub fn fixed<const A: usize, const B: usize>(rows: &[Vec<f64>]) -> [[f64; B]; A] {
     assert_eq!(rows.len(), A, "rows");

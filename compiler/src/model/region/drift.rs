@@ -138,12 +138,7 @@ pub fn drift_bound(model: &TsModel, period: f64, input: f64) -> Result<DriftBoun
             .floor()
             .max(1.0) as usize,
     };
-    let ranges: Vec<(f64, f64)> = model
-        .premises
-        .slots
-        .iter()
-        .flat_map(|s| std::iter::repeat_n(s.range, s.dim))
-        .collect();
+    let ranges = model.premises.component_ranges();
     let bounds = |bx: &[(f64, f64)]| -> Result<Vec<(f64, f64)>, String> {
         let zs = premise_range::on_box(&graph.builder, z, bx)
             .into_iter()

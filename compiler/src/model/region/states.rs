@@ -105,10 +105,7 @@ pub(super) fn checked(model: &TsModel) -> Result<Checked, RegionError> {
         help: "bound the premise variables themselves (`region z = lo .. hi;`, premises linear in the state)".into(),
     })?;
     let z = &graph.outputs[..graph.nz];
-    let ranges: Vec<(f64, f64)> = slots
-        .iter()
-        .flat_map(|s| std::iter::repeat_n(s.range, s.dim))
-        .collect();
+    let ranges = model.premises.component_ranges();
     // Per component: the setting bounding the first state it reads, if it
     // reads only bounded states (and some).
     let setting: Vec<Option<String>> = z
