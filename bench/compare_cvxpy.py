@@ -252,7 +252,7 @@ def main():
         print(f"{'MET   ' if ok else 'MISSED'} {name}: {value}")
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"spec": args.spec, "repeat": args.repeat, "cvxpy": cv, "tsfc": tsfc,
+            json.dump({"spec": os.path.relpath(args.spec, ROOT), "repeat": args.repeat, "cvxpy": cv, "tsfc": tsfc,
                        "speedup": speedup, "overhead_pct": overhead, "gamma_rel_diff": rel}, f, indent=2)
 
 
