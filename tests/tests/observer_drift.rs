@@ -20,14 +20,7 @@ use tsfc::tables::PremiseCode;
 
 const SPEC: &str = "pendulum_observer_88.tsf";
 
-/// The nonlinear pendulum on a cart (g = 9.8, m = 2, M = 8, l = 0.5).
-fn pendulum(x: [f64; 2], u: f64) -> [f64; 2] {
-    let (g, m, mc, l) = (9.8, 2.0, 8.0, 0.5);
-    let a = 1.0 / (m + mc);
-    let (th, om) = (x[0], x[1]);
-    let num = g * th.sin() - a * m * l * om * om * (2.0 * th).sin() / 2.0 - a * th.cos() * u;
-    [om, num / (4.0 * l / 3.0 - a * m * l * th.cos().powi(2))]
-}
+use crate::common::observer::pendulum;
 
 /// h_1 of the textbook's rules: (sinc(theta) - 2/pi) / (1 - 2/pi) on
 /// |theta| <= 90 deg.

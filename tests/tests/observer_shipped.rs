@@ -23,15 +23,7 @@ const T: f64 = 0.01;
 /// The rules' range: |theta| <= 60 deg (the spec's `thmax`).
 const THETA_MAX: f64 = 60.0 * std::f64::consts::PI / 180.0;
 
-/// The nonlinear pendulum on a cart (g = 9.8, m = 2, M = 8, l = 0.5),
-/// written out from the textbook's equation.
-fn pendulum(x: [f64; 2], u: f64) -> [f64; 2] {
-    let (g, m, mc, l) = (9.8, 2.0, 8.0, 0.5);
-    let a = 1.0 / (m + mc);
-    let (th, om) = (x[0], x[1]);
-    let num = g * th.sin() - a * m * l * om * om * (2.0 * th).sin() / 2.0 - a * th.cos() * u;
-    [om, num / (4.0 * l / 3.0 - a * m * l * th.cos().powi(2))]
-}
+use crate::common::observer::pendulum;
 
 fn report_gains(report: &Value) -> Vec<[f64; 2]> {
     report["gains"]

@@ -66,6 +66,16 @@ pub fn compile_code(name: &str, dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&report).expect("JSON")
 }
 
+/// The nonlinear pendulum on a cart (g = 9.8, m = 2, M = 8, l = 0.5),
+/// written out from the textbook's equation (Tanaka & Wang 2001).
+pub fn pendulum(x: [f64; 2], u: f64) -> [f64; 2] {
+    let (g, m, mc, l) = (9.8, 2.0, 8.0, 0.5);
+    let a = 1.0 / (m + mc);
+    let (th, om) = (x[0], x[1]);
+    let num = g * th.sin() - a * m * l * om * om * (2.0 * th).sin() / 2.0 - a * th.cos() * u;
+    [om, num / (4.0 * l / 3.0 - a * m * l * th.cos().powi(2))]
+}
+
 /// A matrix of `A` rows and `B` columns from its rows (sizes checked).
 pub fn fixed<const A: usize, const B: usize>(rows: &[Vec<f64>]) -> [[f64; B]; A] {
     assert_eq!(rows.len(), A, "rows");

@@ -1,7 +1,7 @@
 //! The membership drift over one sampling period on a state box (issue 36):
 //! rigorous bounds of |h_i(x(t)) - h_i(x(t_k))| for t in [t_k, t_k + T],
-//! used by the sampled observer certificate
-//! ([`crate::synth::observer::drift`]).
+//! the data of the synthesis stage's sampled observer certificate (its
+//! `observer::drift` module; this stage does not depend on it).
 //!
 //! Data: the box R of the `region` settings (every state bounded), the period
 //! T and an input bound U (|u_k| <= U, which the certificate imposes).
