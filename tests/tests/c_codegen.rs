@@ -845,7 +845,8 @@ fn many_states(n: usize, seed: u64) -> Vec<Vec<f64>> {
 }
 
 /// Both C styles of the Zhang & Zeng controller on 20,000 seeded states,
-/// in double (also with saturation levels, so that channels clip) and in
+/// in double (also with saturation levels, so that channels clip, and with
+/// a premise map that has an all-zero column and a `-0` coefficient) and in
 /// float: commands, strengths, premises and flags are the runtime's bit for
 /// bit. Double: against the Rust runtime (trapezoid terms only) and the table-driven C step (the C runtime); float:
 /// straight-line against the C runtime's float step.
@@ -862,9 +863,28 @@ fn both_c_styles_are_the_runtimes_bit_for_bit_on_20000_zhang_states() {
         u_max: vec![0.02, 0.5, f64::INFINITY],
         ..zhang.clone()
     };
+    // The straight step leaves L's exact-zero coefficients out of z = L x
+    // but keeps an all-zero column (here x[5]'s): with x[5] NaN or infinite
+    // the runtime's z is NaN (0 * inf) and so must the premise flag be.
+    let sparse = Tables {
+        premise: match &zhang.premise {
+            PremiseCode::Linear(l) => {
+                let mut l = l.clone();
+                l[1][5] = 0.0;
+                l[0][4] = -0.0;
+                PremiseCode::Linear(l)
+            }
+            PremiseCode::Exprs(_) => panic!("zhang's premises are linear"),
+        },
+        ..zhang.clone()
+    };
     let mut report = String::new();
     let real = format!("-D{}_REAL=float", zhang.name.to_ascii_uppercase());
-    for (variant, base) in [("unlimited", zhang), ("saturated", &saturated)] {
+    for (variant, base) in [
+        ("unlimited", zhang),
+        ("saturated", &saturated),
+        ("sparse", &sparse),
+    ] {
         let rust = reference_rows(base, &xs);
         for (prec, extra) in [("f64", vec!["-O2"]), ("f32", vec!["-O2", real.as_str()])] {
             let mut rows: Vec<Vec<Row>> = Vec::new();

@@ -17,7 +17,7 @@ impl Gen<'_> {
         s.push_str(&self.prelude(&self.t.name));
         if super::straight::is_straight(self.t) {
             s.push_str(&self.straight_tables());
-            s.push_str(&self.straight_premises());
+            s.push_str(&self.premises());
             s.push_str(&self.init());
             s.push_str(&self.straight_controller());
         } else {

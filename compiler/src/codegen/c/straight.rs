@@ -39,45 +39,62 @@ pub fn is_straight(t: &Tables) -> bool {
 }
 
 impl Gen<'_> {
-    /// `name_premises` of the straight-line style: `z = L x` written out
-    /// (the runtime's `tsf_dot`: from the first product, in index order),
-    /// or the premise expressions.
-    pub(super) fn straight_premises(&self) -> String {
-        let (p, u) = (&self.p, &self.u);
+    /// The statements of `<name>_step` giving its premise vector `z = L x`
+    /// with the exact-zero coefficients of `L` left out, or `None` when the
+    /// premises are expressions (or `z` is empty): then the step calls
+    /// `<name>_premises`, the runtime's `tsf_dot` rows.
+    ///
+    /// Why the step's commands, strengths and flags stay the runtime's bit
+    /// for bit: for a finite `x`, a product `0 * x_j` is `+-0` and adding it
+    /// leaves every non-zero sum as it was, so each `z_k` has the runtime's
+    /// value but possibly the other sign of zero, which no membership, weight
+    /// or nearest-rule distance can see (`z - a` and `(z - a)^2` are equal
+    /// for `z = +-0` unless `a = +-0`, where the degree's `+ 0` or the
+    /// square erases the sign; see `degree`). For a NaN or infinite `x_j` the
+    /// runtime's `z` is NaN or infinite in every row (`0 * inf = NaN`); a
+    /// column of `L` that has a non-zero entry keeps that product, so some
+    /// `z_k` is non-finite too and the premise flag is set as the runtime
+    /// sets it; an all-zero column keeps all its products, as the runtime.
+    pub(super) fn fused_premises(&self) -> Option<String> {
+        let p = &self.p;
         let t = self.t;
-        let real = format!("{u}REAL");
-        let PremiseCode::Linear(_) = &t.premise else {
-            return self.premises();
+        let real = format!("{}REAL", self.u);
+        let PremiseCode::Linear(l) = &t.premise else {
+            return None;
         };
-        let mut body = String::new();
         if t.p == 0 || t.n == 0 {
-            for k in 0..t.p {
-                let _ = writeln!(body, "    z[{k}] = {u}C(0);");
-            }
-            let _ = writeln!(
-                body,
-                "    (void){p}premise_map;\n    (void)x;\n    (void)z;"
-            );
-        } else {
-            for k in 0..t.p {
-                let row = k * t.n;
-                let _ = writeln!(
-                    body,
-                    "    {{\n        {real} acc = {p}premise_map[{row}] * x[0];"
-                );
-                for j in 1..t.n {
-                    let _ = writeln!(
-                        body,
-                        "        const {real} t{j} = {p}premise_map[{}] * x[{j}];\n        acc = acc + t{j};",
-                        row + j
-                    );
-                }
-                let _ = writeln!(body, "        z[{k}] = acc;\n    }}");
-            }
+            return None;
         }
-        format!(
-            "/* Premise vector z of state x. */\nvoid {p}premises(const {real} x[{u}N], {real} z[]) {{\n{body}}}\n\n"
-        )
+        let column_used = |j: usize| l.iter().any(|row| row.get(j).is_some_and(|v| *v != 0.0));
+        let mut b =
+            String::from("    /* z = L x, the exact-zero coefficients of L left out (see above). */\n");
+        for (k, row) in l.iter().enumerate().take(t.p) {
+            let kept: Vec<usize> = (0..t.n)
+                .filter(|&j| row.get(j).is_some_and(|v| *v != 0.0) || !column_used(j))
+                .collect();
+            let Some((&first, rest)) = kept.split_first() else {
+                let _ = writeln!(b, "    z[{k}] = {}C(0); /* an all-zero row */", self.u);
+                continue;
+            };
+            let _ = writeln!(
+                b,
+                "    {{
+        {real} acc = {p}premise_map[{}] * x[{first}];",
+                k * t.n + first
+            );
+            if !rest.is_empty() {
+                let _ = writeln!(b, "        {real} t;");
+            }
+            for &j in rest {
+                let _ = writeln!(
+                    b,
+                    "        t = {p}premise_map[{}] * x[{j}];\n        acc = acc + t;",
+                    k * t.n + j
+                );
+            }
+            let _ = writeln!(b, "        z[{k}] = acc;\n    }}");
+        }
+        Some(b)
     }
 
     /// The helpers of the straight-line step (the runtime's `tsf_clamp01`,
@@ -356,7 +373,7 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
             let hs: Vec<String> = (0..r).map(|i| format!("h{i}")).collect();
             let _ = writeln!(
                 b,
-                "        /* Rule weights (product t-norm, from 1 in the rule's term order), then\n           normalised. Degrees are +0 or in (0, 1], so weights are too: the runtime's\n           clamp of weights not > 0 and its finite test of the sum (<= {u}R) hold. */\n        {real} {};\n        {real} sum = {u}C(0);",
+                "        /* Rule weights (product t-norm, from 1 in the rule's term order), then\n           normalised. Degrees are +0 or in (0, 1], so weights are too: the runtime's\n           clamp of weights not > 0 and its finite test of the sum (<= {u}R) hold, and the\n           sum may start from the first weight (0 + h0 is h0). */\n        {real} {};\n        {real} sum;",
                 hs.join(", ")
             );
             for (i, rule) in t.factored.rules.iter().enumerate() {
@@ -373,7 +390,8 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
             // The runtime's clamp (weights not > 0 count as 0) and its test
             // that the sum is finite are identities here: every degree is
             // +0 or in (0, 1], so every weight is too and the sum is at most R.
-            for i in 0..r {
+            let _ = writeln!(b, "        sum = h0;");
+            for i in 1..r {
                 let _ = writeln!(b, "        sum = sum + h{i};");
             }
             let _ = writeln!(b, "        if (!(sum > {u}C(0))) {{");
@@ -401,16 +419,24 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
         }
         b.push_str("    }\n    s->flags = flags;\n");
         let pd = self.pd;
+        let (step_doc, premises) = match self.fused_premises() {
+            Some(z) => (
+                format!(
+                    "/* One control step at x: {p}step_with_premises at z = L x. z is computed here\n   without L's exact-zero coefficients: for a finite x each z_k is the runtime's\n   (tsf_dot's) value up to the sign of a zero, which no degree, weight or distance\n   sees; a NaN or infinite x_j still makes some z_k non-finite (an all-zero column\n   of L keeps its products), so the flags are the runtime's too. */\n"
+                ),
+                z,
+            ),
+            None => (String::new(), format!("    {p}premises(x, z);\n")),
+        };
         format!(
             r#"/* One control step at x with premises z: the runtime's tsf_step_with_premises,
    operation by operation, written out for this controller. */
 void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
 {b}}}
 
-void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
+{step_doc}void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
     {real} z[{pd}];
-    {p}premises(x, z);
-    {p}step_with_premises(s, {mode_arg}x, z, u);
+{premises}    {p}step_with_premises(s, {mode_arg}x, z, u);
 }}
 
 "#
