@@ -395,15 +395,15 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
                 let _ = writeln!(b, "        sum = sum + h{i};");
             }
             let _ = writeln!(b, "        if (!(sum > {u}C(0))) {{");
-            b.push_str("            /* No rule fired: the nearest rule centre's gain alone. */\n");
+            b.push_str("            /* No rule fired: the nearest rule centre's gain alone. The strengths are\n               stored as soon as they are known; the blend reads them back. */\n");
             let _ = writeln!(b, "            const int best = {p}nearest_rule(z);");
             for i in 0..r {
-                let _ = writeln!(b, "            h{i} = (best == {i}) ? {u}C(1) : {u}C(0);");
+                let _ = writeln!(b, "            s->h[{i}] = (best == {i}) ? {u}C(1) : {u}C(0);");
             }
             set_flag(&mut b, "            ", "NO_RULE_FIRED");
             b.push_str("        } else {\n");
             for i in 0..r {
-                let _ = writeln!(b, "            h{i} = h{i} / sum;");
+                let _ = writeln!(b, "            s->h[{i}] = h{i} / sum;");
             }
             b.push_str("        }\n");
         } else {
@@ -414,9 +414,6 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
             set_flag(&mut b, "        ", "NO_RULE_FIRED");
         }
         self.straight_blend(&mut b);
-        for i in 0..r {
-            let _ = writeln!(b, "        s->h[{i}] = h{i};");
-        }
         b.push_str("    }\n    s->flags = flags;\n");
         let pd = self.pd;
         let (step_doc, premises) = match self.fused_premises() {
@@ -465,14 +462,14 @@ void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {rea
                 for j in 0..r {
                     let _ = writeln!(
                         b,
-                        "            if (h{j} > {u}C(0)) {{\n                {real} f, t;"
+                        "            if (s->h[{j}] > {u}C(0)) {{\n                {real} f, t;"
                     );
                     for s in 0..m {
                         let row = (j * m + s) * n;
                         let _ = writeln!(b, "                f = {p}row_dot(&g[{row}], x);");
                         let _ = writeln!(
                             b,
-                            "                t = h{j} * f;\n                u{s} = u{s} + t;"
+                            "                t = s->h[{j}] * f;\n                u{s} = u{s} + t;"
                         );
                     }
                     b.push_str("            }\n");
