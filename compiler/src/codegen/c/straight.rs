@@ -39,10 +39,11 @@ pub fn is_straight(t: &Tables) -> bool {
 }
 
 impl Gen<'_> {
-    /// The statements of `<name>_step` giving its premise vector `z = L x`
-    /// with the exact-zero coefficients of `L` left out, or `None` when the
-    /// premises are expressions (or `z` is empty): then the step calls
-    /// `<name>_premises`, the runtime's `tsf_dot` rows.
+    /// The statements of `<name>_step_core` giving, for `<name>_step`, its
+    /// premise vector `z = L x` with the exact-zero coefficients of `L` left
+    /// out, or `None` when the premises are expressions (or `z` is empty):
+    /// then `<name>_step` calls `<name>_premises`, the runtime's `tsf_dot`
+    /// rows, and `<name>_step_with_premises`.
     ///
     /// Why the step's commands, strengths and flags stay the runtime's bit
     /// for bit: for a finite `x`, a product `0 * x_j` is `+-0` and adding it
@@ -66,8 +67,9 @@ impl Gen<'_> {
             return None;
         }
         let column_used = |j: usize| l.iter().any(|row| row.get(j).is_some_and(|v| *v != 0.0));
-        let mut b =
-            String::from("    /* z = L x, the exact-zero coefficients of L left out (see above). */\n");
+        let mut b = String::from(
+            "    /* z = L x, the exact-zero coefficients of L left out (see above). */\n",
+        );
         for (k, row) in l.iter().enumerate().take(t.p) {
             let kept: Vec<usize> = (0..t.n)
                 .filter(|&j| row.get(j).is_some_and(|v| *v != 0.0) || !column_used(j))
@@ -78,8 +80,7 @@ impl Gen<'_> {
             };
             let _ = writeln!(
                 b,
-                "    {{
-        {real} acc = {p}premise_map[{}] * x[{first}];",
+                "    {{\n        {real} acc = {p}premise_map[{}] * x[{first}];",
                 k * t.n + first
             );
             if !rest.is_empty() {
@@ -272,7 +273,11 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
 
     /// The step's test for a NaN or infinite state or premise: one test of
     /// the sum of all values, the runtime's one-by-one tests behind it.
-    fn straight_fault_check(&self) -> String {
+    /// With `fused` (the statements of [`Self::fused_premises`]) the test
+    /// is the one of `<name>_step_core`: `z` from `zin` (then the sum of x and
+    /// z is tested) or, when `zin` is NULL, from `x` (then the sum of z alone
+    /// is: every `x_j` reaches some `z_k`, so the z are all finite only when x is).
+    fn straight_fault_check(&self, fused: Option<&str>) -> String {
         let u = &self.u;
         let t = self.t;
         let real = format!("{u}REAL");
@@ -303,12 +308,29 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
             set_flag(&mut checks, "                    ", flag);
             checks.push_str("                }\n            }\n");
         }
-        if !all.is_empty() {
-            let _ = writeln!(
-                b,
-                "    /* A NaN or infinite state or premise: u = 0, h = 0. The sum of every value is\n       finite when they all are (v - v is 0 only for a finite v); otherwise, or when the\n       sum overflows, they are tested one by one. */\n    {{\n        const {real} all = {};\n        if (all - all != {u}C(0)) {{\n            int i;\n{checks}        }}\n    }}",
-                all.join(" + ")
-            );
+        let comment = "    /* A NaN or infinite state or premise: u = 0, h = 0. The sum of every value is\n       finite when they all are (v - v is 0 only for a finite v); otherwise, or when the\n       sum overflows, they are tested one by one. */\n";
+        match fused {
+            None if !all.is_empty() => {
+                let _ = writeln!(
+                    b,
+                    "{comment}    {{\n        const {real} all = {};\n        if (all - all != {u}C(0)) {{\n            int i;\n{checks}        }}\n    }}",
+                    all.join(" + ")
+                );
+            }
+            None => {}
+            Some(zs) => {
+                let zs: String = zs.lines().map(|l| format!("        {l}\n")).collect();
+                let zsum: Vec<String> = (0..t.p).map(|k| format!("z[{k}]")).collect();
+                let copy: String = (0..t.p)
+                    .map(|k| format!("            z[{k}] = zin[{k}];\n"))
+                    .collect();
+                let _ = writeln!(
+                    b,
+                    "{comment}    {{\n        {real} all;\n        if (zin == NULL) {{\n{zs}            all = {}; /* every x_j reaches some z_k */\n        }} else {{\n{copy}            all = {};\n        }}\n        if (all - all != {u}C(0)) {{\n            int i;\n{checks}        }}\n    }}",
+                    zsum.join(" + "),
+                    all.join(" + ")
+                );
+            }
         }
         b
     }
@@ -327,6 +349,11 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
             Some(_) => ("uint8_t mode, ", "mode, "),
             None => ("", ""),
         };
+        let fused = self.fused_premises();
+        let pd = self.pd;
+        if fused.is_some() {
+            let _ = writeln!(b, "    {real} z[{pd}];");
+        }
         b.push_str("    uint8_t flags = 0u;\n");
         match t.modes {
             Some(_) => {
@@ -339,7 +366,7 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
                 let _ = writeln!(b, "    const {real} *g = {p}gains;");
             }
         }
-        b.push_str(&self.straight_fault_check());
+        b.push_str(&self.straight_fault_check(fused.as_deref()));
         if t.p == 0 {
             b.push_str("    (void)z;\n");
         }
@@ -398,7 +425,10 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
             b.push_str("            /* No rule fired: the nearest rule centre's gain alone. The strengths are\n               stored as soon as they are known; the blend reads them back. */\n");
             let _ = writeln!(b, "            const int best = {p}nearest_rule(z);");
             for i in 0..r {
-                let _ = writeln!(b, "            s->h[{i}] = (best == {i}) ? {u}C(1) : {u}C(0);");
+                let _ = writeln!(
+                    b,
+                    "            s->h[{i}] = (best == {i}) ? {u}C(1) : {u}C(0);"
+                );
             }
             set_flag(&mut b, "            ", "NO_RULE_FIRED");
             b.push_str("        } else {\n");
@@ -415,29 +445,42 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
         }
         self.straight_blend(&mut b);
         b.push_str("    }\n    s->flags = flags;\n");
-        let pd = self.pd;
-        let (step_doc, premises) = match self.fused_premises() {
-            Some(z) => (
-                format!(
-                    "/* One control step at x: {p}step_with_premises at z = L x. z is computed here\n   without L's exact-zero coefficients: for a finite x each z_k is the runtime's\n   (tsf_dot's) value up to the sign of a zero, which no degree, weight or distance\n   sees; a NaN or infinite x_j still makes some z_k non-finite (an all-zero column\n   of L keeps its products), so the flags are the runtime's too. */\n"
-                ),
-                z,
-            ),
-            None => (String::new(), format!("    {p}premises(x, z);\n")),
-        };
-        format!(
-            r#"/* One control step at x with premises z: the runtime's tsf_step_with_premises,
-   operation by operation, written out for this controller. */
-void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
+        let head = "/* One control step at x with premises z: the runtime's tsf_step_with_premises,\n   operation by operation, written out for this controller.";
+        match fused {
+            Some(_) => format!(
+                r#"{head} {p}step and
+   {p}step_with_premises share it: z is zin, or when zin is NULL
+   z = L x computed here without L's exact-zero coefficients. For a finite x each z_k
+   is then the runtime's (tsf_dot's) value up to the sign of a zero, which no degree,
+   weight or distance sees; a NaN or infinite x_j still makes some z_k non-finite (an
+   all-zero column of L keeps its products), so the flags are the runtime's too. */
+static void {p}step_core({p}t *s, {mode_param}const {real} x[{u}N], const {real} *zin, {real} u[{u}M]) {{
 {b}}}
 
-{step_doc}void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
-    {real} z[{pd}];
-{premises}    {p}step_with_premises(s, {mode_arg}x, z, u);
+void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
+    {p}step_core(s, {mode_arg}x, z, u);
+}}
+
+void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
+    {p}step_core(s, {mode_arg}x, NULL, u);
 }}
 
 "#
-        )
+            ),
+            None => format!(
+                r#"{head} */
+void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
+{b}}}
+
+void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
+    {real} z[{pd}];
+    {p}premises(x, z);
+    {p}step_with_premises(s, {mode_arg}x, z, u);
+}}
+
+"#
+            ),
+        }
     }
 
     /// The blend (one branch per rule, skipped when its strength is not
