@@ -9,9 +9,14 @@
 //!
 //! Every arithmetic operation is the runtime's, in the runtime's order, one
 //! product per statement (see the [`super`] module documentation), so the
-//! command, strengths and flags are the runtime's bit for bit. The rare
-//! nearest-rule fallback is a small loop over the rule centres, the
-//! runtime's `tsf_nearest_rule`; `exp` is the runtime's `tsf_exp`.
+//! command, strengths and flags are the runtime's bit for bit. The
+//! exceptions change no output bit: with linear premises `<name>_step`
+//! computes `z = L x` without `L`'s exact-zero coefficients (see
+//! `fused_premises`), the sum of the weights starts from the first weight,
+//! and the strengths are stored as soon as they are normalised (the blend
+//! reads them back; fewer values live in registers). The rare nearest-rule
+//! fallback is a small loop over the rule centres, the runtime's
+//! `tsf_nearest_rule`; `exp` is the runtime's `tsf_exp`.
 
 use super::{lit, Gen};
 use crate::model::TermSpec;
@@ -345,10 +350,6 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
         let set_flag = |b: &mut String, ind: &str, flag: &str| {
             let _ = writeln!(b, "{ind}flags = (uint8_t)(flags | {u}FLAG_{flag});");
         };
-        let (mode_param, mode_arg) = match t.modes {
-            Some(_) => ("uint8_t mode, ", "mode, "),
-            None => ("", ""),
-        };
         let fused = self.fused_premises();
         let pd = self.pd;
         if fused.is_some() {
@@ -400,7 +401,7 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
             let hs: Vec<String> = (0..r).map(|i| format!("h{i}")).collect();
             let _ = writeln!(
                 b,
-                "        /* Rule weights (product t-norm, from 1 in the rule's term order), then\n           normalised. Degrees are +0 or in (0, 1], so weights are too: the runtime's\n           clamp of weights not > 0 and its finite test of the sum (<= {u}R) hold, and the\n           sum may start from the first weight (0 + h0 is h0). */\n        {real} {};\n        {real} sum;",
+                "        /* Rule weights (product t-norm, from 1 in the rule's term order), then\n           normalised. Degrees are +0 or in (0, 1], so weights are too: the runtime's\n           clamp of weights not > 0 and its finite test of the sum (<= {u}R) hold, and\n           the sum may start from the first weight (0 + h0 is h0). */\n        {real} {};\n        {real} sum;",
                 hs.join(", ")
             );
             for (i, rule) in t.factored.rules.iter().enumerate() {
@@ -445,9 +446,23 @@ static {real} {p}edge_ratio({real} p, {real} q, {real} r, {real} s) {{
         }
         self.straight_blend(&mut b);
         b.push_str("    }\n    s->flags = flags;\n");
+        self.step_functions(&b, fused.is_some())
+    }
+
+    /// The step functions around body `b` (of the runtime's step): with
+    /// `fused` a `static` `<name>_step_core` both steps call, else
+    /// `<name>_step_with_premises` and a `<name>_step` calling it.
+    fn step_functions(&self, b: &str, fused: bool) -> String {
+        let (p, u) = (&self.p, &self.u);
+        let real = format!("{u}REAL");
+        let pd = self.pd;
+        let (mode_param, mode_arg) = match self.t.modes {
+            Some(_) => ("uint8_t mode, ", "mode, "),
+            None => ("", ""),
+        };
         let head = "/* One control step at x with premises z: the runtime's tsf_step_with_premises,\n   operation by operation, written out for this controller.";
-        match fused {
-            Some(_) => format!(
+        if fused {
+            format!(
                 r#"{head} {p}step and
    {p}step_with_premises share it: z is zin, or when zin is NULL
    z = L x computed here without L's exact-zero coefficients. For a finite x each z_k
@@ -466,8 +481,9 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
 }}
 
 "#
-            ),
-            None => format!(
+            )
+        } else {
+            format!(
                 r#"{head} */
 void {p}step_with_premises({p}t *s, {mode_param}const {real} x[{u}N], const {real} z[], {real} u[{u}M]) {{
 {b}}}
@@ -479,7 +495,7 @@ void {p}step({p}t *s, {mode_param}const {real} x[{u}N], {real} u[{u}M]) {{
 }}
 
 "#
-            ),
+            )
         }
     }
 
