@@ -241,6 +241,11 @@ pub fn check(
         .fold(max_relative_rounding, f64::max);
     let round = |v: f64| stored(v, precision);
     lmis.extend(loop_margins(&stored_model, design, &gains, Some(&round))?);
+    lmis.extend(super::output::margins(
+        &stored_model,
+        design,
+        Some((&gains, &round)),
+    )?);
     let cert = summarize(lmis);
     let certified = cert.ok && membership.holds;
     let worst_lmi = if cert.ok && !membership.holds {
