@@ -150,6 +150,7 @@ pub struct RegionOfAttraction {
     /// (x, e), e = x - x_hat (2n x 2n rows, U = P_aug), and the levels below
     /// are those of (x0, x0 - xhat0): xhat0 = 0 for the objective's x0, the
     /// scenario's `xhat0` (else 0) for the simulate block's.
+    #[serde(rename = "U")]
     pub u: Vec<Vec<f64>>,
     /// x0' U x0 for the objective's `for x0 = ...` (a certified containment).
     pub x0_level: Option<f64>,
@@ -670,7 +671,12 @@ fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttractio
     // The certified region E(P, c) as E(U, 1); an observer loop's is the
     // augmented E(P_aug, 1) on (x, e).
     let u = match observer {
-        Some(aug) if aug.bounded.as_ref().is_some_and(|b| b.bounds.saturation.is_some()) => {
+        Some(aug)
+            if aug
+                .bounded
+                .as_ref()
+                .is_some_and(|b| b.bounds.saturation.is_some()) =>
+        {
             aug.p.clone()
         }
         Some(_) => return None,

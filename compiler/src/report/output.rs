@@ -6,9 +6,9 @@
 use crate::model::TsModel;
 use crate::synth::observer::bounded::BoundedDesign;
 use crate::synth::observer::{ObserverDesign, OutputFeedback, PremiseSource, StaticOutputDesign};
-use tsf_lang::spec::InitialSet;
 use crate::util::matrix::rows;
 use serde::Serialize;
+use tsf_lang::spec::InitialSet;
 
 /// One rule's local model x' = A x + B u + D w.
 #[derive(Debug, Serialize, schemars::JsonSchema)]
@@ -81,6 +81,8 @@ pub struct AugmentedBoundsReport {
     /// The certified bound mu: ||u(t)|| <= mu on E(P_aug, 1), with
     /// [P_aug, K_j'; K_j, mu^2 I] >= 0, K_j = [F_j, -F_j].
     pub input_norm_bound: Option<f64>,
+    /// The output bound lambda: ||C_z x|| <= lambda on E(P_aug, 1).
+    pub output_norm_bound: Option<f64>,
     /// The generalized sector condition, with the saturation region.
     pub saturation: Option<AugmentedSectorReport>,
 }
@@ -102,14 +104,22 @@ pub struct AugmentedSectorReport {
 fn bounds_report(b: &BoundedDesign, n: usize) -> AugmentedBoundsReport {
     let sets = [
         b.bounds.input.as_ref().map(|i| &i.initial),
-        b.bounds.saturation.as_ref().and_then(|s| s.contain.as_ref()),
+        b.bounds
+            .saturation
+            .as_ref()
+            .and_then(|s| s.contain.as_ref()),
     ];
     let mut initial_points = Vec::new();
     let mut initial_ellipsoids = Vec::new();
     for set in sets.into_iter().flatten() {
         match set {
-            InitialSet::Point(x0) => initial_points.push(x0.clone()),
-            InitialSet::Ellipsoid(r) => initial_ellipsoids.push(rows(r)),
+            InitialSet::Point(x0) if !initial_points.contains(x0) => {
+                initial_points.push(x0.clone());
+            }
+            InitialSet::Ellipsoid(r) if !initial_ellipsoids.contains(&rows(r)) => {
+                initial_ellipsoids.push(rows(r));
+            }
+            _ => {}
         }
     }
     AugmentedBoundsReport {
@@ -118,9 +128,12 @@ fn bounds_report(b: &BoundedDesign, n: usize) -> AugmentedBoundsReport {
         initial_points,
         initial_ellipsoids,
         input_norm_bound: b.mu,
+        output_norm_bound: b.bounds.output.as_ref().map(|o| o.lambda),
         saturation: b.bounds.saturation.as_ref().map(|s| AugmentedSectorReport {
             levels: s.levels.clone(),
-            t: b.t.as_ref().map_or_else(Vec::new, |t| t.diagonal().iter().copied().collect()),
+            t: b.t
+                .as_ref()
+                .map_or_else(Vec::new, |t| t.diagonal().iter().copied().collect()),
             h: b.h.iter().map(rows).collect(),
         }),
     }

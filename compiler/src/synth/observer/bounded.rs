@@ -32,6 +32,9 @@
 //! - input bound: [X, X K_j'; K_j X, mu^2 I] >= 0 for every rule j, i.e.
 //!   ||K_j xi|| <= mu on E(P, 1), hence ||u|| <= mu there (the blend is a
 //!   convex combination);
+//! - output bound: [X, X Cbar_j'; Cbar_j X, lambda^2 I] >= 0,
+//!   Cbar_j = [C_z + E_z F_j, -E_z F_j], i.e. ||z|| <= lambda on E(P, 1)
+//!   (with z = theta it keeps the certified set inside the rules' range);
 //! - the initial set: the observer starts from x_hat(0) = 0 (the generated
 //!   code's `INIT`), so xi(0) = (x0, x0) = E x0 with E = [I; I]: for a point
 //!   [1, xi0'; xi0, X] >= 0, for an ellipsoid {x0' R x0 <= 1}
@@ -53,7 +56,7 @@ use tsf_lmi::{Expr, LmiError, Problem, Relation, Var};
 pub const X_AUG: &str = "X_aug";
 /// S = T^-1 of the generalized sector condition (m x m, diagonal).
 pub const S_AUG: &str = "S_aug";
-/// mu^2 of the input bound when minimized.
+/// nu = mu^2 / sigma^2 of the input bound when minimized ([`mu_scale`]).
 pub const MU2_AUG: &str = "mu2_aug";
 
 /// A minimized input bound is certified this much (relative) above the
@@ -83,11 +86,28 @@ pub struct SectorRegion {
     pub contain: Option<InitialSet>,
 }
 
+/// An output bound ||C_z x|| <= lambda on E(P, 1) (fixed lambda): it keeps
+/// the certified set inside a region of the state, e.g. the rules' range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputBound {
+    /// C_z of the output (rows x n).
+    pub c: DMatrix<f64>,
+    /// E_z of the output (rows x m): z = C_z x + E_z u.
+    pub e: DMatrix<f64>,
+    /// The spec's lambda.
+    pub lambda: f64,
+    /// The initial states (with x_hat(0) = 0).
+    pub initial: InitialSet,
+}
+
 /// What the bounded certificate imposes beyond the decay rate.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Bounds {
     /// `objective input_norm`.
     pub input: Option<InputBound>,
+    /// `objective output_norm(z) <= lambda` (the checker refuses a
+    /// minimized one with `control observer_based`).
+    pub output: Option<OutputBound>,
     /// `objective saturation region` (asked for, or implied by `saturate`
     /// levels without an input bound).
     pub saturation: Option<SectorRegion>,
@@ -112,6 +132,18 @@ impl Bounds {
                         initial: initial.clone(),
                     });
                 }
+                Objective::OutputNorm {
+                    output,
+                    target: Target::Fixed(lambda),
+                    initial,
+                } => {
+                    b.output = Some(OutputBound {
+                        c: spec.outputs[*output].c.clone(),
+                        e: spec.outputs[*output].e.clone(),
+                        lambda: *lambda,
+                        initial: initial.clone(),
+                    });
+                }
                 Objective::SaturationRegion { contain } => {
                     asked = true;
                     b.saturation = spec.saturation.clone().map(|levels| SectorRegion {
@@ -128,7 +160,7 @@ impl Bounds {
                 contain: None,
             });
         }
-        (b.input.is_some() || b.saturation.is_some()).then_some(b)
+        (b.input.is_some() || b.output.is_some() || b.saturation.is_some()).then_some(b)
     }
 
     /// The initial sets the region E(P, 1) must contain.
@@ -136,6 +168,7 @@ impl Bounds {
         let mut sets: Vec<&InitialSet> = Vec::new();
         let asked = [
             self.input.as_ref().map(|i| &i.initial),
+            self.output.as_ref().map(|o| &o.initial),
             self.saturation.as_ref().and_then(|s| s.contain.as_ref()),
         ];
         for set in asked.into_iter().flatten() {
@@ -162,6 +195,30 @@ pub fn initial_map(n: usize) -> DMatrix<f64> {
     e.view_mut((0, 0), (n, n)).fill_with_identity();
     e.view_mut((n, 0), (n, n)).fill_with_identity();
     e
+}
+
+/// The scale sigma of a minimized input bound (mu^2 = sigma^2 nu): the
+/// command max_j ||F_j|| reaches at the largest initial point (1 without
+/// points), at least 1e-6.
+pub fn mu_scale(bounds: &Bounds, f: &[DMatrix<f64>], n: usize) -> f64 {
+    let radius = bounds
+        .initial_sets()
+        .iter()
+        .map(|set| match set {
+            InitialSet::Point(x0) => DMatrix::from_column_slice(n, 1, x0).norm(),
+            InitialSet::Ellipsoid(r) => r
+                .clone()
+                .symmetric_eigen()
+                .eigenvalues
+                .min()
+                .max(f64::MIN_POSITIVE)
+                .recip()
+                .sqrt(),
+        })
+        .fold(0.0, f64::max);
+    let gain = f.iter().map(|fj| fj.norm()).fold(0.0, f64::max);
+    let scale = gain * if radius > 0.0 { radius } else { 1.0 };
+    scale.max(1e-6)
 }
 
 /// The bounded analysis problem and what the certificate needs of it.
@@ -270,13 +327,14 @@ pub fn problem(
             let k = command_map(fj);
             for (ch, level) in sat.levels.iter().enumerate() {
                 let sel = row_selector(ch, m);
-                // Row s of K_j X - Z_j (1 x 2n).
-                let row = Expr::var(x).left_mul(&(&sel * &k))?.sub(Expr::product(
-                    &sel,
-                    z[j],
-                    &DMatrix::identity(2 * n, 2 * n),
-                )?)?;
-                let rhs = Expr::constant(&DMatrix::from_element(1, 1, level * level))?;
+                // Row s of K_j X - Z_j (1 x 2n), divided by u_s: the block
+                // [X, row'/u_s; *, 1] >= 0 is the condition's congruence by
+                // diag(I, 1/u_s), scaled for the solver.
+                let row = Expr::var(x)
+                    .left_mul(&(&sel * &k))?
+                    .sub(Expr::product(&sel, z[j], &DMatrix::identity(2 * n, 2 * n))?)?
+                    .scale(1.0 / level)?;
+                let rhs = Expr::identity(1);
                 let name = format!("augmented linear region [{},{}]", j + 1, ch + 1);
                 nonstrict_psd(
                     &mut problem,
@@ -289,14 +347,39 @@ pub fn problem(
         }
     }
     if let Some(input) = &bounds.input {
-        let fixed = input.mu.map_or(0.0, |mu| mu * mu);
+        // A fixed bound as [X, X K_j'/mu; *, I] >= 0 (scaled as the region).
+        let (fixed, by) = input.mu.map_or((0.0, 1.0), |mu| (1.0, mu));
         for (j, fj) in f.iter().enumerate() {
-            let kx = Expr::var(x).left_mul(&command_map(fj))?;
+            // A minimized one as [X, X K_j'/sigma; *, nu I] >= 0 with
+            // mu^2 = sigma^2 nu (sigma from [`mu_scale`], nu of order 1).
+            let by = if mu2.is_some() {
+                mu_scale(bounds, f, n)
+            } else {
+                by
+            };
+            let kx = Expr::var(x).left_mul(&(command_map(fj) / by))?;
             let block = Expr::sym_blocks(vec![
                 vec![Some(Expr::var(x)), Some(kx.transpose())],
                 vec![None, Some(scalar_times_identity(mu2, fixed, m)?)],
             ])?;
             let name = format!("augmented input norm [{}]", j + 1);
+            nonstrict_psd(&mut problem, &mut nonstrict, &name, block, eps)?;
+        }
+    }
+    if let Some(out) = &bounds.output {
+        let rows = out.c.nrows();
+        let level = DMatrix::identity(rows, rows);
+        for (j, fj) in f.iter().enumerate() {
+            // z = C_z x + E_z u = [C_z + E_z F_j, -E_z F_j] xi under rule j.
+            let mut cbar = &out.e * command_map(fj);
+            let mut cx_part = cbar.view_mut((0, 0), (rows, n));
+            cx_part += &out.c;
+            let cx = Expr::var(x).left_mul(&(cbar / out.lambda))?;
+            let block = Expr::sym_blocks(vec![
+                vec![Some(Expr::var(x)), Some(cx.transpose())],
+                vec![None, Some(Expr::constant(&level)?)],
+            ])?;
+            let name = format!("augmented output norm [{}]", j + 1);
             nonstrict_psd(&mut problem, &mut nonstrict, &name, block, eps)?;
         }
     }
@@ -338,10 +421,53 @@ fn asked(bounds: &Bounds) -> String {
             None => "a minimized input bound".to_string(),
         });
     }
+    if let Some(o) = &bounds.output {
+        parts.push(format!("the output bound {}", o.lambda));
+    }
     if bounds.saturation.is_some() {
         parts.push("the saturation region".to_string());
     }
     parts.join(" and ")
+}
+
+/// The least input bound the gains admit with the other bounds (the input
+/// bound minimized), when the solver finds one (solved, or almost: the
+/// certificate checks the fixed bound made of it).
+fn least_input_bound(
+    runner: &mut crate::synth::Runner<'_>,
+    (f, l): (&[DMatrix<f64>], &[DMatrix<f64>]),
+    c: &DMatrix<f64>,
+    alpha: f64,
+    bounds: &Bounds,
+) -> Result<Option<f64>, crate::synth::SynthError> {
+    use tsf_lmi::SolveStatus;
+    let model = runner.model;
+    let mut loose = bounds.clone();
+    if let Some(input) = &mut loose.input {
+        input.mu = None;
+    }
+    let built = problem(model, (f, l), c, alpha, &loose, runner.settings.eps).map_err(|e| {
+        crate::synth::SynthError::Internal(format!(
+            "internal error: bounded augmented problem: {e}"
+        ))
+    })?;
+    let sol = runner.solve(
+        &built.problem,
+        "augmented observer-loop input bound (minimized)",
+    )?;
+    if !matches!(sol.status, SolveStatus::Solved | SolveStatus::AlmostSolved) {
+        return Ok(None);
+    }
+    let Some(v) = built.mu2 else {
+        return Ok(None);
+    };
+    // An almost-solved iterate only proposes the level: the fixed bound made
+    // of it is solved again and certified.
+    Ok(sol
+        .assignment_any_status()
+        .value(v)
+        .ok()
+        .map(|nu| mu_scale(&loose, f, model.n) * nu[(0, 0)].max(0.0).sqrt()))
 }
 
 /// Solves the bounded analysis SDP; refused (not certified) when infeasible,
@@ -363,20 +489,12 @@ pub fn solve(
     // MU_SLACK above the least: the optimum lies on the boundary, where the
     // solver's residuals (about 1e-7 at mu^2 ~ 1e5) break the certificate.
     let mut bounds = bounds.clone();
-    if bounds.input.as_ref().is_some_and(|i| i.mu.is_none()) {
-        let built =
-            problem(model, (f, l), c, alpha, &bounds, runner.settings.eps).map_err(internal)?;
-        let sol = runner.solve(
-            &built.problem,
-            "augmented observer-loop input bound (minimized)",
-        )?;
-        if let (SolveStatus::Solved, Some(v), Some(input)) =
-            (sol.status, built.mu2, &mut bounds.input)
-        {
-            let mu2 = sol
-                .value(v)
-                .map_err(|e| SynthError::Internal(format!("internal error: {e}")))?;
-            input.mu = Some(mu2[(0, 0)].max(0.0).sqrt() * (1.0 + MU_SLACK));
+    if let Some(input) = &bounds.input {
+        if input.mu.is_none() {
+            let least = least_input_bound(runner, (f, l), c, alpha, &bounds)?;
+            if let (Some(mu), Some(input)) = (least, &mut bounds.input) {
+                input.mu = Some(mu * (1.0 + MU_SLACK));
+            }
         }
     }
     let bounds = &bounds;
@@ -386,26 +504,9 @@ pub fn solve(
         let mut achievable = vec![
             "lower the observer's decay rate (`control observer_based(decay = ..)`: a fast observer peaks from x_hat(0) = 0) or the controller's `decay_rate`, or shrink the initial set".to_string(),
         ];
-        if let Some(InputBound {
-            mu: Some(_),
-            initial,
-        }) = &bounds.input
-        {
-            let mut loose = bounds.clone();
-            loose.input = Some(InputBound {
-                mu: None,
-                initial: initial.clone(),
-            });
-            let rebuilt =
-                problem(model, (f, l), c, alpha, &loose, runner.settings.eps).map_err(internal)?;
-            let again = runner.solve(
-                &rebuilt.problem,
-                "augmented observer-loop bounds problem (input bound minimized)",
-            )?;
-            if let (SolveStatus::Solved, Some(v)) = (again.status, rebuilt.mu2) {
-                if let Ok(mu2) = again.value(v) {
-                    achievable.insert(0, format!("these gains certify ||u|| <= {:.6} on the augmented loop: `objective input_norm(u) <= {:.6} ...` (or minimize)", mu2[(0, 0)].max(0.0).sqrt(), mu2[(0, 0)].max(0.0).sqrt() * 1.01));
-                }
+        if bounds.input.as_ref().is_some_and(|i| i.mu.is_some()) {
+            if let Some(mu) = least_input_bound(runner, (f, l), c, alpha, bounds)? {
+                achievable.insert(0, format!("these gains certify ||u|| <= {mu:.6} on the augmented loop: `objective input_norm(u) <= {:.6} ...` (or minimize)", mu * (1.0 + 10.0 * MU_SLACK)));
             }
         }
         return Err(SynthError::Infeasible {
@@ -442,7 +543,9 @@ pub fn solve(
     };
     let mu = match &bounds.input {
         Some(InputBound { mu: Some(mu), .. }) => Some(*mu),
-        Some(InputBound { mu: None, .. }) => Some(get(MU2_AUG)?[(0, 0)].max(0.0).sqrt()),
+        Some(InputBound { mu: None, .. }) => {
+            Some(mu_scale(bounds, f, model.n) * get(MU2_AUG)?[(0, 0)].max(0.0).sqrt())
+        }
         None => None,
     };
     let (t, h) = match &bounds.saturation {

@@ -122,6 +122,12 @@ fn bounded_notes(d: &mut crate::synth::Design, b: &bounded::BoundedDesign) {
             "observer-based input bound: ||u(t)|| <= {mu:.6} for t >= 0 from the initial set with x_hat(0) = 0, certified on the augmented loop (x, e) with the shipped F_j, L_i (E(P_aug, 1) invariant, P_aug full)"
         ));
     }
+    if let Some(o) = &b.bounds.output {
+        d.notes.push(format!(
+            "observer-based output bound: ||z(t)|| <= {} for t >= 0 on E(P_aug, 1), from the initial set with x_hat(0) = 0",
+            o.lambda
+        ));
+    }
     if let Some(s) = &b.bounds.saturation {
         d.notes.push(format!(
             "observer-based saturation region: E(P_aug, 1) on (x, e) is invariant for the saturated loop (levels {:?}, the observer fed the saturated command) and lies where the generalized sector condition holds{}",

@@ -3,8 +3,9 @@
 //! premises on measured states (every state component a premise reads lies
 //! in the row space of C); for `static_output` a C of full row rank; for
 //! `observer_based` the objectives the augmented loop's certificate covers
-//! (stability, decay rate; H-inf, an input bound and the saturation region
-//! on the continuous loop only, H-inf not with the last two). Neither is
+//! (stability, decay rate; H-inf, an input bound, a fixed output bound and
+//! the saturation region on the continuous loop only, H-inf not with the
+//! bounds). Neither is
 //! combined with a trigger other than `periodic` (the sampled loop;
 //! `observer_based` there without `saturate`), modes, an adaptive block, a
 //! fuzzy Lyapunov function, given gains or a plant region.
@@ -49,9 +50,9 @@ impl Checker<'_> {
     }
 
     /// The objectives the augmented loop's certificate covers: stability, a
-    /// decay rate, H-inf, an input bound and the saturation region on the
-    /// continuous loop (H-inf not together with the bounds); stability and a
-    /// decay rate on the sampled loop.
+    /// decay rate, H-inf, an input bound, a fixed output bound and the
+    /// saturation region on the continuous loop (H-inf not together with the
+    /// bounds); stability and a decay rate on the sampled loop.
     fn observer_objectives(&mut self, spec: &Spec, at: Span) {
         let sampled = spec
             .trigger
@@ -61,20 +62,38 @@ impl Checker<'_> {
             || spec.objectives.iter().any(|o| {
                 matches!(
                     o.node.kind(),
-                    ObjectiveKind::InputNorm | ObjectiveKind::SaturationRegion
+                    ObjectiveKind::InputNorm
+                        | ObjectiveKind::OutputNorm
+                        | ObjectiveKind::SaturationRegion
                 )
             });
         for o in &spec.objectives {
             let k = o.node.kind();
             let continuous_only = matches!(
                 k,
-                ObjectiveKind::Hinf | ObjectiveKind::InputNorm | ObjectiveKind::SaturationRegion
+                ObjectiveKind::Hinf
+                    | ObjectiveKind::InputNorm
+                    | ObjectiveKind::OutputNorm
+                    | ObjectiveKind::SaturationRegion
+            );
+            let minimized_output = matches!(
+                o.node,
+                crate::spec::Objective::OutputNorm {
+                    target: crate::spec::Target::Optimize,
+                    ..
+                }
             );
             if continuous_only && sampled {
                 self.err(
                     Diagnostic::error(o.span, format!("`objective {}` is not covered for the sampled `control observer_based` loop", k.keyword()))
                         .with_secondary(at, "the observer-based controller is declared here")
-                        .with_help("the sampled loop's certificate covers stability and a decay rate; H-inf, the input bound and the saturation region are certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
+                        .with_help("the sampled loop's certificate covers stability and a decay rate; H-inf, the input and output bounds and the saturation region are certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
+                );
+            } else if minimized_output {
+                self.err(
+                    Diagnostic::error(o.span, "`objective output_norm` needs a fixed bound for `control observer_based`")
+                        .with_secondary(at, "the observer-based controller is declared here")
+                        .with_help("write the bound, e.g. `objective output_norm(z) <= 1.0 for x0 = ...;` (the augmented loop's output bound keeps its certified set inside a region; it is not minimized in this build)"),
                 );
             } else if k == ObjectiveKind::Hinf && bounded {
                 self.err(
@@ -88,7 +107,7 @@ impl Checker<'_> {
                 self.err(
                     Diagnostic::error(o.span, format!("`objective {}` is not covered for `control observer_based`", k.keyword()))
                         .with_secondary(at, "the observer-based controller is declared here")
-                        .with_help("the augmented loop (x, e) is certified for stability, a decay rate, an H-inf gain, an input bound and the saturation region in this build (docs/limits.md); use `control static_output;` or state feedback for the other objectives"),
+                        .with_help("the augmented loop (x, e) is certified for stability, a decay rate, an H-inf gain, input and output bounds and the saturation region in this build (docs/limits.md); use `control static_output;` or state feedback for the other objectives"),
                 );
             }
         }
