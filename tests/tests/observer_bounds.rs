@@ -231,7 +231,11 @@ fn input_bound_spec() -> String {
             "objective output_norm(th) <= thmax for x0 = [25 * pi() / 180, 0];",
             "objective output_norm(th) <= thmax for x0 = [15 * pi() / 180, 0];",
         );
-    assert_eq!(out.matches("input_norm").count(), 1, "the shipped spec's lines");
+    assert_eq!(
+        out.matches("input_norm").count(),
+        1,
+        "the shipped spec's lines"
+    );
     assert_eq!(out.matches("x0 = [15 * pi() / 180, 0]").count(), 2);
     assert!(!out.contains("u saturate"), "the actuator limit removed");
     out

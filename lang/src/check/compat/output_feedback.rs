@@ -285,12 +285,37 @@ mod tests {
         let src = format!(
             "{PENDULUM}measure y = th;\ncontrol observer_based;\nobjective input_norm(u) <= 5 for x0 = [0.1, 0];\n"
         );
-        let (m, at) = only_error_of(&src);
+        valid(&src);
+        let (m, at) = only_error_of(&format!("{src}trigger periodic {{ every = 0.01; }}\n"));
         assert_eq!(
             m,
-            "`objective input_norm` is not covered for `control observer_based`"
+            "`objective input_norm` is not covered for the sampled `control observer_based` loop"
         );
         assert!(at.starts_with("objective input_norm"), "{at}");
+        let (m, at) = only_error_of(&format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\ndisturbance d; D = [0; 1]; output z = th;\nobjective linf(d -> z) <= 5;\n"
+        ));
+        assert_eq!(
+            m,
+            "`objective linf` is not covered for `control observer_based`"
+        );
+        assert!(at.starts_with("objective linf"), "{at}");
+        let (m, at) = only_error_of(&format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\noutput z = th;\nobjective output_norm(z) minimize for x0 = [0.1, 0];\n"
+        ));
+        assert_eq!(
+            m,
+            "`objective output_norm` needs a fixed bound for `control observer_based`"
+        );
+        assert!(at.starts_with("objective output_norm"), "{at}");
+        let (m, at) = only_error_of(&format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\ndisturbance d; D = [0; 1]; output z = th;\nobjective hinf(d -> z) minimize;\nobjective saturation region;\n"
+        ).replace("input u;", "input u saturate 50;"));
+        assert!(
+            m.starts_with("`objective hinf` is not combined with an input bound or saturation"),
+            "{m}"
+        );
+        assert!(at.starts_with("objective hinf"), "{at}");
         let src = format!(
             "{PENDULUM}measure y = th;\ncontrol static_output;\ntrigger jittered {{ every = 0.01; jitter = 0.001; }}\n"
         );
