@@ -10,7 +10,9 @@
 //!   He(P2 A_i - N_i C) + 2 alpha_o P2 < 0 ([`gains`]); the loop is then
 //!   certified on the augmented state (x, e), e = x - x_hat, by an analysis
 //!   SDP in P_aug = diag(P1, Pe) under the spec's relaxation and decay rate
-//!   ([`augmented`]).
+//!   ([`augmented`]); with an input bound, a fixed output bound or the
+//!   saturation region, by an analysis SDP in X = P_aug^-1 (full) that adds
+//!   them ([`bounded`]).
 //! - Static output feedback u = sum_j h_j K_j y (Crusius & Trofino 1999,
 //!   "Sufficient LMI conditions for output feedback control problems"):
 //!   M C = C X and M_j = N_j C added to the core problem, K_j = N_j M^-1
