@@ -31,8 +31,11 @@ struct Data {
     /// The output bound on theta.
     lambda: f64,
     /// Levels, T (diagonal), H_j.
-    sector: Option<(Vec<f64>, DMatrix<f64>, Vec<DMatrix<f64>>)>,
+    sector: Option<Sector>,
 }
+
+/// The sector condition's data: levels, T (diagonal), H_j.
+type Sector = (Vec<f64>, DMatrix<f64>, Vec<DMatrix<f64>>);
 
 fn data(report: &Value) -> Data {
     let locals = report["local_models"].as_array().expect("local_models");

@@ -41,7 +41,7 @@ pub struct AugmentedDesign {
     pub hinf_gamma: Option<f64>,
     /// The input bound and saturation region's certificate, when the spec
     /// asks for them ([`super::bounded`]).
-    pub bounded: Option<super::bounded::BoundedDesign>,
+    pub bounded: Option<Box<super::bounded::BoundedDesign>>,
 }
 
 /// The augmented problem and what the certificate needs of it.

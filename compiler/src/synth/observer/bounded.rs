@@ -565,12 +565,12 @@ pub fn solve(
         values,
         reductions: built.reductions,
         hinf_gamma: None,
-        bounded: Some(BoundedDesign {
+        bounded: Some(Box::new(BoundedDesign {
             bounds: bounds.clone(),
             x,
             mu,
             t,
             h,
-        }),
+        })),
     })
 }
