@@ -37,6 +37,7 @@ mod newcomer;
 mod nonlinear_region;
 mod objectives;
 mod observer;
+mod observer_bounds;
 mod observer_code;
 mod observer_drift;
 mod observer_hinf;

@@ -157,7 +157,7 @@ pub fn certify(model: &TsModel, design: &Design) -> Result<Certificate, SynthErr
     // the design's gains (the ones emitted), not a copy.
     lmis.extend(loop_margins(model, design, &design.gains, None)?);
     lmis.extend(fuzzy_region(design));
-    lmis.extend(output::margins(model, design)?);
+    lmis.extend(output::margins(model, design, None)?);
     let mut cert = summarize(lmis);
     if cert.ok {
         let stored = stored::check(model, design, &built)?;

@@ -4,7 +4,8 @@
 //! and a bound on the arithmetic of membership evaluation, normalization and
 //! blending in that precision (docs/precision.md).
 //!
-//! Stored quantities: the gains F_j, the saturation levels, and for a sensor
+//! Stored quantities: the gains F_j, the saturation levels, an observer's
+//! gains L_i (its conditions rebuilt by `output.rs`), and for a sensor
 //! module the trigger weight Upsilon, the threshold ceiling nu and the
 //! sampling bounds. Generated Rust and C print f64 literals in shortest
 //! round-trip form, so `precision f64` stores every value exactly; with
@@ -241,6 +242,11 @@ pub fn check(
         .fold(max_relative_rounding, f64::max);
     let round = |v: f64| stored(v, precision);
     lmis.extend(loop_margins(&stored_model, design, &gains, Some(&round))?);
+    lmis.extend(super::output::margins(
+        &stored_model,
+        design,
+        Some((&gains, &round)),
+    )?);
     let cert = summarize(lmis);
     let certified = cert.ok && membership.holds;
     let worst_lmi = if cert.ok && !membership.holds {

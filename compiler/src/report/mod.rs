@@ -146,6 +146,10 @@ pub struct Timings {
 #[derive(Debug, Serialize, schemars::JsonSchema)]
 pub struct RegionOfAttraction {
     /// U = P / c (n x n rows): the certified region E(P, c) is {x : x' U x <= 1}.
+    /// For `control observer_based` the region is on the augmented state
+    /// (x, e), e = x - x_hat (2n x 2n rows, U = P_aug), and the levels below
+    /// are those of (x0, x0 - xhat0): xhat0 = 0 for the objective's x0, the
+    /// scenario's `xhat0` (else 0) for the simulate block's.
     #[serde(rename = "U")]
     pub u: Vec<Vec<f64>>,
     /// x0' U x0 for the objective's `for x0 = ...` (a certified containment).
@@ -660,19 +664,49 @@ fn status_of(
 /// whether it contains the initial states of the objective and the scenario.
 fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttraction> {
     let sat = d.plan.saturation()?;
-    let (p, c) = d.certified_region()?;
-    // The certified region E(P, c) as E(U, 1).
-    let u = p / c;
-    let p = &u;
-    let level = |x0: &[f64]| {
-        let x0 = nalgebra::DVector::from_column_slice(x0);
-        (x0.transpose() * p * &x0)[(0, 0)]
-    };
-    let objective_x0 = match &sat.contain {
-        Some(tsf_lang::spec::InitialSet::Point(x0)) => Some(level(x0)),
+    let observer = match &d.output {
+        Some(crate::synth::observer::OutputFeedback::Observer(o)) => Some(&o.augmented),
         _ => None,
     };
-    let scenario = model.spec.simulate.as_ref().map(|sim| level(&sim.x0));
+    // The certified region E(P, c) as E(U, 1); an observer loop's is the
+    // augmented E(P_aug, 1) on (x, e).
+    let u = match observer {
+        Some(aug)
+            if aug
+                .bounded
+                .as_ref()
+                .is_some_and(|b| b.bounds.saturation.is_some()) =>
+        {
+            aug.p.clone()
+        }
+        Some(_) => return None,
+        None => {
+            let (p, c) = d.certified_region()?;
+            p / c
+        }
+    };
+    let p = &u;
+    let level = |x0: &[f64], xhat0: &[f64]| {
+        let xi: Vec<f64> = match observer {
+            Some(_) => x0
+                .iter()
+                .copied()
+                .chain(x0.iter().zip(xhat0).map(|(x, xh)| x - xh))
+                .collect(),
+            None => x0.to_vec(),
+        };
+        let xi = nalgebra::DVector::from_column_slice(&xi);
+        (xi.transpose() * p * &xi)[(0, 0)]
+    };
+    let zero = vec![0.0; model.n];
+    let objective_x0 = match &sat.contain {
+        Some(tsf_lang::spec::InitialSet::Point(x0)) => Some(level(x0, &zero)),
+        _ => None,
+    };
+    let scenario = model.spec.simulate.as_ref().map(|sim| {
+        let xhat0 = sim.xhat0.as_ref().map_or(&zero, |x| &x.node);
+        level(&sim.x0, xhat0)
+    });
     Some(RegionOfAttraction {
         u: rows(p),
         x0_level: objective_x0,

@@ -4,9 +4,11 @@
 //! certificate's P) and `static_output` (C and the gains K_j).
 
 use crate::model::TsModel;
+use crate::synth::observer::bounded::BoundedDesign;
 use crate::synth::observer::{ObserverDesign, OutputFeedback, PremiseSource, StaticOutputDesign};
 use crate::util::matrix::rows;
 use serde::Serialize;
+use tsf_lang::spec::InitialSet;
 
 /// One rule's local model x' = A x + B u + D w.
 #[derive(Debug, Serialize, schemars::JsonSchema)]
@@ -53,9 +55,88 @@ pub struct ObserverGain {
 pub struct AugmentedReport {
     /// The decay rate certified for (x, e).
     pub decay_rate: f64,
-    /// P_aug = diag(P1, Pe) (2n x 2n rows): V = [x; e]' P_aug [x; e].
+    /// P_aug (2n x 2n rows): V = [x; e]' P_aug [x; e]; diag(P1, Pe), or
+    /// full (P_aug = X^-1) with `bounds`.
     #[serde(rename = "P")]
     pub p: Vec<Vec<f64>>,
+    /// The input bound and saturation region certified on (x, e), if asked for.
+    pub bounds: Option<AugmentedBoundsReport>,
+}
+
+/// The input bound and saturation region of an observer-based loop: what
+/// re-checking them needs (module `synth/observer/bounded.rs`).
+#[derive(Debug, Serialize, schemars::JsonSchema)]
+pub struct AugmentedBoundsReport {
+    /// The initial estimate the initial sets assume (0, the generated
+    /// code's `INIT`): xi(0) = (x0, x0 - xhat0).
+    pub xhat0: Vec<f64>,
+    /// X = P_aug^-1 as solved (2n x 2n rows); the conditions are linear in X.
+    #[serde(rename = "X")]
+    pub x: Vec<Vec<f64>>,
+    /// Initial points x0 whose (x0, x0) E(P_aug, 1) contains.
+    pub initial_points: Vec<Vec<f64>>,
+    /// Matrices R of initial ellipsoids {x0' R x0 <= 1} whose image (x0, x0)
+    /// E(P_aug, 1) contains.
+    pub initial_ellipsoids: Vec<Vec<Vec<f64>>>,
+    /// The certified bound mu: ||u(t)|| <= mu on E(P_aug, 1), with
+    /// [P_aug, K_j'; K_j, mu^2 I] >= 0, K_j = [F_j, -F_j].
+    pub input_norm_bound: Option<f64>,
+    /// The output bound lambda: ||C_z x|| <= lambda on E(P_aug, 1).
+    pub output_norm_bound: Option<f64>,
+    /// The generalized sector condition, with the saturation region.
+    pub saturation: Option<AugmentedSectorReport>,
+}
+
+/// The sector condition's data on (x, e): psi' T (psi - H_j xi) <= 0 where
+/// |(K_j - H_j)_s xi| <= u_s.
+#[derive(Debug, Serialize, schemars::JsonSchema)]
+pub struct AugmentedSectorReport {
+    /// The saturation levels u_s.
+    pub levels: Vec<f64>,
+    /// The diagonal of T (T = S^-1).
+    #[serde(rename = "T")]
+    pub t: Vec<f64>,
+    /// H_j = Z_j X^-1 (m x 2n rows), by controller rule.
+    #[serde(rename = "H")]
+    pub h: Vec<Vec<Vec<f64>>>,
+}
+
+fn bounds_report(b: &BoundedDesign, n: usize) -> AugmentedBoundsReport {
+    let sets = [
+        b.bounds.input.as_ref().map(|i| &i.initial),
+        b.bounds
+            .saturation
+            .as_ref()
+            .and_then(|s| s.contain.as_ref()),
+    ];
+    let mut initial_points = Vec::new();
+    let mut initial_ellipsoids = Vec::new();
+    for set in sets.into_iter().flatten() {
+        match set {
+            InitialSet::Point(x0) if !initial_points.contains(x0) => {
+                initial_points.push(x0.clone());
+            }
+            InitialSet::Ellipsoid(r) if !initial_ellipsoids.contains(&rows(r)) => {
+                initial_ellipsoids.push(rows(r));
+            }
+            _ => {}
+        }
+    }
+    AugmentedBoundsReport {
+        xhat0: vec![0.0; n],
+        x: rows(&b.x),
+        initial_points,
+        initial_ellipsoids,
+        input_norm_bound: b.mu,
+        output_norm_bound: b.bounds.output.as_ref().map(|o| o.lambda),
+        saturation: b.bounds.saturation.as_ref().map(|s| AugmentedSectorReport {
+            levels: s.levels.clone(),
+            t: b.t
+                .as_ref()
+                .map_or_else(Vec::new, |t| t.diagonal().iter().copied().collect()),
+            h: b.h.iter().map(rows).collect(),
+        }),
+    }
 }
 
 /// An observer-based design.
@@ -124,6 +205,11 @@ fn observer(model: &TsModel, o: &ObserverDesign) -> ObserverReport {
         augmented: AugmentedReport {
             decay_rate: o.augmented.alpha,
             p: rows(&o.augmented.p),
+            bounds: o
+                .augmented
+                .bounded
+                .as_ref()
+                .map(|b| bounds_report(b, model.n)),
         },
     }
 }

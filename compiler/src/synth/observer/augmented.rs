@@ -29,7 +29,8 @@ pub const PE: &str = "Pe_aug";
 pub struct AugmentedDesign {
     /// The decay rate alpha imposed on the augmented loop.
     pub alpha: f64,
-    /// P_aug = diag(P1, Pe) (2n x 2n).
+    /// P_aug (2n x 2n): diag(P1, Pe), or full with input bounds or the
+    /// saturation region ([`super::bounded`], P_aug = X^-1).
     pub p: DMatrix<f64>,
     /// Values of every variable of the solved problem.
     pub values: Vec<(String, DMatrix<f64>)>,
@@ -38,6 +39,9 @@ pub struct AugmentedDesign {
     /// The certified H-inf gain from (w, v) to the objective's output, with
     /// an H-inf objective ([`super::hinf`]).
     pub hinf_gamma: Option<f64>,
+    /// The input bound and saturation region's certificate, when the spec
+    /// asks for them ([`super::bounded`]).
+    pub bounded: Option<Box<super::bounded::BoundedDesign>>,
 }
 
 /// The augmented problem and what the certificate needs of it.
@@ -205,5 +209,6 @@ pub fn solve(
         values,
         reductions: built.reductions,
         hinf_gamma,
+        bounded: None,
     })
 }

@@ -10,13 +10,16 @@
 //!   He(P2 A_i - N_i C) + 2 alpha_o P2 < 0 ([`gains`]); the loop is then
 //!   certified on the augmented state (x, e), e = x - x_hat, by an analysis
 //!   SDP in P_aug = diag(P1, Pe) under the spec's relaxation and decay rate
-//!   ([`augmented`]).
+//!   ([`augmented`]); with an input bound, a fixed output bound or the
+//!   saturation region, by an analysis SDP in X = P_aug^-1 (full) that adds
+//!   them ([`bounded`]).
 //! - Static output feedback u = sum_j h_j K_j y (Crusius & Trofino 1999,
 //!   "Sufficient LMI conditions for output feedback control problems"):
 //!   M C = C X and M_j = N_j C added to the core problem, K_j = N_j M^-1
 //!   ([`static_output`]); the core's conditions then hold for F_j = K_j C.
 
 pub mod augmented;
+pub mod bounded;
 pub mod drift;
 pub mod gains;
 pub mod hinf;
@@ -110,6 +113,32 @@ pub fn default_observer_decay(controller: f64) -> f64 {
 /// controller's is 0 (plain stability).
 pub const MIN_OBSERVER_DECAY: f64 = 0.1;
 
+/// The notes of a bounded augmented certificate; its input bound replaces
+/// the state-feedback one in the report's objectives (the loop that ships
+/// reads x_hat).
+fn bounded_notes(d: &mut crate::synth::Design, b: &bounded::BoundedDesign) {
+    if let Some(mu) = b.mu {
+        d.achieved
+            .set(crate::synth::achieved::Quantity::InputNormBound, mu);
+        d.notes.push(format!(
+            "observer-based input bound: ||u(t)|| <= {mu:.6} for t >= 0 from the initial set with x_hat(0) = 0, certified on the augmented loop (x, e) with the shipped F_j, L_i (E(P_aug, 1) invariant, P_aug full)"
+        ));
+    }
+    if let Some(o) = &b.bounds.output {
+        d.notes.push(format!(
+            "observer-based output bound: ||z(t)|| <= {} for t >= 0 on E(P_aug, 1), from the initial set with x_hat(0) = 0",
+            o.lambda
+        ));
+    }
+    if let Some(s) = &b.bounds.saturation {
+        d.notes.push(format!(
+            "observer-based saturation region: E(P_aug, 1) on (x, e) is invariant for the saturated loop (levels {:?}, the observer fed the saturated command) and lies where the generalized sector condition holds{}",
+            s.levels,
+            if s.contain.is_some() { "; it contains the initial set with x_hat(0) = 0" } else { "" }
+        ));
+    }
+}
+
 /// The observer step of a `control observer_based` spec, after the core
 /// design `d` (its gains F_j): the observer gains at the observer's decay
 /// rate, then the augmented loop's certificate at the controller's decay
@@ -134,10 +163,20 @@ pub fn observe(
         .observer_decay
         .unwrap_or_else(|| default_observer_decay(alpha_c));
     let observer = gains::solve(runner, &measured.c, alpha_o)?;
-    let aug = augmented::solve(runner, &d.gains, &observer.gains, &measured.c, alpha_c)?;
+    let aug = match bounded::Bounds::of(&model.spec) {
+        Some(b) => bounded::solve(
+            runner,
+            (&d.gains, &observer.gains),
+            &measured.c,
+            alpha_c,
+            &b,
+        )?,
+        None => augmented::solve(runner, &d.gains, &observer.gains, &measured.c, alpha_c)?,
+    };
     d.notes.push(format!(
-        "observer-based: observer gains L_i designed at decay rate {alpha_o}{}; the augmented loop (x, e) is certified at decay rate {alpha_c} with V = x'P1 x + e'Pe e",
-        if model.spec.control.observer_decay.is_some() { "" } else { " (default: 3 times the controller's, at least 0.1)" }
+        "observer-based: observer gains L_i designed at decay rate {alpha_o}{}; the augmented loop (x, e) is certified at decay rate {alpha_c} with {}",
+        if model.spec.control.observer_decay.is_some() { "" } else { " (default: 3 times the controller's, at least 0.1)" },
+        if aug.bounded.is_some() { "V = [x; e]' P_aug [x; e], P_aug full" } else { "V = x'P1 x + e'Pe e" }
     ));
     if let Some(gamma) = aug.hinf_gamma {
         // The core design's gamma is the state-feedback loop's; the loop that
@@ -147,6 +186,9 @@ pub fn observe(
         d.notes.push(format!(
             "observer-based H-inf: ||z||_2 < {gamma:.6} (||w||_2^2 + ||v||_2^2)^(1/2) from x(0) = x_hat(0) = 0 (w the disturbance, v the measurement noise), certified on the augmented loop with the shipped F_j, L_i"
         ));
+    }
+    if let Some(b) = &aug.bounded {
+        bounded_notes(d, b);
     }
     d.output = Some(OutputFeedback::Observer(ObserverDesign {
         c: measured.c.clone(),

@@ -3,7 +3,9 @@
 //! premises on measured states (every state component a premise reads lies
 //! in the row space of C); for `static_output` a C of full row rank; for
 //! `observer_based` the objectives the augmented loop's certificate covers
-//! (stability, decay rate; H-inf on the continuous loop only). Neither is
+//! (stability, decay rate; H-inf, an input bound, a fixed output bound and
+//! the saturation region on the continuous loop only, H-inf not with the
+//! bounds). Neither is
 //! combined with a trigger other than `periodic` (the sampled loop;
 //! `observer_based` there without `saturate`), modes, an adaptive block, a
 //! fuzzy Lyapunov function, given gains or a plant region.
@@ -43,29 +45,70 @@ impl Checker<'_> {
         self.premises_measured(spec, c);
         self.output_feedback_alone(spec, at, word);
         if kind == ControlKind::ObserverBased {
-            for o in &spec.objectives {
-                let k = o.node.kind();
-                let sampled = spec
-                    .trigger
-                    .as_ref()
-                    .is_some_and(|t| matches!(t.node, Trigger::Periodic { .. }));
-                if k == ObjectiveKind::Hinf && sampled {
-                    self.err(
-                        Diagnostic::error(o.span, "`objective hinf` is not covered for the sampled `control observer_based` loop")
-                            .with_secondary(at, "the observer-based controller is declared here")
-                            .with_help("the sampled loop's certificate covers stability and a decay rate; the H-inf gain is certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
-                    );
+            self.observer_objectives(spec, at);
+        }
+    }
+
+    /// The objectives the augmented loop's certificate covers: stability, a
+    /// decay rate, H-inf, an input bound, a fixed output bound and the
+    /// saturation region on the continuous loop (H-inf not together with the
+    /// bounds); stability and a decay rate on the sampled loop.
+    fn observer_objectives(&mut self, spec: &Spec, at: Span) {
+        let sampled = spec
+            .trigger
+            .as_ref()
+            .is_some_and(|t| matches!(t.node, Trigger::Periodic { .. }));
+        let bounded = spec.saturation.is_some()
+            || spec.objectives.iter().any(|o| {
+                matches!(
+                    o.node.kind(),
+                    ObjectiveKind::InputNorm
+                        | ObjectiveKind::OutputNorm
+                        | ObjectiveKind::SaturationRegion
+                )
+            });
+        for o in &spec.objectives {
+            let k = o.node.kind();
+            let continuous_only = matches!(
+                k,
+                ObjectiveKind::Hinf
+                    | ObjectiveKind::InputNorm
+                    | ObjectiveKind::OutputNorm
+                    | ObjectiveKind::SaturationRegion
+            );
+            let minimized_output = matches!(
+                o.node,
+                crate::spec::Objective::OutputNorm {
+                    target: crate::spec::Target::Optimize,
+                    ..
                 }
-                if !matches!(
-                    k,
-                    ObjectiveKind::Stability | ObjectiveKind::DecayRate | ObjectiveKind::Hinf
-                ) {
-                    self.err(
-                        Diagnostic::error(o.span, format!("`objective {}` is not covered for `control observer_based`", k.keyword()))
-                            .with_secondary(at, "the observer-based controller is declared here")
-                            .with_help("the augmented loop (x, e) is certified for stability, a decay rate and an H-inf gain in this build (docs/limits.md); use `control static_output;` or state feedback for the other objectives"),
-                    );
-                }
+            );
+            if continuous_only && sampled {
+                self.err(
+                    Diagnostic::error(o.span, format!("`objective {}` is not covered for the sampled `control observer_based` loop", k.keyword()))
+                        .with_secondary(at, "the observer-based controller is declared here")
+                        .with_help("the sampled loop's certificate covers stability and a decay rate; H-inf, the input and output bounds and the saturation region are certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
+                );
+            } else if minimized_output {
+                self.err(
+                    Diagnostic::error(o.span, "`objective output_norm` needs a fixed bound for `control observer_based`")
+                        .with_secondary(at, "the observer-based controller is declared here")
+                        .with_help("write the bound, e.g. `objective output_norm(z) <= 1.0 for x0 = ...;` (the augmented loop's output bound keeps its certified set inside a region; it is not minimized in this build)"),
+                );
+            } else if k == ObjectiveKind::Hinf && bounded {
+                self.err(
+                    Diagnostic::error(o.span, "`objective hinf` is not combined with an input bound or saturation for `control observer_based`")
+                        .with_secondary(at, "the observer-based controller is declared here")
+                        .with_help("the augmented loop's input bound and saturation region are certified without a disturbance in this build: remove the H-inf objective, or the `input_norm` objective, the saturation region and the `saturate` levels"),
+                );
+            }
+            if !continuous_only && !matches!(k, ObjectiveKind::Stability | ObjectiveKind::DecayRate)
+            {
+                self.err(
+                    Diagnostic::error(o.span, format!("`objective {}` is not covered for `control observer_based`", k.keyword()))
+                        .with_secondary(at, "the observer-based controller is declared here")
+                        .with_help("the augmented loop (x, e) is certified for stability, a decay rate, an H-inf gain, input and output bounds and the saturation region in this build (docs/limits.md); use `control static_output;` or state feedback for the other objectives"),
+                );
             }
         }
     }
@@ -242,12 +285,37 @@ mod tests {
         let src = format!(
             "{PENDULUM}measure y = th;\ncontrol observer_based;\nobjective input_norm(u) <= 5 for x0 = [0.1, 0];\n"
         );
-        let (m, at) = only_error_of(&src);
+        valid(&src);
+        let (m, at) = only_error_of(&format!("{src}trigger periodic {{ every = 0.01; }}\n"));
         assert_eq!(
             m,
-            "`objective input_norm` is not covered for `control observer_based`"
+            "`objective input_norm` is not covered for the sampled `control observer_based` loop"
         );
         assert!(at.starts_with("objective input_norm"), "{at}");
+        let (m, at) = only_error_of(&format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\ndisturbance d; D = [0; 1]; output z = th;\nobjective linf(d -> z) <= 5;\n"
+        ));
+        assert_eq!(
+            m,
+            "`objective linf` is not covered for `control observer_based`"
+        );
+        assert!(at.starts_with("objective linf"), "{at}");
+        let (m, at) = only_error_of(&format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\noutput z = th;\nobjective output_norm(z) minimize for x0 = [0.1, 0];\n"
+        ));
+        assert_eq!(
+            m,
+            "`objective output_norm` needs a fixed bound for `control observer_based`"
+        );
+        assert!(at.starts_with("objective output_norm"), "{at}");
+        let (m, at) = only_error_of(&format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\ndisturbance d; D = [0; 1]; output z = th;\nobjective hinf(d -> z) minimize;\nobjective saturation region;\n"
+        ).replace("input u;", "input u saturate 50;"));
+        assert!(
+            m.starts_with("`objective hinf` is not combined with an input bound or saturation"),
+            "{m}"
+        );
+        assert!(at.starts_with("objective hinf"), "{at}");
         let src = format!(
             "{PENDULUM}measure y = th;\ncontrol static_output;\ntrigger jittered {{ every = 0.01; jitter = 0.001; }}\n"
         );
