@@ -6,18 +6,13 @@
 //! the continuous fuzzy observer from x_hat(0) = 0, the saturated command fed
 //! to plant and observer) from points on the boundary of the certified set.
 
+use crate::common::looped::mat;
 use crate::common::observer::{pendulum, tsfc};
 use crate::common::{compile_shipped, compile_text, errors_of, spec_path};
 use nalgebra::{DMatrix, DVector};
 use serde_json::Value;
 
 const SATURATED: &str = "pendulum_observer_saturated.tsf";
-
-fn mat(v: &Value) -> DMatrix<f64> {
-    let rows: Vec<Vec<f64>> = serde_json::from_value(v.clone()).expect("a matrix");
-    let (r, c) = (rows.len(), rows.first().map_or(0, Vec::len));
-    DMatrix::from_fn(r, c, |i, j| rows[i][j])
-}
 
 /// What the report says of the loop and its bounds.
 struct Data {
@@ -180,16 +175,20 @@ fn sector_rows(d: &Data, scale: f64) -> Vec<DMatrix<f64>> {
         .collect()
 }
 
-#[test]
-fn saturation_region_of_the_observer_loop_holds_from_the_report_and_fails_tightened() {
-    let (_, c) = compile_shipped(SATURATED);
+/// The report of a compile that must certify, as JSON.
+fn certified((_, c): (tsfc::model::TsModel, tsfc::driver::compile::Compiled)) -> Value {
     assert_eq!(
         c.status,
         tsfc::driver::compile::Status::Certified,
         "{:?}",
         c.report.diagnosis
     );
-    let report = serde_json::to_value(&c.report).expect("report json");
+    serde_json::to_value(&c.report).expect("report json")
+}
+
+#[test]
+fn saturation_region_of_the_observer_loop_holds_from_the_report_and_fails_tightened() {
+    let report = certified(compile_shipped(SATURATED));
     let d = data(&report);
     let (levels, t, _) = d.sector.as_ref().expect("saturation data");
     assert_eq!(levels, &vec![200.0]);
@@ -246,14 +245,10 @@ fn input_bound_spec() -> String {
 
 #[test]
 fn input_bound_of_the_observer_loop_holds_from_the_report_and_fails_tightened() {
-    let (_, c) = compile_text("pendulum_observer_bounded", &input_bound_spec());
-    assert_eq!(
-        c.status,
-        tsfc::driver::compile::Status::Certified,
-        "{:?}",
-        c.report.diagnosis
-    );
-    let report = serde_json::to_value(&c.report).expect("report json");
+    let report = certified(compile_text(
+        "pendulum_observer_bounded",
+        &input_bound_spec(),
+    ));
     let d = data(&report);
     let mu = d.mu.expect("the certified bound");
     assert_eq!(
@@ -381,8 +376,7 @@ fn boundary_starts(d: &Data) -> Vec<[f64; 4]> {
 
 #[test]
 fn nonlinear_pendulum_stays_in_the_certified_sets_from_their_boundary() {
-    let (_, c) = compile_shipped(SATURATED);
-    let sat = data(&serde_json::to_value(&c.report).expect("json"));
+    let sat = data(&certified(compile_shipped(SATURATED)));
     let level = sat.sector.as_ref().expect("sector").0[0];
     let mut saturated = false;
     for s0 in boundary_starts(&sat) {
@@ -396,8 +390,10 @@ fn nonlinear_pendulum_stays_in_the_certified_sets_from_their_boundary() {
         saturated,
         "no run saturates: the test does not exercise the sector"
     );
-    let (_, c) = compile_text("pendulum_observer_bounded", &input_bound_spec());
-    let inp = data(&serde_json::to_value(&c.report).expect("json"));
+    let inp = data(&certified(compile_text(
+        "pendulum_observer_bounded",
+        &input_bound_spec(),
+    )));
     let mu = inp.mu.expect("mu");
     let mut peak = 0.0f64;
     for s0 in boundary_starts(&inp) {

@@ -6,6 +6,7 @@
 //! loop, whose H-inf norm the certified gamma must bound, is swept in
 //! frequency.
 
+use crate::common::looped::mat;
 use crate::common::{compile_text, errors_of, spec_path};
 use nalgebra::{Complex, DMatrix};
 use serde_json::Value;
@@ -24,12 +25,6 @@ fn spec() -> String {
         "objective stability;",
         "objective stability;\ndisturbance d;\nD = [0; 1];\noutput z = theta;\nobjective hinf(d -> z) minimize;",
     )
-}
-
-fn mat(v: &Value) -> DMatrix<f64> {
-    let rows: Vec<Vec<f64>> = serde_json::from_value(v.clone()).expect("a matrix");
-    let (r, c) = (rows.len(), rows.first().map_or(0, Vec::len));
-    DMatrix::from_fn(r, c, |i, j| rows[i][j])
 }
 
 /// The report's data: per rule (A, B, D, F, L), C, P_aug, gamma.

@@ -176,23 +176,8 @@ pub fn solve(
             ],
         });
     }
-    let values = built
-        .problem
-        .vars()
-        .map(|(name, v)| {
-            sol.value(v)
-                .cloned()
-                .map(|m| (name.to_string(), m))
-                .map_err(|e| SynthError::Internal(format!("internal error: {e}")))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    let get = |name: &str| {
-        values
-            .iter()
-            .find(|(k, _)| k == name)
-            .map(|(_, v)| v.clone())
-            .ok_or_else(|| SynthError::Internal(format!("internal error: no value of {name}")))
-    };
+    let values = super::SolvedVars::read(&built.problem, &sol)?;
+    let get = |name: &str| values.get(name);
     let (p1, pe) = (get(P1)?, get(PE)?);
     let hinf_gamma = super::hinf::objective(model).map(|(_, _, fixed)| match fixed {
         Some(gamma) => Ok(gamma),
@@ -206,7 +191,7 @@ pub fn solve(
     Ok(AugmentedDesign {
         alpha,
         p,
-        values,
+        values: values.0,
         reductions: built.reductions,
         hinf_gamma,
         bounded: None,

@@ -518,23 +518,8 @@ pub fn solve(
             achievable,
         });
     }
-    let values = built
-        .problem
-        .vars()
-        .map(|(name, v)| {
-            sol.value(v)
-                .cloned()
-                .map(|m| (name.to_string(), m))
-                .map_err(|e| SynthError::Internal(format!("internal error: {e}")))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    let get = |name: &str| {
-        values
-            .iter()
-            .find(|(k, _)| k == name)
-            .map(|(_, v)| v.clone())
-            .ok_or_else(|| SynthError::Internal(format!("internal error: no value of {name}")))
-    };
+    let values = super::SolvedVars::read(&built.problem, &sol)?;
+    let get = |name: &str| values.get(name);
     let x = get(X_AUG)?;
     let Some(p) = x.clone().cholesky().map(|ch| ch.inverse()) else {
         return Err(SynthError::Internal(
@@ -562,7 +547,7 @@ pub fn solve(
     Ok(super::augmented::AugmentedDesign {
         alpha,
         p,
-        values,
+        values: values.0,
         reductions: built.reductions,
         hinf_gamma: None,
         bounded: Some(Box::new(BoundedDesign {

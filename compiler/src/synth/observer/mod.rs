@@ -202,3 +202,36 @@ pub fn observe(
     }));
     Ok(())
 }
+
+/// The solved values of an observer-loop problem's named unknowns.
+pub(crate) struct SolvedVars(pub(crate) Vec<(String, DMatrix<f64>)>);
+
+impl SolvedVars {
+    /// Reads every unknown of `problem` from `sol`.
+    pub(crate) fn read(
+        problem: &tsf_lmi::Problem,
+        sol: &tsf_lmi::Solution,
+    ) -> Result<Self, crate::synth::SynthError> {
+        problem
+            .vars()
+            .map(|(name, v)| {
+                sol.value(v)
+                    .cloned()
+                    .map(|m| (name.to_string(), m))
+                    .map_err(|e| crate::synth::SynthError::Internal(format!("internal error: {e}")))
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map(Self)
+    }
+
+    /// The value of the unknown `name`.
+    pub(crate) fn get(&self, name: &str) -> Result<DMatrix<f64>, crate::synth::SynthError> {
+        self.0
+            .iter()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| v.clone())
+            .ok_or_else(|| {
+                crate::synth::SynthError::Internal(format!("internal error: no value of {name}"))
+            })
+    }
+}
