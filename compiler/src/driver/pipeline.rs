@@ -213,9 +213,14 @@ pub fn withheld(model: &TsModel, design: &Design) -> Option<String> {
     match model.spec.control.kind {
         ControlKind::StateFeedback => None,
         ControlKind::ObserverBased if design.loop_design.observer_sampled().is_some() => None,
-        ControlKind::ObserverBased => Some(
-            "an observer-based controller runs every period T: its code and simulation need `trigger periodic { every = T; }` (the certificate then covers the sampled loop; without it only the continuous loop is certified, and no code or simulation is emitted)".into(),
-        ),
+        ControlKind::ObserverBased => {
+            let base = "an observer-based controller runs every period T: its code and simulation need `trigger periodic { every = T; }` (the certificate then covers the sampled loop; without it only the continuous loop is certified, and no code or simulation is emitted)";
+            Some(match crate::synth::observer::bounded::Bounds::of(&model.spec) {
+                // What a newcomer would try next is refused at check time.
+                Some(_) => format!("{base}; the sampled loop does not yet cover an input bound, an output bound, saturation levels or the saturation region (docs/limits.md), so this design ships no code in this build"),
+                None => base.into(),
+            })
+        }
         ControlKind::StaticOutput => None,
     }
 }
