@@ -7,7 +7,10 @@
 //! E(P, 1): the drift of h_1 and of theta within every period stay below the
 //! reported bounds, and the state stays in the region; (b) the paired
 //! conditions rebuilt from the report with eigenvalues, which fail with a
-//! larger drift or with the controller switched off.
+//! larger drift or with the controller switched off. The gyro-less
+//! spacecraft (`amrr2019_gyroless.tsf`) certifies its decay rate this way:
+//! its paired conditions re-derived, and V(t_k) along a run of its T-S
+//! plant checked against e^(-2 alpha t_k) V(0).
 
 use crate::common;
 use crate::common::looped::{mat, max_eig, Looped};
@@ -86,6 +89,34 @@ fn report_gains(report: &Value) -> Vec<DMatrix<f64>> {
         .collect()
 }
 
+/// E(P, 1) of the report's sampled loop lies in the reported sample box
+/// and in |(F_l xhat)_s| <= U for every gain and input (the reach of
+/// E(P, 1) along a row r is sqrt(r P^-1 r')); returns the sample box.
+fn inside_sample_box(report: &Value, gains: &[DMatrix<f64>]) -> Vec<Vec<f64>> {
+    let s = &report["sampled_loop"];
+    let drift = &s["drift"];
+    let p_inv = mat(&s["P"]).try_inverse().expect("P invertible");
+    let n = p_inv.nrows() / 2;
+    let samples: Vec<Vec<f64>> = serde_json::from_value(drift["samples"].clone()).expect("box");
+    assert_eq!(samples.len(), n, "a sample interval per state");
+    for (k, b) in samples.iter().enumerate() {
+        let reach = p_inv[(k, k)].sqrt();
+        assert!(
+            reach <= b[1].min(-b[0]),
+            "state {k}: E(P, 1) reaches {reach}, box {b:?}"
+        );
+    }
+    let u_bound = num(&drift["input_bound"]);
+    for f in gains {
+        for row in f.row_iter() {
+            let r = DVector::from_fn(2 * n, |k, _| if k < n { 0.0 } else { row[k - n] });
+            let reach = (r.transpose() * &p_inv * &r)[(0, 0)].sqrt();
+            assert!(reach <= u_bound, "|u| reaches {reach} > U = {u_bound}");
+        }
+    }
+    samples
+}
+
 /// (b) The paired conditions rebuilt from the report (P, Y, L1, L2, the
 /// local models, F_l, L_j, C, T, the reported drift bound): negative at the
 /// certified rate 0.5; E(P, 1) inside the sample box and |u| <= U; the
@@ -109,22 +140,7 @@ fn pendulum_88_paired_drift_conditions_rederived_from_the_report() {
     let off: Vec<DMatrix<f64>> = gains.iter().map(|g| g * 0.0).collect();
     let open = worst_paired(&report, &off, delta[1], 1.0);
     assert!(open > 0.0, "open loop passes: {open:e}");
-    // E(P, 1) inside the sample box and the input bound: r P^-1 r' <= b^2.
-    let p_inv = mat(&s["P"]).try_inverse().expect("P invertible");
-    let samples: Vec<Vec<f64>> = serde_json::from_value(drift["samples"].clone()).expect("box");
-    for (k, b) in samples.iter().enumerate() {
-        let reach = p_inv[(k, k)].sqrt();
-        assert!(
-            reach <= b[1].min(-b[0]),
-            "state {k}: E(P, 1) reaches {reach}, box {b:?}"
-        );
-    }
-    let u_bound = num(&drift["input_bound"]);
-    for f in &gains {
-        let row = DVector::from_vec(vec![0.0, 0.0, f[(0, 0)], f[(0, 1)]]);
-        let reach = (row.transpose() * &p_inv * &row)[(0, 0)].sqrt();
-        assert!(reach <= u_bound, "|u| reaches {reach} > U = {u_bound}");
-    }
+    let samples = inside_sample_box(&report, &gains);
     // The drift bound covers the sampled drift on the sample box.
     let (step, th_box) = (nums(&drift["steps"])[0], samples[0][1]);
     let sampled = (0..=20_000)
@@ -256,4 +272,110 @@ fn pendulum_88_region_misuse_is_a_check_error_at_the_setting() {
         let written = spec.lines().nth(line.max(1) - 1).expect("the line");
         assert!(written.contains(at), "{want}: at line {line} `{written}`");
     }
+}
+
+/// The gyro-less spacecraft's decay rate (the spec's objective).
+const GYROLESS_ALPHA: f64 = 0.05;
+
+/// V(t_k) = xi_k' P xi_k at the samples of the gyro-less spacecraft's loop
+/// from `(x0, xhat0)`: the T-S plant x' = sum_i h_i(p'p) (A_i x + B_i u)
+/// of the report's local models (h_1 = 1 - p'p, h_2 = p'p, the spec's
+/// triangles on [0, 1]; nonlinear through the memberships, which move
+/// within every period), RK4 at T / 10 with u held, and the runtime
+/// observer on the generated tables every T (y = p, premise y'y).
+fn gyroless_run(
+    report: &Value,
+    tables: &tsfc::tables::Tables,
+    xi0: &[f64],
+    samples: usize,
+) -> Vec<f64> {
+    let s = &report["sampled_loop"];
+    let (p, t) = (mat(&s["P"]), num(&s["sampling"][0]));
+    let models: Vec<(DMatrix<f64>, DMatrix<f64>)> = report["local_models"]
+        .as_array()
+        .expect("local models")
+        .iter()
+        .map(|m| (mat(&m["A"]), mat(&m["B"])))
+        .collect();
+    let terms = runtime_terms(tables);
+    let obs = runtime_observer::<6, 3, 3, 1, 2, 2>(tables, &terms);
+    let field = |x: &DVector<f64>, u: &DVector<f64>| {
+        let z = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).clamp(0.0, 1.0);
+        let (a1, b1) = &models[0];
+        let (a2, b2) = &models[1];
+        (a1 * x + b1 * u) * (1.0 - z) + (a2 * x + b2 * u) * z
+    };
+    let mut x = DVector::from_column_slice(&xi0[..6]);
+    let mut xhat: [f64; 6] = std::array::from_fn(|k| xi0[6 + k]);
+    let h = t / 10.0;
+    let mut v = Vec::with_capacity(samples);
+    for _ in 0..samples {
+        let xi = DVector::from_iterator(12, x.iter().copied().chain(xhat));
+        v.push((xi.transpose() * &p * &xi)[(0, 0)]);
+        let y = [x[0], x[1], x[2]];
+        let z = y.iter().map(|c| c * c).sum::<f64>();
+        let u = DVector::from_column_slice(&obs.step_with_premises(&mut xhat, &y, &[z]).u);
+        for _ in 0..10 {
+            let k1 = field(&x, &u);
+            let k2 = field(&(&x + &k1 * (h / 2.0)), &u);
+            let k3 = field(&(&x + &k2 * (h / 2.0)), &u);
+            let k4 = field(&(&x + &k3 * h), &u);
+            x += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0);
+        }
+    }
+    v
+}
+
+/// Issue 36: the gyro-less spacecraft (`amrr2019_gyroless.tsf`, the
+/// suite's one compile of it) certifies its sampled loop at T = 0.1 s with
+/// the decay rate 0.05 on the drift route. From the report alone: the
+/// paired conditions at phi = 2 alpha are negative (and fail with the
+/// controller off); E(P, 1) lies in the sample box and |u| <= U; the spec's
+/// scenario (x0, xhat0 = 0) lies in E(P, 1). Along a run of the T-S plant
+/// written here (memberships moving within the periods) with the runtime
+/// observer, V(t_k) <= e^(-2 alpha t_k) V(0) at every sample, which fails
+/// with alpha doubled.
+#[test]
+fn gyroless_drift_route_certifies_its_decay_rate_and_the_run_keeps_it() {
+    let (c, _) = common::observer::gyroless();
+    let report = &c.report;
+    let s = &report["sampled_loop"];
+    let covers = s["covers"].as_str().expect("covers");
+    assert!(
+        covers.contains("every 0.1 s") && covers.contains("decays at rate 0.05"),
+        "{covers}"
+    );
+    assert!(covers.contains("E(P, 1)"), "{covers}");
+    let delta = nums(&s["drift"]["delta"]);
+    let gains = report_gains(report);
+    let phi = 2.0 * GYROLESS_ALPHA;
+    let worst = worst_paired(report, &gains, delta[1], phi);
+    assert!(worst < 0.0, "a paired condition is not negative: {worst:e}");
+    let off: Vec<DMatrix<f64>> = gains.iter().map(|g| g * 0.0).collect();
+    let open = worst_paired(report, &off, delta[1], phi);
+    assert!(open > 0.0, "open loop passes: {open:e}");
+    inside_sample_box(report, &gains);
+    // The scenario: x0 of the simulate block, the estimate at 0 (`INIT`).
+    let text = std::fs::read_to_string(common::spec_path("amrr2019_gyroless.tsf")).expect("spec");
+    let model = common::model_of("amrr2019_gyroless.tsf", &text);
+    let sim = model.spec.simulate.as_ref().expect("simulate");
+    assert!(sim.xhat0.is_none(), "the scenario's estimate starts at 0");
+    let xi0: Vec<f64> = sim.x0.iter().copied().chain([0.0; 6]).collect();
+    let p = mat(&s["P"]);
+    let xi = DVector::from_column_slice(&xi0);
+    let level = (xi.transpose() * &p * &xi)[(0, 0)];
+    assert!(level < 1.0, "the scenario is outside E(P, 1): {level}");
+    // 200 s of the loop: V(t_k) against e^(-2 a t_k) V(0).
+    let t = num(&s["sampling"][0]);
+    let v = gyroless_run(report, &c.tables, &xi0, 2000);
+    let ratio = |a: f64| {
+        v.iter()
+            .enumerate()
+            .map(|(k, vk)| vk / v[0] * (2.0 * a * t * k as f64).exp())
+            .fold(0.0, f64::max)
+    };
+    let (kept, doubled) = (ratio(GYROLESS_ALPHA), ratio(2.0 * GYROLESS_ALPHA));
+    eprintln!("V(0) = {:e}, V(200 s) = {:e}, max V(t_k) e^(2 a t_k) / V(0) = {kept} (a = 0.05), {doubled} (a = 0.1)", v[0], v[v.len() - 1]);
+    assert!(kept <= 1.0 + 1e-9, "V(t_k) above e^(-2 a t_k) V(0): {kept}");
+    assert!(doubled > 1.0, "V(t_k) decays at twice the rate: {doubled}");
 }

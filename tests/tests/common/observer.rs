@@ -8,6 +8,7 @@ use super::runtime_eval;
 use super::Rng;
 use std::path::{Path, PathBuf};
 use std::process::Output;
+use std::sync::OnceLock;
 use tsf_runtime::{FactoredController, Observer, Term};
 use tsfc::tables::sym::Sym;
 use tsfc::tables::{PremiseCode, Tables};
@@ -64,6 +65,50 @@ pub fn compile_code(name: &str, dir: &Path) -> serde_json::Value {
     }
     let report = std::fs::read(dir.join(format!("{stem}.report.json"))).expect("report");
     serde_json::from_slice(&report).expect("JSON")
+}
+
+/// A compiled spec: the controller's name, its tables and its report (JSON).
+pub struct Compiled {
+    /// The controller's name.
+    pub name: String,
+    /// Its tables.
+    pub tables: Tables,
+    /// Its report (JSON).
+    pub report: serde_json::Value,
+}
+
+/// Compiles `spec` as `tsfc compile` does (its `Front::compile`, then
+/// `Run::generate` for the spec's `emit` targets, one synthesis) and writes
+/// the generated files into `dir`; `Err(why)` when it ships no code.
+pub fn compiled(spec: &Path, dir: &Path) -> Result<Compiled, String> {
+    let run = tsfc::driver::pipeline::read(spec)
+        .and_then(|front| front.compile(&tsfc::synth::Settings::default()))
+        .map_err(|e| e.message)?;
+    let files = run.generate(&run.model.spec.emit).map_err(|e| e.message)?;
+    for f in files {
+        std::fs::write(dir.join(&f.name), f.text).expect("write a generated file");
+    }
+    let tables = run.tables().map_err(|e| e.message)?;
+    Ok(Compiled {
+        name: run.model.spec.controller.node.clone(),
+        tables,
+        report: super::schema::report_json(&run.compiled.report),
+    })
+}
+
+/// The shipped gyro-less spacecraft `amrr2019_gyroless.tsf`, compiled once
+/// per test process (its sampled loop is the suite's slowest solve; shared
+/// by `output_feedback_c` and `observer_drift`), and the folder holding its
+/// generated files.
+pub fn gyroless() -> &'static (Compiled, PathBuf) {
+    static CELL: OnceLock<(Compiled, PathBuf)> = OnceLock::new();
+    CELL.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("gyroless_shared");
+        std::fs::create_dir_all(&dir).expect("dir");
+        let spec = super::spec_path("amrr2019_gyroless.tsf");
+        let c = compiled(&spec, &dir).unwrap_or_else(|why| panic!("gyro-less spec: {why}"));
+        (c, dir)
+    })
 }
 
 /// The nonlinear pendulum on a cart (g = 9.8, m = 2, M = 8, l = 0.5),
