@@ -9,8 +9,9 @@
 //!
 //! The specs: the test oscillator spec (its sampled observer loop certifies
 //! at 0.01 s, so it must ship code) and the shipped pendulum observer. The
-//! shipped spacecraft `amrr2019_gyroless.tsf` (76 s of solve, compiled once,
-//! in process, and nowhere else in the suite) is checked the same way by
+//! shipped spacecraft `amrr2019_gyroless.tsf` (compiled once per process, in
+//! process, by `common::observer::gyroless`, shared with `observer_drift`) is
+//! checked the same way by
 //! `spacecraft_observer_c_equals_the_runtime_bit_for_bit`, and its C is built
 //! for the Cortex-M4 by the flight audit. The
 //! static-output-feedback Lorenz spec is checked the same way: its step

@@ -1,8 +1,10 @@
 //! The output-feedback test seam shared by `observer_code`,
-//! `observer_sampled` and `output_feedback_c`: the runtime's observer built
-//! from a design's tables at its exact sizes, the `tsfc` command on a spec,
-//! the test oscillator spec that certifies its sampled loop, seeded outputs
-//! with fault values, and RK4 of a 2-state plant with the command held.
+//! `observer_sampled`, `observer_drift` and `output_feedback_c`: the
+//! runtime's observer built from a design's tables at its exact sizes, the
+//! `tsfc` command on a spec, a spec compiled in process (the gyro-less
+//! spacecraft once per process), the test oscillator spec that certifies its
+//! sampled loop, seeded outputs with fault values, and RK4 of a 2-state plant
+//! with the command held.
 
 use super::runtime_eval;
 use super::Rng;
