@@ -53,6 +53,21 @@ impl LoopLaw for ObserverSampled {
         let alpha = d.plan.decay().map_or(0.0, |dec| dec.alpha);
         let o = o.clone();
         let s = runner.sampled_observer(d, &o, t, alpha)?;
+        if let Some(mu) = s.input_bound() {
+            // The loop that ships is the sampled one: its bound replaces the
+            // state-feedback design's.
+            d.achieved
+                .set(crate::synth::achieved::Quantity::InputNormBound, mu);
+            d.notes.push(format!(
+                "sampled observer-based input bound: ||u(t)|| <= {mu:.6} for t >= 0 from the initial set with x_hat(0) = 0 (the command held between samples; xi(t_k) stays in E(P, 1) of the sampled loop)"
+            ));
+        }
+        if !s.saturation_levels().is_empty() {
+            d.notes.push(format!(
+                "sampled observer-based saturation: linear-region certificate, saturation inactive on the certified set (|u_s| <= {:?} on E(P, 1) of the sampled loop, so the saturated loop is the certified linear one there; active saturation is not certified)",
+                s.saturation_levels()
+            ));
+        }
         d.notes
             .push(format!("sampled loop certified: {}", s.covers()));
         Ok(LoopDesign::ObserverSampled(s))
