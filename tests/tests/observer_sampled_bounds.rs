@@ -206,9 +206,7 @@ fn run(l: &Loop, xi0: &DVector<f64>, samples: usize, phi: f64) -> Run {
     let PremiseCode::Exprs(exprs) = &tables.premise else {
         panic!("sinc premise")
     };
-    let t = l.report["sampled_loop"]["sampling"][0]
-        .as_f64()
-        .expect("T");
+    let t = l.report["sampled_loop"]["sampling"][0].as_f64().expect("T");
     let p = mat(&l.report["sampled_loop"]["P"]);
     let terms = runtime_terms(tables);
     let obs = runtime_observer::<2, 1, 1, 1, 2, 2>(tables, &terms);
@@ -356,10 +354,15 @@ fn uncovered_sampled_objectives_are_refused_at_their_line_and_column() {
         let word = at.trim_start_matches("objective ");
         assert_eq!(
             e.message,
-            format!("`objective {word}` is not covered for the sampled `control observer_based` loop")
+            format!(
+                "`objective {word}` is not covered for the sampled `control observer_based` loop"
+            )
         );
         let help = e.help.as_deref().unwrap_or_default();
-        assert!(help.contains("an input bound and saturation levels"), "{help}");
+        assert!(
+            help.contains("an input bound and saturation levels"),
+            "{help}"
+        );
         let want = spec.find(at).expect("the objective");
         assert_eq!(e.span.start, want, "{at}: not at its line:col");
     }

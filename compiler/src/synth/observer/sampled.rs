@@ -240,7 +240,9 @@ impl SampledObserver {
             Some(b) => {
                 let mut parts = Vec::new();
                 if let Some(mu) = b.mu() {
-                    parts.push(format!("||u(t)|| <= {mu:.6} for t >= 0 (the command held between samples)"));
+                    parts.push(format!(
+                        "||u(t)|| <= {mu:.6} for t >= 0 (the command held between samples)"
+                    ));
                 }
                 if !b.levels.is_empty() {
                     parts.push(format!("|u_s| <= u_s on E(P, 1) for the levels {:?}: the saturation is inactive on the certified set (linear-region certificate), so the saturated loop is the certified linear one there", b.levels));
@@ -260,7 +262,10 @@ impl SampledObserver {
 
     /// The certified input bound mu (||u(t)|| <= mu), if one was imposed.
     pub fn input_bound(&self) -> Option<f64> {
-        self.plan.observer_bounds.as_ref().and_then(SampledBounds::mu)
+        self.plan
+            .observer_bounds
+            .as_ref()
+            .and_then(SampledBounds::mu)
     }
 
     /// The saturation levels the certified set keeps the command within
@@ -325,7 +330,9 @@ impl Runner<'_> {
                 continue;
             };
             let drift = Drift::of(self.model, bound);
-            if let Some(s) = self.observer_solve(aug, d, o, (period, alpha), (Some(&drift), bounds))? {
+            if let Some(s) =
+                self.observer_solve(aug, d, o, (period, alpha), (Some(&drift), bounds))?
+            {
                 return Ok(Some(s));
             }
         }
@@ -461,7 +468,10 @@ impl Runner<'_> {
         let mut advice = round_down(period * lo);
         let mut checked = "not re-certified";
         for _ in 0..4 {
-            if self.observer_attempt(&aug, d, o, (advice, 0.0), bounds)?.is_some() {
+            if self
+                .observer_attempt(&aug, d, o, (advice, 0.0), bounds)?
+                .is_some()
+            {
                 checked = "certified";
                 break;
             }

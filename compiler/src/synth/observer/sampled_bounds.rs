@@ -217,12 +217,7 @@ pub(in crate::synth) fn impose(
         nonstrict_psd(problem, nonstrict, &name, block, eps)?;
     }
     if let Some(nu) = nu {
-        problem.add_scalar(
-            "observer sampled nu >= 0",
-            Expr::var(nu),
-            Relation::Ge,
-            0.0,
-        )?;
+        problem.add_scalar("observer sampled nu >= 0", Expr::var(nu), Relation::Ge, 0.0)?;
     }
     Ok(nu)
 }

@@ -103,8 +103,7 @@ impl Checker<'_> {
                         .with_help("the augmented loop's input bound and saturation region are certified without a disturbance in this build: remove the H-inf objective, or the `input_norm` objective, the saturation region and the `saturate` levels"),
                 );
             }
-            if !augmented && !matches!(k, ObjectiveKind::Stability | ObjectiveKind::DecayRate)
-            {
+            if !augmented && !matches!(k, ObjectiveKind::Stability | ObjectiveKind::DecayRate) {
                 self.err(
                     Diagnostic::error(o.span, format!("`objective {}` is not covered for `control observer_based`", k.keyword()))
                         .with_secondary(at, "the observer-based controller is declared here")
