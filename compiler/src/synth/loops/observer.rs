@@ -3,7 +3,9 @@
 //! on the continuous plant; the certificate is the looped functional on the
 //! augmented state (x, xhat) ([`crate::synth::observer::sampled`]), rebuilt
 //! from the shipped gains F_l and observer tables (Phi_j, Gu_j, Gy_j), also
-//! as stored. Refused with the longest period that certifies.
+//! as stored, with the input bound and the saturation levels (as stored) of
+//! [`crate::synth::observer::sampled_bounds`]. Refused with the longest
+//! period that certifies.
 
 use super::every_sample::looped_conditions;
 use super::{Condition, LoopCertificate, LoopDesign, LoopLaw, Rounding, Start};
@@ -86,7 +88,11 @@ impl LoopCertificate for SampledObserver {
             Some(round) => self.steps.rounded(round),
             None => self.steps.clone(),
         };
-        let plan = self.plan_with(gains, &steps);
+        let mut plan = self.plan_with(gains, &steps);
+        // The saturation levels as stored (the step clips at those).
+        if let (Some(round), Some(b)) = (stored, plan.observer_bounds.as_mut()) {
+            b.levels = b.levels.iter().map(|v| round(*v)).collect();
+        }
         let aug = augmented_model(model);
         looped_conditions(&aug, &plan, eps, self.values.clone(), &self.reductions)
     }
