@@ -52,25 +52,31 @@ fn shipped() -> &'static Loop {
     L.get_or_init(|| compile_file(&spec_path(SPEC)))
 }
 
+/// The shipped spec's saturation-region line.
+const SATURATION: &str = "objective saturation region for x0 = [th0, 0];";
+
+/// The shipped spec with its saturation-region line replaced by `line` and
+/// the period by `period`, compiled from `tag`'s folder.
+fn variant(tag: &str, line: &str, period: &str) -> Loop {
+    let text = std::fs::read_to_string(spec_path(SPEC)).expect("spec");
+    assert_eq!(text.matches(SATURATION).count(), 1, "the spec's line");
+    let text = text
+        .replace(SATURATION, line)
+        .replace("every = 0.01;", &format!("every = {period};"));
+    let dir = common::fresh_dir("observer_sampled_bounds", tag);
+    let path = dir.join(format!("pendulum_observer_sampled_{tag}.tsf"));
+    std::fs::write(&path, text).expect("write the variant");
+    compile_file(&path)
+}
+
 /// The shipped spec with a minimized input bound from the same initial
 /// state, at T = 0.005 s (the design's gains change with the bound; at
 /// 0.01 s its sampled loop is not certified).
 fn minimized() -> &'static Loop {
     static L: OnceLock<Loop> = OnceLock::new();
     L.get_or_init(|| {
-        let text = std::fs::read_to_string(spec_path(SPEC)).expect("spec");
-        let saturation = "objective saturation region for x0 = [th0, 0];";
-        assert_eq!(text.matches(saturation).count(), 1, "the spec's line");
-        let text = text
-            .replace(
-                saturation,
-                &format!("{saturation}\nobjective input_norm(u) minimize for x0 = [th0, 0];"),
-            )
-            .replace("every = 0.01;", "every = 0.005;");
-        let dir = common::fresh_dir("observer_sampled_bounds", "minimized");
-        let path = dir.join("pendulum_observer_sampled_minimized.tsf");
-        std::fs::write(&path, text).expect("write the variant");
-        compile_file(&path)
+        let line = format!("{SATURATION}\nobjective input_norm(u) minimize for x0 = [th0, 0];");
+        variant("minimized", &line, "0.005")
     })
 }
 
@@ -366,4 +372,21 @@ fn uncovered_sampled_objectives_are_refused_at_their_line_and_column() {
         let want = spec.find(at).expect("the objective");
         assert_eq!(e.span.start, want, "{at}: not at its line:col");
     }
+}
+
+/// An ellipsoidal initial set {x0' R x0 <= 1} with x_hat(0) = 0: the x-block
+/// of P satisfies P11 <= R (eigenvalues of R - P11), so every such x0 with
+/// x_hat(0) = 0 lies in E(P, 1); the linear region holds as for a point.
+#[test]
+fn ellipsoidal_initial_set_gives_p11_below_r() {
+    let line = "const R = [25, 0; 0, 25];\nobjective saturation region for x0 in ellipsoid(R);";
+    let l = variant("ellipsoid", line, "0.01");
+    let s = &l.report["sampled_loop"];
+    assert_eq!(s["bounds"]["saturation"], "inactive_on_certified_set");
+    let p = mat(&s["P"]);
+    let gap = DMatrix::from_diagonal_element(2, 2, 25.0) - p.view((0, 0), (2, 2));
+    let least = gap.symmetric_eigenvalues().min();
+    assert!(least >= -1e-9, "P11 above R: {least:e}");
+    let worst = worst_block(&p, &gains(&l.report), LEVEL);
+    assert!(worst >= -1e-9, "linear region violated: {worst:e}");
 }
