@@ -428,17 +428,19 @@ fn line_col(text: &str, at: usize) -> (usize, usize) {
 #[test]
 fn uncovered_observer_bound_combinations_are_refused_at_the_objective() {
     let spec = input_bound_spec();
-    let objective = "objective input_norm(u) minimize";
-    // The sampled loop: the input bound is not covered there.
+    let objective = "objective output_norm(th)";
+    // The sampled loop covers the input bound (observer_sampled_bounds.rs),
+    // not the output bound: one error, at the output bound.
     let sampled = spec.replace(
         "control observer_based(decay = 5);",
         "control observer_based(decay = 5);\ntrigger periodic { every = 0.01; }",
     );
     let errors = errors_of("sampled.tsf", &sampled);
-    let e = errors.first().expect("an error");
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    let e = &errors[0];
     assert_eq!(
         e.message,
-        "`objective input_norm` is not covered for the sampled `control observer_based` loop"
+        "`objective output_norm` is not covered for the sampled `control observer_based` loop"
     );
     let at = sampled.find(objective).expect("the objective");
     assert_eq!(line_col(&sampled, e.span.start), line_col(&sampled, at));

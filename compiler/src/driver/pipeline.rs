@@ -217,7 +217,7 @@ pub fn withheld(model: &TsModel, design: &Design) -> Option<String> {
             let base = "an observer-based controller runs every period T: its code and simulation need `trigger periodic { every = T; }` (the certificate then covers the sampled loop; without it only the continuous loop is certified, and no code or simulation is emitted)";
             Some(match crate::synth::observer::bounded::Bounds::of(&model.spec) {
                 // What a newcomer would try next is refused at check time.
-                Some(_) => format!("{base}; the sampled loop does not yet cover an input bound, an output bound, saturation levels or the saturation region (docs/limits.md), so this design ships no code in this build"),
+                Some(_) => format!("{base}; the sampled loop covers an input bound and saturation levels (the actuator kept linear on its certified set), not an output bound or H-inf (docs/limits.md)"),
                 None => base.into(),
             })
         }

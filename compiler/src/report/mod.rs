@@ -218,6 +218,24 @@ pub struct SampledReport {
     /// its paired vertices are imposed with.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub drift: Option<crate::model::region::drift::DriftBound>,
+    /// The sampled observer loop's input bound and saturation certificate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<SampledBoundsReport>,
+}
+
+/// The input bound and saturation levels certified on the sampled observer
+/// loop's E(P, 1) (`synth/observer/sampled_bounds.rs`).
+#[derive(Debug, Serialize, schemars::JsonSchema)]
+pub struct SampledBoundsReport {
+    /// The certified ||u(t)|| <= mu for t >= 0, if an input bound was imposed.
+    pub input_norm: Option<f64>,
+    /// The actuator's saturation levels u_s (empty: no `saturate`).
+    pub saturation_levels: Vec<f64>,
+    /// Which certificate the saturation got: `inactive_on_certified_set`
+    /// (the linear-region certificate: |u_s| <= u_s on E(P, 1), so the
+    /// saturated loop is the certified linear one there); `None` without
+    /// saturation levels.
+    pub saturation: Option<&'static str>,
 }
 
 /// The `sampled_loop` section of the sampled observer loop: the looped
@@ -238,6 +256,16 @@ fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
             .map(|(a, b)| [a, b]),
         modes: None,
         drift: s.plan.drift.as_ref().map(|d| d.bound.clone()),
+        bounds: s
+            .plan
+            .observer_bounds
+            .as_ref()
+            .map(|_| SampledBoundsReport {
+                input_norm: s.input_bound(),
+                saturation_levels: s.saturation_levels().to_vec(),
+                saturation: (!s.saturation_levels().is_empty())
+                    .then_some("inactive_on_certified_set"),
+            }),
     })
 }
 
@@ -565,6 +593,7 @@ pub fn report(
                     l: None,
                     modes: None,
                     drift: None,
+                    bounds: None,
                 })
                 .or_else(|| markov::sampled_loop(model, d))
                 .or_else(|| observer_sampled_loop(d))

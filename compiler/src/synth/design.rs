@@ -404,6 +404,9 @@ pub struct TriggerPlan {
     /// ([`crate::synth::observer::drift`]): plant and observer vertices
     /// paired, the drift terms, the sample box. `None`: free vertices.
     pub drift: Option<crate::synth::observer::drift::Drift>,
+    /// The input bound, saturation levels and initial set of the sampled
+    /// observer loop ([`crate::synth::observer::sampled_bounds`]).
+    pub observer_bounds: Option<crate::synth::observer::sampled_bounds::SampledBounds>,
 }
 
 impl TriggerPlan {

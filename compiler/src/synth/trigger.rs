@@ -26,6 +26,7 @@ use super::design::{Design, SynthError, TriggerDesign};
 use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
 use super::objective::BuildError;
 use super::observer::drift;
+use super::observer::sampled_bounds;
 use super::reduction::Reduction;
 use super::search::Runner;
 use super::solved::{names, Solved as _};
@@ -472,9 +473,12 @@ pub(super) fn impose(
         }
     }
     impose_regions(&mut problem, &mut nonstrict, model, plan, &vars, &ctrl, eps)?;
+    let nu = sampled_bounds::impose(&mut problem, &mut nonstrict, plan, vars.p, eps)?;
     if let (Some(gamma), Some(xi)) = (gamma, xi) {
         peak(&mut problem, plan, vars.p, gamma, xi, eps)?;
         problem.minimize(Expr::var(gamma))?;
+    } else if let Some(nu) = nu {
+        problem.minimize(Expr::var(nu))?;
     }
     let p = match vars.p {
         Factor::Var(p) => Some(p),
@@ -699,6 +703,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         region,
         model_error: super::loop_error::LoopError::of(model),
         drift: None,
+        observer_bounds: None,
     };
     // A region's vertex sets, checked before any SDP (too many is a refusal).
     vertices::describe(model, &plan).map_err(|e| match e {

@@ -3,7 +3,9 @@
 //! on the continuous plant; the certificate is the looped functional on the
 //! augmented state (x, xhat) ([`crate::synth::observer::sampled`]), rebuilt
 //! from the shipped gains F_l and observer tables (Phi_j, Gu_j, Gy_j), also
-//! as stored. Refused with the longest period that certifies.
+//! as stored, with the input bound and the saturation levels (as stored) of
+//! [`crate::synth::observer::sampled_bounds`]. Refused with the longest
+//! period that certifies.
 
 use super::every_sample::looped_conditions;
 use super::{Condition, LoopCertificate, LoopDesign, LoopLaw, Rounding, Start};
@@ -53,6 +55,21 @@ impl LoopLaw for ObserverSampled {
         let alpha = d.plan.decay().map_or(0.0, |dec| dec.alpha);
         let o = o.clone();
         let s = runner.sampled_observer(d, &o, t, alpha)?;
+        if let Some(mu) = s.input_bound() {
+            // The loop that ships is the sampled one: its bound replaces the
+            // state-feedback design's.
+            d.achieved
+                .set(crate::synth::achieved::Quantity::InputNormBound, mu);
+            d.notes.push(format!(
+                "sampled observer-based input bound: ||u(t)|| <= {mu:.6} for t >= 0 from the initial set with x_hat(0) = 0 (the command held between samples; xi(t_k) stays in E(P, 1) of the sampled loop)"
+            ));
+        }
+        if !s.saturation_levels().is_empty() {
+            d.notes.push(format!(
+                "sampled observer-based saturation: linear-region certificate, saturation inactive on the certified set (|u_s| <= {:?} on E(P, 1) of the sampled loop, so the saturated loop is the certified linear one there; active saturation is not certified)",
+                s.saturation_levels()
+            ));
+        }
         d.notes
             .push(format!("sampled loop certified: {}", s.covers()));
         Ok(LoopDesign::ObserverSampled(s))
@@ -71,7 +88,11 @@ impl LoopCertificate for SampledObserver {
             Some(round) => self.steps.rounded(round),
             None => self.steps.clone(),
         };
-        let plan = self.plan_with(gains, &steps);
+        let mut plan = self.plan_with(gains, &steps);
+        // The saturation levels as stored (the step clips at those).
+        if let (Some(round), Some(b)) = (stored, plan.observer_bounds.as_mut()) {
+            b.levels = b.levels.iter().map(|v| round(*v)).collect();
+        }
         let aug = augmented_model(model);
         looped_conditions(&aug, &plan, eps, self.values.clone(), &self.reductions)
     }

@@ -24,6 +24,7 @@ pub mod drift;
 pub mod gains;
 pub mod hinf;
 pub mod sampled;
+pub mod sampled_bounds;
 pub mod static_output;
 
 use nalgebra::DMatrix;
@@ -163,7 +164,10 @@ pub fn observe(
         .observer_decay
         .unwrap_or_else(|| default_observer_decay(alpha_c));
     let observer = gains::solve(runner, &measured.c, alpha_o)?;
-    let aug = match bounded::Bounds::of(&model.spec) {
+    // With a periodic trigger the bounds are certified on the sampled loop
+    // that ships ([`sampled_bounds`]), not on the continuous one.
+    let continuous = crate::synth::loops::observer::period(model).is_none();
+    let aug = match bounded::Bounds::of(&model.spec).filter(|_| continuous) {
         Some(b) => bounded::solve(
             runner,
             (&d.gains, &observer.gains),

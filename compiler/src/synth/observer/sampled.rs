@@ -50,6 +50,7 @@
 //! (and from their stored rounding: [`crate::synth::loops::observer`]).
 
 use super::drift::Drift;
+use super::sampled_bounds::{SampledBounds, MU2_SAMPLED};
 use super::ObserverDesign;
 use crate::model::region::drift::{drift_bound, largest_input, state_box};
 use crate::model::TsModel;
@@ -235,10 +236,45 @@ impl SampledObserver {
             ),
             None => String::new(),
         };
+        let bounds = match &self.plan.observer_bounds {
+            Some(b) => {
+                let mut parts = Vec::new();
+                if let Some(mu) = b.mu() {
+                    parts.push(format!(
+                        "||u(t)|| <= {mu:.6} for t >= 0 (the command held between samples)"
+                    ));
+                }
+                if !b.levels.is_empty() {
+                    parts.push(format!("|u_s| <= u_s on E(P, 1) for the levels {:?}: the saturation is inactive on the certified set (linear-region certificate), so the saturated loop is the certified linear one there", b.levels));
+                }
+                if !b.initial.is_empty() {
+                    parts.push("E(P, 1) contains the initial set with x_hat(0) = 0".to_string());
+                }
+                format!("; {}", parts.join("; "))
+            }
+            None => String::new(),
+        };
         format!(
-            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}{start}; the measurement noise is not bounded by it",
+            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}{start}{bounds}; the measurement noise is not bounded by it",
             self.period
         )
+    }
+
+    /// The certified input bound mu (||u(t)|| <= mu), if one was imposed.
+    pub fn input_bound(&self) -> Option<f64> {
+        self.plan
+            .observer_bounds
+            .as_ref()
+            .and_then(SampledBounds::mu)
+    }
+
+    /// The saturation levels the certified set keeps the command within
+    /// (empty: no actuator limit).
+    pub fn saturation_levels(&self) -> &[f64] {
+        self.plan
+            .observer_bounds
+            .as_ref()
+            .map_or(&[], |b| b.levels.as_slice())
     }
 }
 
@@ -252,7 +288,7 @@ fn plan_at(
     d: &Design,
     o: &ObserverDesign,
     (period, phi): (f64, f64),
-    drift: Option<&Drift>,
+    (drift, bounds): (Option<&Drift>, Option<&SampledBounds>),
 ) -> (TriggerPlan, ObserverSteps) {
     let steps = ObserverSteps::of(model, &o.c, &o.gains, period);
     let mut plan = plan_for(model, d, (period, period));
@@ -263,6 +299,7 @@ fn plan_at(
     plan.c = DMatrix::zeros(0, 2 * model.n);
     plan.gains = pair_gains(&d.gains, &o.c, &steps, period);
     plan.drift = drift.cloned();
+    plan.observer_bounds = bounds.cloned();
     (plan, steps)
 }
 
@@ -276,11 +313,11 @@ impl Runner<'_> {
         aug: &TsModel,
         d: &Design,
         o: &ObserverDesign,
-        period: f64,
-        alpha: f64,
+        (period, alpha): (f64, f64),
+        bounds: Option<&SampledBounds>,
     ) -> Result<Option<SampledObserver>, SynthError> {
         let Some(region) = state_box(self.model) else {
-            return self.observer_solve(aug, d, o, (period, alpha), None);
+            return self.observer_solve(aug, d, o, (period, alpha), (None, bounds));
         };
         let most = largest_input(self.model, &region, period);
         let fractions: &[f64] = if most.is_finite() {
@@ -293,23 +330,47 @@ impl Runner<'_> {
                 continue;
             };
             let drift = Drift::of(self.model, bound);
-            if let Some(s) = self.observer_solve(aug, d, o, (period, alpha), Some(&drift))? {
+            if let Some(s) =
+                self.observer_solve(aug, d, o, (period, alpha), (Some(&drift), bounds))?
+            {
                 return Ok(Some(s));
             }
         }
         Ok(None)
     }
 
-    /// One SDP of the sampled observer loop at `period` and `alpha`.
+    /// One SDP of the sampled observer loop at `period` and `alpha` (two
+    /// with a minimized input bound: the least bound, then the fixed bound
+    /// [`super::bounded::MU_SLACK`] above it, which is what is certified).
     fn observer_solve(
         &mut self,
         aug: &TsModel,
         d: &Design,
         o: &ObserverDesign,
         (period, alpha): (f64, f64),
-        drift: Option<&Drift>,
+        (drift, bounds): (Option<&Drift>, Option<&SampledBounds>),
     ) -> Result<Option<SampledObserver>, SynthError> {
-        let (plan, steps) = plan_at(self.model, d, o, (period, 2.0 * alpha), drift);
+        let fixed;
+        let bounds = match bounds {
+            Some(b) if b.input == Some(None) => {
+                let (plan, steps) =
+                    plan_at(self.model, d, o, (period, 2.0 * alpha), (drift, Some(b)));
+                if !steps.finite() {
+                    return Ok(None);
+                }
+                let what = "sampled observer-loop input bound (minimized)";
+                let Some((_, all)) =
+                    self.solve_looped_on(aug, &plan, what, LoopedSolve::default())?
+                else {
+                    return Ok(None);
+                };
+                let nu = all.required(MU2_SAMPLED)?[(0, 0)].max(0.0);
+                fixed = b.fixed(b.scale * nu.sqrt() * (1.0 + super::bounded::MU_SLACK));
+                Some(&fixed)
+            }
+            other => other,
+        };
+        let (plan, steps) = plan_at(self.model, d, o, (period, 2.0 * alpha), (drift, bounds));
         if !steps.finite() {
             return Ok(None);
         }
@@ -330,6 +391,38 @@ impl Runner<'_> {
         }))
     }
 
+    /// The refusal of `bounds` on a loop that certifies without them at
+    /// `period`: with the least input bound these gains admit with the other
+    /// bounds (minimized), when one is found.
+    fn bounds_refusal(
+        &mut self,
+        aug: &TsModel,
+        (d, o): (&Design, &ObserverDesign),
+        period: f64,
+        bounds: &SampledBounds,
+    ) -> Result<SynthError, SynthError> {
+        let mut achievable = Vec::new();
+        if let Some(Some(_)) = bounds.input {
+            let loose = SampledBounds {
+                input: Some(None),
+                ..bounds.clone()
+            };
+            if let Some(s) = self.observer_attempt(aug, d, o, (period, 0.0), Some(&loose))? {
+                if let Some(mu) = s.input_bound() {
+                    achievable.push(format!("these gains certify ||u|| <= {mu:.6} on the sampled loop (stability): `objective input_norm(u) <= {:.6} ...` (or minimize)", mu * (1.0 + 10.0 * super::bounded::MU_SLACK)));
+                }
+            }
+        }
+        achievable.push("shrink the initial set, raise the saturation levels or the input bound, or lower the controller's gains (its decay rate, or `input_norm` on the design)".to_string());
+        Ok(SynthError::Infeasible {
+            message: format!(
+                "the observer-based loop sampled every {period} s certifies without its bounds, but not with {} (the linear sampled certificate keeps E(P, 1) where the actuator does not saturate)",
+                bounds.asked()
+            ),
+            achievable,
+        })
+    }
+
     /// The certificate of the sampled observer loop of `d` at `period`: at
     /// the controller's decay rate `alpha` if it holds, else for stability
     /// (noted); refused with the longest period that certifies stability
@@ -342,18 +435,28 @@ impl Runner<'_> {
         alpha: f64,
     ) -> Result<SampledObserver, SynthError> {
         let aug = augmented_model(self.model);
+        let bounds = SampledBounds::of(&self.model.spec, &d.gains);
+        let bounds = bounds.as_ref();
         if alpha > 0.0 {
-            if let Some(s) = self.observer_attempt(&aug, d, o, period, alpha)? {
+            if let Some(s) = self.observer_attempt(&aug, d, o, (period, alpha), bounds)? {
                 return Ok(s);
             }
         }
-        if let Some(s) = self.observer_attempt(&aug, d, o, period, 0.0)? {
+        if let Some(s) = self.observer_attempt(&aug, d, o, (period, 0.0), bounds)? {
             return Ok(s);
+        }
+        if let Some(b) = bounds {
+            if self
+                .observer_attempt(&aug, d, o, (period, 0.0), None)?
+                .is_some()
+            {
+                return Err(self.bounds_refusal(&aug, (d, o), period, b)?);
+            }
         }
         let what = format!("the observer-based loop sampled every {period} s is not certified (the looped-functional conditions of the sampled loop, with the discrete observer at that period, are infeasible)");
         let Some(lo) = longest_scale(|s| {
             Ok(self
-                .observer_attempt(&aug, d, o, period * s, 0.0)?
+                .observer_attempt(&aug, d, o, (period * s, 0.0), bounds)?
                 .is_some())
         })?
         else {
@@ -365,7 +468,10 @@ impl Runner<'_> {
         let mut advice = round_down(period * lo);
         let mut checked = "not re-certified";
         for _ in 0..4 {
-            if self.observer_attempt(&aug, d, o, advice, 0.0)?.is_some() {
+            if self
+                .observer_attempt(&aug, d, o, (advice, 0.0), bounds)?
+                .is_some()
+            {
                 checked = "certified";
                 break;
             }

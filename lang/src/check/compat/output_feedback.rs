@@ -3,12 +3,11 @@
 //! premises on measured states (every state component a premise reads lies
 //! in the row space of C); for `static_output` a C of full row rank; for
 //! `observer_based` the objectives the augmented loop's certificate covers
-//! (stability, decay rate; H-inf, an input bound, a fixed output bound and
-//! the saturation region on the continuous loop only, H-inf not with the
-//! bounds). Neither is
-//! combined with a trigger other than `periodic` (the sampled loop;
-//! `observer_based` there without `saturate`), modes, an adaptive block, a
-//! fuzzy Lyapunov function, given gains or a plant region.
+//! (stability, decay rate, an input bound and saturation levels; H-inf and a
+//! fixed output bound on the continuous loop only, H-inf not with the
+//! bounds). Neither is combined with a trigger other than `periodic` (the
+//! sampled loop), modes, an adaptive block, a fuzzy Lyapunov function, given
+//! gains or a plant region.
 
 use crate::ast::ItemKind;
 use crate::check::measure::{rank, recovered, state_reads};
@@ -52,7 +51,8 @@ impl Checker<'_> {
     /// The objectives the augmented loop's certificate covers: stability, a
     /// decay rate, H-inf, an input bound, a fixed output bound and the
     /// saturation region on the continuous loop (H-inf not together with the
-    /// bounds); stability and a decay rate on the sampled loop.
+    /// bounds); stability, a decay rate, an input bound and the saturation
+    /// region (the linear region: no active saturation) on the sampled loop.
     fn observer_objectives(&mut self, spec: &Spec, at: Span) {
         let sampled = spec
             .trigger
@@ -69,13 +69,14 @@ impl Checker<'_> {
             });
         for o in &spec.objectives {
             let k = o.node.kind();
-            let continuous_only = matches!(
+            let augmented = matches!(
                 k,
                 ObjectiveKind::Hinf
                     | ObjectiveKind::InputNorm
                     | ObjectiveKind::OutputNorm
                     | ObjectiveKind::SaturationRegion
             );
+            let continuous_only = matches!(k, ObjectiveKind::Hinf | ObjectiveKind::OutputNorm);
             let minimized_output = matches!(
                 o.node,
                 crate::spec::Objective::OutputNorm {
@@ -87,7 +88,7 @@ impl Checker<'_> {
                 self.err(
                     Diagnostic::error(o.span, format!("`objective {}` is not covered for the sampled `control observer_based` loop", k.keyword()))
                         .with_secondary(at, "the observer-based controller is declared here")
-                        .with_help("the sampled loop's certificate covers stability and a decay rate; H-inf, the input and output bounds and the saturation region are certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
+                        .with_help("the sampled loop's certificate covers stability, a decay rate, an input bound and saturation levels (the actuator kept linear on the certified set); H-inf and the output bound are certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
                 );
             } else if minimized_output {
                 self.err(
@@ -102,8 +103,7 @@ impl Checker<'_> {
                         .with_help("the augmented loop's input bound and saturation region are certified without a disturbance in this build: remove the H-inf objective, or the `input_norm` objective, the saturation region and the `saturate` levels"),
                 );
             }
-            if !continuous_only && !matches!(k, ObjectiveKind::Stability | ObjectiveKind::DecayRate)
-            {
+            if !augmented && !matches!(k, ObjectiveKind::Stability | ObjectiveKind::DecayRate) {
                 self.err(
                     Diagnostic::error(o.span, format!("`objective {}` is not covered for `control observer_based`", k.keyword()))
                         .with_secondary(at, "the observer-based controller is declared here")
@@ -199,15 +199,6 @@ impl Checker<'_> {
             if periodic && spec.control.kind == ControlKind::ObserverBased {
                 self.drift_region(spec);
             }
-            let saturated = spec.saturation.is_some();
-            if let (true, true, true, Some(input)) = (
-                periodic,
-                saturated,
-                spec.control.kind == ControlKind::ObserverBased,
-                spec.inputs.first(),
-            ) {
-                refuse(self, input.span, "a saturating input in the sampled loop", "the sampled observer-based loop is certified without saturation in this build: remove `saturate` or the `trigger` item");
-            }
         }
         if matches!(spec.lyapunov.node, Lyapunov::Fuzzy { .. }) {
             refuse(
@@ -286,12 +277,19 @@ mod tests {
             "{PENDULUM}measure y = th;\ncontrol observer_based;\nobjective input_norm(u) <= 5 for x0 = [0.1, 0];\n"
         );
         valid(&src);
-        let (m, at) = only_error_of(&format!("{src}trigger periodic {{ every = 0.01; }}\n"));
+        valid(&format!("{src}trigger periodic {{ every = 0.01; }}\n"));
+        valid(
+            &format!("{src}objective saturation region;\ntrigger periodic {{ every = 0.01; }}\n")
+                .replace("input u;", "input u saturate 50;"),
+        );
+        let (m, at) = only_error_of(&format!(
+            "{PENDULUM}measure y = th;\ncontrol observer_based;\noutput z = th;\nobjective output_norm(z) <= 1 for x0 = [0.1, 0];\ntrigger periodic {{ every = 0.01; }}\n"
+        ));
         assert_eq!(
             m,
-            "`objective input_norm` is not covered for the sampled `control observer_based` loop"
+            "`objective output_norm` is not covered for the sampled `control observer_based` loop"
         );
-        assert!(at.starts_with("objective input_norm"), "{at}");
+        assert!(at.starts_with("objective output_norm"), "{at}");
         let (m, at) = only_error_of(&format!(
             "{PENDULUM}measure y = th;\ncontrol observer_based;\ndisturbance d; D = [0; 1]; output z = th;\nobjective linf(d -> z) <= 5;\n"
         ));
