@@ -165,6 +165,7 @@ pub fn sampled_loop(model: &TsModel, design: &Design) -> Option<SampledReport> {
         y: Some(rows(&s.y)),
         l: None,
         drift: None,
+        hinf_gamma: None,
         modes: Some(
             modes
                 .modes

@@ -218,6 +218,11 @@ pub struct SampledReport {
     /// its paired vertices are imposed with.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub drift: Option<crate::model::region::drift::DriftBound>,
+    /// The H-inf gain certified for the sampled loop: from rest,
+    /// ||z||_2 <= gamma ||w||_2 (the sampled observer loop with
+    /// `objective hinf`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hinf_gamma: Option<f64>,
 }
 
 /// The `sampled_loop` section of the sampled observer loop: the looped
@@ -238,6 +243,7 @@ fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
             .map(|(a, b)| [a, b]),
         modes: None,
         drift: s.plan.drift.as_ref().map(|d| d.bound.clone()),
+        hinf_gamma: s.hinf_gamma(),
     })
 }
 
@@ -565,6 +571,7 @@ pub fn report(
                     l: None,
                     modes: None,
                     drift: None,
+                    hinf_gamma: None,
                 })
                 .or_else(|| markov::sampled_loop(model, d))
                 .or_else(|| observer_sampled_loop(d))

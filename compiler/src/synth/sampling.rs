@@ -75,6 +75,7 @@ pub fn plan_for(model: &TsModel, design: &Design, sampling: (f64, f64)) -> Trigg
         region: None,
         model_error: super::loop_error::LoopError::of(model),
         drift: None,
+        l2: None,
     }
 }
 

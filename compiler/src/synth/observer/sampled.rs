@@ -54,7 +54,7 @@ use super::ObserverDesign;
 use crate::model::region::drift::{drift_bound, largest_input, state_box};
 use crate::model::TsModel;
 use crate::synth::advice::{about, round_down};
-use crate::synth::design::{SynthError, TriggerPlan};
+use crate::synth::design::{L2Channel, SynthError, TriggerPlan};
 use crate::synth::objectives::discrete::zoh;
 use crate::synth::reduction::Reduction;
 use crate::synth::sampling::{longest_scale, plan_for};
@@ -217,6 +217,13 @@ impl SampledObserver {
         }
     }
 
+    /// The H-inf gain certified from w to z (the spec's `objective hinf`).
+    pub fn hinf_gamma(&self) -> Option<f64> {
+        self.plan.l2.as_ref()?;
+        let g = self.values.value(names::LOOP_HINF)?;
+        Some(g[(0, 0)].max(0.0).sqrt())
+    }
+
     /// What it certifies, in words.
     pub fn covers(&self) -> String {
         let rate = if self.alpha > 0.0 {
@@ -235,8 +242,12 @@ impl SampledObserver {
             ),
             None => String::new(),
         };
+        let gain = match self.hinf_gamma() {
+            Some(g) => format!("; from rest (x(0) = xhat(0) = 0) its H-inf gain from the disturbance to the output is at most {g:.6}: ||z||_2 <= {g:.6} ||w||_2"),
+            None => String::new(),
+        };
         format!(
-            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}{start}; the measurement noise is not bounded by it",
+            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}{start}{gain}; the measurement noise is not bounded by it",
             self.period
         )
     }
@@ -263,7 +274,43 @@ fn plan_at(
     plan.c = DMatrix::zeros(0, 2 * model.n);
     plan.gains = pair_gains(&d.gains, &o.c, &steps, period);
     plan.drift = drift.cloned();
+    if let Some((d, l2)) = hinf_channel(model) {
+        plan.d = d;
+        plan.l2 = Some(l2);
+    }
     (plan, steps)
+}
+
+/// The spec's H-inf objective as the sampled loop's channel on xi = (x,
+/// xhat): the disturbance columns [D_i; 0] per rule (the observer does not
+/// see w), z = [C_z, 0] xi + E_z u_k + G w, g <= gamma^2 with the spec's
+/// fixed gamma (a minimized one is refused at check time: with g unbounded
+/// the feasibility problem has a recession direction and Clarabel stops with
+/// NumericalError). `None` without the objective or its bound.
+fn hinf_channel(model: &TsModel) -> Option<(Vec<DMatrix<f64>>, L2Channel)> {
+    let (from, to, fixed) = super::hinf::objective(model)?;
+    let gamma = fixed?;
+    let (sig, out) = (model.spec.disturbances.get(from)?, model.spec.outputs.get(to)?);
+    let n = model.n;
+    let d = model
+        .rules
+        .iter()
+        .map(|r| {
+            let mut d = DMatrix::zeros(2 * n, sig.len);
+            d.view_mut((0, 0), (n, sig.len))
+                .copy_from(&r.d.columns(sig.offset, sig.len));
+            d
+        })
+        .collect();
+    let mut c = DMatrix::zeros(out.c.nrows(), 2 * n);
+    c.view_mut((0, 0), (out.c.nrows(), n)).copy_from(&out.c);
+    let l2 = L2Channel {
+        c,
+        e: out.e.clone(),
+        g: out.g.columns(sig.offset, sig.len).into_owned(),
+        gamma,
+    };
+    Some((d, l2))
 }
 
 impl Runner<'_> {
@@ -310,6 +357,18 @@ impl Runner<'_> {
         drift: Option<&Drift>,
     ) -> Result<Option<SampledObserver>, SynthError> {
         let (plan, steps) = plan_at(self.model, d, o, (period, 2.0 * alpha), drift);
+        self.observer_plan_solve(aug, o, plan, steps, (period, alpha))
+    }
+
+    /// The SDP of the sampled observer loop for `plan` (its observer `steps`).
+    fn observer_plan_solve(
+        &mut self,
+        aug: &TsModel,
+        o: &ObserverDesign,
+        plan: TriggerPlan,
+        steps: ObserverSteps,
+        (period, alpha): (f64, f64),
+    ) -> Result<Option<SampledObserver>, SynthError> {
         if !steps.finite() {
             return Ok(None);
         }
