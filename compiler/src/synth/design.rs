@@ -425,8 +425,10 @@ pub struct L2Channel {
     pub e: DMatrix<f64>,
     /// G of z (rows of z x disturbance columns).
     pub g: DMatrix<f64>,
-    /// The spec's fixed bound on gamma (g <= gamma^2 is imposed).
+    /// The bound on gamma (g <= gamma^2 is imposed).
     pub gamma: f64,
+    /// Whether g is minimized under the bound (else a feasibility problem).
+    pub minimize: bool,
 }
 
 impl TriggerPlan {

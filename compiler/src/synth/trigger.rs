@@ -21,8 +21,8 @@
 use super::achieved::Quantity;
 use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
-pub use super::design::{L2Channel, TriggerPlan};
 use super::design::{Design, SynthError, TriggerDesign};
+pub use super::design::{L2Channel, TriggerPlan};
 use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
 use super::objective::BuildError;
 use super::observer::drift;
@@ -430,6 +430,9 @@ pub(super) fn impose(
         let g = problem.scalar(names::LOOP_HINF)?;
         let bound = ch.gamma * ch.gamma;
         problem.add_scalar("trigger H-inf g", Expr::var(g), Relation::Le, bound)?;
+        if ch.minimize {
+            problem.minimize(Expr::var(g))?;
+        }
         vars.xi = Some(g);
     }
     if !plan.model_error.is_zero() {

@@ -290,7 +290,10 @@ fn plan_at(
 fn hinf_channel(model: &TsModel) -> Option<(Vec<DMatrix<f64>>, L2Channel)> {
     let (from, to, fixed) = super::hinf::objective(model)?;
     let gamma = fixed?;
-    let (sig, out) = (model.spec.disturbances.get(from)?, model.spec.outputs.get(to)?);
+    let (sig, out) = (
+        model.spec.disturbances.get(from)?,
+        model.spec.outputs.get(to)?,
+    );
     let n = model.n;
     let d = model
         .rules
@@ -309,6 +312,7 @@ fn hinf_channel(model: &TsModel) -> Option<(Vec<DMatrix<f64>>, L2Channel)> {
         e: out.e.clone(),
         g: out.g.columns(sig.offset, sig.len).into_owned(),
         gamma,
+        minimize: false,
     };
     Some((d, l2))
 }
@@ -345,6 +349,27 @@ impl Runner<'_> {
             }
         }
         Ok(None)
+    }
+
+    /// With the H-inf channel, `s` re-solved minimizing g under the spec's
+    /// bound (the first solve is a feasibility problem, whose g is an
+    /// interior point): the reported gain is then the least this functional
+    /// certifies. When the minimization does not solve (on the pendulum
+    /// Clarabel stops with NumericalError for some bounds where the
+    /// feasibility problem solves), `s` is kept.
+    fn least_hinf(
+        &mut self,
+        aug: &TsModel,
+        o: &ObserverDesign,
+        s: SampledObserver,
+    ) -> Result<SampledObserver, SynthError> {
+        let mut plan = s.plan.clone();
+        let Some(c) = plan.l2.as_mut() else {
+            return Ok(s);
+        };
+        c.minimize = true;
+        let least = self.observer_plan_solve(aug, o, plan, s.steps.clone(), (s.period, s.alpha))?;
+        Ok(least.unwrap_or(s))
     }
 
     /// One SDP of the sampled observer loop at `period` and `alpha`.
@@ -403,11 +428,11 @@ impl Runner<'_> {
         let aug = augmented_model(self.model);
         if alpha > 0.0 {
             if let Some(s) = self.observer_attempt(&aug, d, o, period, alpha)? {
-                return Ok(s);
+                return self.least_hinf(&aug, o, s);
             }
         }
         if let Some(s) = self.observer_attempt(&aug, d, o, period, 0.0)? {
-            return Ok(s);
+            return self.least_hinf(&aug, o, s);
         }
         let what = format!("the observer-based loop sampled every {period} s is not certified (the looped-functional conditions of the sampled loop, with the discrete observer at that period, are infeasible)");
         let Some(lo) = longest_scale(|s| {
