@@ -43,6 +43,7 @@ mod observer_drift;
 mod observer_hinf;
 mod observer_sampled;
 mod observer_sampled_bounds;
+mod observer_sampled_hinf;
 mod observer_shipped;
 mod output_feedback_c;
 mod plant_claim;

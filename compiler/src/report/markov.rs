@@ -166,6 +166,7 @@ pub fn sampled_loop(model: &TsModel, design: &Design) -> Option<SampledReport> {
         l: None,
         drift: None,
         bounds: None,
+        hinf_gamma: None,
         modes: Some(
             modes
                 .modes

@@ -218,6 +218,11 @@ pub struct SampledReport {
     /// its paired vertices are imposed with.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub drift: Option<crate::model::region::drift::DriftBound>,
+    /// The H-inf gain certified for the sampled loop: from rest,
+    /// ||z||_2 <= gamma ||w||_2 (the sampled observer loop with
+    /// `objective hinf`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hinf_gamma: Option<f64>,
     /// The sampled observer loop's input bound and saturation certificate.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bounds: Option<SampledBoundsReport>,
@@ -266,6 +271,7 @@ fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
                 saturation: (!s.saturation_levels().is_empty())
                     .then_some("inactive_on_certified_set"),
             }),
+        hinf_gamma: s.hinf_gamma(),
     })
 }
 
@@ -594,6 +600,7 @@ pub fn report(
                     modes: None,
                     drift: None,
                     bounds: None,
+                    hinf_gamma: None,
                 })
                 .or_else(|| markov::sampled_loop(model, d))
                 .or_else(|| observer_sampled_loop(d))

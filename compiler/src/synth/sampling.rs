@@ -76,6 +76,7 @@ pub fn plan_for(model: &TsModel, design: &Design, sampling: (f64, f64)) -> Trigg
         model_error: super::loop_error::LoopError::of(model),
         drift: None,
         observer_bounds: None,
+        l2: None,
     }
 }
 

@@ -26,6 +26,8 @@ pub mod names {
     pub const LOOP_GAMMA: &str = "gamma_tr";
     /// xi of the sampled loop's L-inf bound.
     pub const LOOP_XI: &str = "xi_tr";
+    /// g = gamma^2 of the sampled loop's H-inf bound.
+    pub const LOOP_HINF: &str = "g_tr";
     /// The prefix of the model-error multipliers of the decrease block
     /// (`eps_model_a`, `eps_model_b`: robust conditions).
     pub const MODEL_ERROR: &str = "eps_model";

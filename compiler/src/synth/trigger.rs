@@ -21,8 +21,8 @@
 use super::achieved::Quantity;
 use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
-pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
+pub use super::design::{L2Channel, TriggerPlan};
 use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
 use super::objective::BuildError;
 use super::observer::drift;
@@ -181,7 +181,7 @@ impl Layout {
         let e = plan.event.then(|| take(model.n));
         let dz = (!plan.levels.is_empty()).then(|| take(model.m));
         let q = plan.d.first().map_or(0, |d| d.ncols());
-        let tau = (plan.linf && q > 0).then(|| (take(q), q));
+        let tau = ((plan.linf || plan.l2.is_some()) && q > 0).then(|| (take(q), q));
         Layout { k, e, dz, tau }
     }
 }
@@ -261,6 +261,9 @@ fn lambda(
         let etau = pick(q, at, k);
         xi_block = xi_block.sub(Expr::scaled(xi, &(etau.transpose() * &etau))?)?;
     }
+    if let Some(ch) = &plan.l2 {
+        xi_block = xi_block.add(Expr::constant(&output_energy(ch, &lay, &ex, &xk, f)?)?)?;
+    }
     // With a model error the gains must be known (N_b is data).
     let robust =
         match (plan.model_error.is_zero(), f) {
@@ -315,6 +318,31 @@ fn lambda(
         Some(sel) => robust_lambda(plan, v, top, sel, h, r),
         None => Ok(top),
     }
+}
+
+/// z'z of the H-inf channel `ch` as a quadratic form in psi: z = C E_x psi +
+/// E (F x(t_k)) + G E_tau psi, F's first `ch.e.ncols()` rows the held
+/// command u_k (the augmented observer loop's gain also holds the estimate's
+/// slope below them). Constant: the gains must be known (an unknown F would
+/// need the Schur complement; the co-design's gain step has no H-inf
+/// channel).
+fn output_energy(
+    ch: &L2Channel,
+    lay: &Layout,
+    ex: &DMatrix<f64>,
+    xk: &DMatrix<f64>,
+    f: Factor<'_>,
+) -> Result<DMatrix<f64>, LmiError> {
+    let Factor::Val(f) = f else {
+        return Err(LmiError::Variable {
+            what: "the sampled loop's H-inf channel needs known gains".into(),
+        });
+    };
+    let mut z = &ch.c * ex + &ch.e * f.rows(0, ch.e.ncols()) * xk;
+    if let Some((at, q)) = lay.tau {
+        z += &ch.g * pick(q, at, lay.k);
+    }
+    Ok(z.transpose() * z)
 }
 
 /// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are
@@ -399,6 +427,15 @@ pub(super) fn impose(
         (None, None)
     };
     vars.xi = xi;
+    if let Some(ch) = &plan.l2 {
+        let g = problem.scalar(names::LOOP_HINF)?;
+        let bound = ch.gamma * ch.gamma;
+        problem.add_scalar("trigger H-inf g", Expr::var(g), Relation::Le, bound)?;
+        if ch.minimize {
+            problem.minimize(Expr::var(g))?;
+        }
+        vars.xi = Some(g);
+    }
     if !plan.model_error.is_zero() {
         vars.robust = [
             plan.model_error.declare(&mut problem, 1)?,
@@ -704,6 +741,7 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         model_error: super::loop_error::LoopError::of(model),
         drift: None,
         observer_bounds: None,
+        l2: None,
     };
     // A region's vertex sets, checked before any SDP (too many is a refusal).
     vertices::describe(model, &plan).map_err(|e| match e {

@@ -42,9 +42,7 @@ pub struct Looped {
     pub t: f64,
     p: DMatrix<f64>,
     y: DMatrix<f64>,
-    free: DMatrix<f64>,
-    ex: DMatrix<f64>,
-    es: DMatrix<f64>,
+    l: [DMatrix<f64>; 2],
     c: DMatrix<f64>,
     n: usize,
     /// (A_i, B_i) of every rule.
@@ -62,10 +60,6 @@ impl Looped {
         let (l1, l2) = (mat(&s["L"][0]), mat(&s["L"][1]));
         let c = mat(&report["observer"]["C"]);
         let n = c.ncols();
-        let big = 2 * n;
-        let ex = DMatrix::from_fn(big, 2 * big, |r, k| f64::from(u8::from(k == r)));
-        let es = DMatrix::from_fn(big, 2 * big, |r, k| f64::from(u8::from(k == r + big)));
-        let free = ex.transpose() * &l1 + es.transpose() * &l2;
         let models: Vec<_> = report["local_models"]
             .as_array()
             .expect("local models")
@@ -93,14 +87,22 @@ impl Looped {
             t,
             p,
             y,
-            free,
-            ex,
-            es,
+            l: [l1, l2],
             c,
             n,
             models,
             steps,
         }
+    }
+
+    /// Observer rule `j`'s step (Phi_j, Gu_j, Gy_j).
+    pub fn step(&self, j: usize) -> &(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+        &self.steps[j]
+    }
+
+    /// The measured output map C.
+    pub fn c(&self) -> &DMatrix<f64> {
+        &self.c
     }
 
     /// The number of rules.
@@ -134,26 +136,65 @@ impl Looped {
     /// The blocks (r = 1, r = 2) of the vertex (Abar, Bbar, K) at `phi`.
     pub fn blocks(
         &self,
-        (abar, bbar): &(DMatrix<f64>, DMatrix<f64>),
+        plant: &(DMatrix<f64>, DMatrix<f64>),
         k: &DMatrix<f64>,
         phi: f64,
     ) -> (DMatrix<f64>, DMatrix<f64>) {
+        self.blocks_with(plant, k, phi, None)
+    }
+
+    /// The blocks with an H-inf channel: psi = [xi(t); xi(t_k); w], the flow
+    /// gains Dbar w, Xi gains z'z - g w'w with z = Zx xi + Zu u_k + Zw w
+    /// (u_k the first rows of K xi(t_k)).
+    pub fn blocks_with(
+        &self,
+        (abar, bbar): &(DMatrix<f64>, DMatrix<f64>),
+        k: &DMatrix<f64>,
+        phi: f64,
+        channel: Option<&Channel>,
+    ) -> (DMatrix<f64>, DMatrix<f64>) {
         let (t, big) = (self.t, 2 * self.n);
-        let (ex, es, p, y) = (&self.ex, &self.es, &self.p, &self.y);
-        let flow = abar * ex + bbar * k * es;
+        let q = channel.map_or(0, |c| c.d.ncols());
+        let size = 2 * big + q;
+        let pick = |at: usize, len: usize| {
+            DMatrix::from_fn(len, size, |r, c| f64::from(u8::from(c == r + at)))
+        };
+        let (ex, es, ew) = (pick(0, big), pick(big, big), pick(2 * big, q));
+        let (p, y) = (&self.p, &self.y);
+        let free = ex.transpose() * &self.l[0] + es.transpose() * &self.l[1];
+        let mut flow = abar * &ex + bbar * k * &es;
         let he = |q: DMatrix<f64>| &q + q.transpose();
-        let xi = he(ex.transpose() * p * &flow)
-            + ex.transpose() * p * ex * phi
-            + he(&self.free * (ex - es));
+        let mut xi = ex.transpose() * p * &ex * phi + he(&free * (&ex - &es));
+        if let Some(ch) = channel {
+            flow += &ch.d * &ew;
+            let m = ch.zu.ncols();
+            let z = &ch.zx * &ex + &ch.zu * k.rows(0, m) * &es + &ch.zw * &ew;
+            xi += z.transpose() * z - ew.transpose() * &ew * ch.g;
+        }
+        xi += he(ex.transpose() * p * &flow);
         let r1 = &xi + flow.transpose() * y * &flow * t;
-        let mut r2 = DMatrix::zeros(3 * big, 3 * big);
-        r2.view_mut((0, 0), (2 * big, 2 * big)).copy_from(&xi);
-        r2.view_mut((0, 2 * big), (2 * big, big))
-            .copy_from(&(&self.free * t.sqrt()));
-        r2.view_mut((2 * big, 0), (big, 2 * big))
-            .copy_from(&(self.free.transpose() * t.sqrt()));
-        r2.view_mut((2 * big, 2 * big), (big, big))
+        let mut r2 = DMatrix::zeros(size + big, size + big);
+        r2.view_mut((0, 0), (size, size)).copy_from(&xi);
+        r2.view_mut((0, size), (size, big))
+            .copy_from(&(&free * t.sqrt()));
+        r2.view_mut((size, 0), (big, size))
+            .copy_from(&(free.transpose() * t.sqrt()));
+        r2.view_mut((size, size), (big, big))
             .copy_from(&(-(-phi * t).exp() * y));
         (r1, r2)
     }
+}
+
+/// The H-inf channel of [`Looped::blocks_with`].
+pub struct Channel {
+    /// Dbar (2n x q): the disturbance columns on xi.
+    pub d: DMatrix<f64>,
+    /// z's map of xi.
+    pub zx: DMatrix<f64>,
+    /// z's map of u_k.
+    pub zu: DMatrix<f64>,
+    /// z's map of w.
+    pub zw: DMatrix<f64>,
+    /// g = gamma^2.
+    pub g: f64,
 }

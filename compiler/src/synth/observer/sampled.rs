@@ -55,7 +55,7 @@ use super::ObserverDesign;
 use crate::model::region::drift::{drift_bound, largest_input, state_box};
 use crate::model::TsModel;
 use crate::synth::advice::{about, round_down};
-use crate::synth::design::{SynthError, TriggerPlan};
+use crate::synth::design::{L2Channel, SynthError, TriggerPlan};
 use crate::synth::objectives::discrete::zoh;
 use crate::synth::reduction::Reduction;
 use crate::synth::sampling::{longest_scale, plan_for};
@@ -218,6 +218,13 @@ impl SampledObserver {
         }
     }
 
+    /// The H-inf gain certified from w to z (the spec's `objective hinf`).
+    pub fn hinf_gamma(&self) -> Option<f64> {
+        self.plan.l2.as_ref()?;
+        let g = self.values.value(names::LOOP_HINF)?;
+        Some(g[(0, 0)].max(0.0).sqrt())
+    }
+
     /// What it certifies, in words.
     pub fn covers(&self) -> String {
         let rate = if self.alpha > 0.0 {
@@ -254,8 +261,12 @@ impl SampledObserver {
             }
             None => String::new(),
         };
+        let gain = match self.hinf_gamma() {
+            Some(g) => format!("; from rest (x(0) = xhat(0) = 0) its H-inf gain from the disturbance to the output is at most {g:.6}: ||z||_2 <= {g:.6} ||w||_2"),
+            None => String::new(),
+        };
         format!(
-            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}{start}{bounds}; the measurement noise is not bounded by it",
+            "the sampled observer-based loop (continuous T-S plant, the discrete observer and controller every {} s, zero-order hold) {rate}{start}{bounds}{gain}; the measurement noise is not bounded by it",
             self.period
         )
     }
@@ -300,7 +311,47 @@ fn plan_at(
     plan.gains = pair_gains(&d.gains, &o.c, &steps, period);
     plan.drift = drift.cloned();
     plan.observer_bounds = bounds.cloned();
+    if let Some((d, l2)) = hinf_channel(model) {
+        plan.d = d;
+        plan.l2 = Some(l2);
+    }
     (plan, steps)
+}
+
+/// The spec's H-inf objective as the sampled loop's channel on xi = (x,
+/// xhat): the disturbance columns [D_i; 0] per rule (the observer does not
+/// see w), z = [C_z, 0] xi + E_z u_k + G w, g <= gamma^2 with the spec's
+/// fixed gamma (a minimized one is refused at check time: with g unbounded
+/// the feasibility problem has a recession direction and Clarabel stops with
+/// NumericalError). `None` without the objective or its bound.
+fn hinf_channel(model: &TsModel) -> Option<(Vec<DMatrix<f64>>, L2Channel)> {
+    let (from, to, fixed) = super::hinf::objective(model)?;
+    let gamma = fixed?;
+    let (sig, out) = (
+        model.spec.disturbances.get(from)?,
+        model.spec.outputs.get(to)?,
+    );
+    let n = model.n;
+    let d = model
+        .rules
+        .iter()
+        .map(|r| {
+            let mut d = DMatrix::zeros(2 * n, sig.len);
+            d.view_mut((0, 0), (n, sig.len))
+                .copy_from(&r.d.columns(sig.offset, sig.len));
+            d
+        })
+        .collect();
+    let mut c = DMatrix::zeros(out.c.nrows(), 2 * n);
+    c.view_mut((0, 0), (out.c.nrows(), n)).copy_from(&out.c);
+    let l2 = L2Channel {
+        c,
+        e: out.e.clone(),
+        g: out.g.columns(sig.offset, sig.len).into_owned(),
+        gamma,
+        minimize: false,
+    };
+    Some((d, l2))
 }
 
 impl Runner<'_> {
@@ -339,6 +390,27 @@ impl Runner<'_> {
         Ok(None)
     }
 
+    /// With the H-inf channel, `s` re-solved minimizing g under the spec's
+    /// bound (the first solve is a feasibility problem, whose g is an
+    /// interior point): the reported gain is then the least this functional
+    /// certifies. When the minimization does not solve (on the pendulum
+    /// Clarabel stops with NumericalError for some bounds where the
+    /// feasibility problem solves), `s` is kept.
+    fn least_hinf(
+        &mut self,
+        aug: &TsModel,
+        o: &ObserverDesign,
+        s: SampledObserver,
+    ) -> Result<SampledObserver, SynthError> {
+        let mut plan = s.plan.clone();
+        let Some(c) = plan.l2.as_mut() else {
+            return Ok(s);
+        };
+        c.minimize = true;
+        let least = self.observer_plan_solve(aug, o, plan, s.steps.clone(), (s.period, s.alpha))?;
+        Ok(least.unwrap_or(s))
+    }
+
     /// One SDP of the sampled observer loop at `period` and `alpha` (two
     /// with a minimized input bound: the least bound, then the fixed bound
     /// [`super::bounded::MU_SLACK`] above it, which is what is certified).
@@ -371,6 +443,17 @@ impl Runner<'_> {
             other => other,
         };
         let (plan, steps) = plan_at(self.model, d, o, (period, 2.0 * alpha), (drift, bounds));
+        self.observer_plan_solve(aug, o, plan, steps, (period, alpha))
+    }
+    /// The SDP of the sampled observer loop for `plan` (its observer `steps`).
+    fn observer_plan_solve(
+        &mut self,
+        aug: &TsModel,
+        o: &ObserverDesign,
+        plan: TriggerPlan,
+        steps: ObserverSteps,
+        (period, alpha): (f64, f64),
+    ) -> Result<Option<SampledObserver>, SynthError> {
         if !steps.finite() {
             return Ok(None);
         }
@@ -439,11 +522,11 @@ impl Runner<'_> {
         let bounds = bounds.as_ref();
         if alpha > 0.0 {
             if let Some(s) = self.observer_attempt(&aug, d, o, (period, alpha), bounds)? {
-                return Ok(s);
+                return self.least_hinf(&aug, o, s);
             }
         }
         if let Some(s) = self.observer_attempt(&aug, d, o, (period, 0.0), bounds)? {
-            return Ok(s);
+            return self.least_hinf(&aug, o, s);
         }
         if let Some(b) = bounds {
             if self

@@ -52,7 +52,8 @@ impl Checker<'_> {
     /// decay rate, H-inf, an input bound, a fixed output bound and the
     /// saturation region on the continuous loop (H-inf not together with the
     /// bounds); stability, a decay rate, an input bound and the saturation
-    /// region (the linear region: no active saturation) on the sampled loop.
+    /// region (the linear region: no active saturation), or H-inf with a
+    /// fixed bound (free vertices, without the bounds), on the sampled loop.
     fn observer_objectives(&mut self, spec: &Spec, at: Span) {
         let sampled = spec
             .trigger
@@ -84,11 +85,31 @@ impl Checker<'_> {
                     ..
                 }
             );
-            if continuous_only && sampled {
+            let sampled_hinf = k == ObjectiveKind::Hinf && !bounded;
+            let minimized_hinf = matches!(
+                o.node,
+                crate::spec::Objective::Hinf {
+                    target: crate::spec::Target::Optimize,
+                    ..
+                }
+            );
+            if sampled_hinf && sampled && minimized_hinf {
+                self.err(
+                    Diagnostic::error(o.span, "`objective hinf` needs a fixed bound for the sampled `control observer_based` loop")
+                        .with_secondary(at, "the observer-based controller is declared here")
+                        .with_help("write the bound, e.g. `objective hinf(d -> z) <= 20;`: the sampled loop's H-inf gain is certified against a fixed bound (the gains of a minimized continuous design are too aggressive to sample, and the sampled problem without a bound is ill-posed for the solver)"),
+                );
+            } else if sampled_hinf && sampled && !spec.trigger_region.is_empty() {
+                self.err(
+                    Diagnostic::error(o.span, "`objective hinf` is not covered for the sampled `control observer_based` loop on a region")
+                        .with_secondary(spec.trigger_region[0].span, "the membership-drift region is declared here")
+                        .with_help("the region's drift bound assumes the state stays in the box over a period, which an energy-bounded disturbance does not keep; remove the `region` settings (free vertices, a global certificate) or the H-inf objective"),
+                );
+            } else if continuous_only && sampled && !sampled_hinf {
                 self.err(
                     Diagnostic::error(o.span, format!("`objective {}` is not covered for the sampled `control observer_based` loop", k.keyword()))
                         .with_secondary(at, "the observer-based controller is declared here")
-                        .with_help("the sampled loop's certificate covers stability, a decay rate, an input bound and saturation levels (the actuator kept linear on the certified set); H-inf and the output bound are certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
+                        .with_help("the sampled loop's certificate covers stability, a decay rate, an input bound and saturation levels (the actuator kept linear on the certified set), and a fixed H-inf bound without them; the output bound, and H-inf together with the bounds, are certified on the continuous augmented loop only (remove the `trigger periodic` item, or the objective)"),
                 );
             } else if minimized_output {
                 self.err(
