@@ -409,29 +409,7 @@ pub struct TriggerPlan {
     pub observer_bounds: Option<crate::synth::observer::sampled_bounds::SampledBounds>,
     /// The H-inf (L2-gain) channel from the disturbance columns `d` to
     /// z = C x + E u_k + G tau (`None`: none; [`L2Channel`]).
-    pub l2: Option<L2Channel>,
-}
-
-/// The H-inf channel of a sampled loop: with z = `c` x(t) + `e` u_k +
-/// `g` tau(t), u_k the held command (the first `e.ncols()` rows of the
-/// loop's gain times the held state), every Lambda gains the constant z'z
-/// block and -g tau'tau (g = gamma^2 the loop's unknown [`names`]
-/// `LOOP_HINF`), so W' + phi V + z'z - g tau'tau < 0 between samples: from
-/// rest, ||z||_2^2 <= g ||tau||_2^2 ([`crate::synth::trigger`]).
-///
-/// [`names`]: crate::synth::solved::names
-#[derive(Debug, Clone, PartialEq)]
-pub struct L2Channel {
-    /// C of z (rows of z x the loop's states).
-    pub c: DMatrix<f64>,
-    /// E of z (rows of z x inputs u).
-    pub e: DMatrix<f64>,
-    /// G of z (rows of z x disturbance columns).
-    pub g: DMatrix<f64>,
-    /// The bound on gamma (g <= gamma^2 is imposed).
-    pub gamma: f64,
-    /// Whether g is minimized under the bound (else a feasibility problem).
-    pub minimize: bool,
+    pub l2: Option<super::l2_channel::L2Channel>,
 }
 
 impl TriggerPlan {

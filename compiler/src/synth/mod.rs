@@ -21,6 +21,7 @@ mod design;
 mod diagnose;
 pub mod experimental;
 pub mod given;
+pub mod l2_channel;
 pub mod loop_error;
 pub mod loops;
 pub mod lyapunov;

@@ -21,8 +21,9 @@
 use super::achieved::Quantity;
 use super::advice::round_down;
 use super::blocks::{nonstrict_psd, region_block};
+pub use super::design::TriggerPlan;
 use super::design::{Design, SynthError, TriggerDesign};
-pub use super::design::{L2Channel, TriggerPlan};
+use super::l2_channel::output_energy;
 use super::loop_error::{robust_lambda, LoopMultipliers, Selectors};
 use super::objective::BuildError;
 use super::observer::drift;
@@ -158,7 +159,7 @@ impl<'a> LoopVars<'a> {
 }
 
 /// Selector of rows `at .. at + len` of a vector of length `k`, as a `len x k` matrix.
-fn pick(len: usize, at: usize, k: usize) -> DMatrix<f64> {
+pub(super) fn pick(len: usize, at: usize, k: usize) -> DMatrix<f64> {
     DMatrix::from_fn(len, k, |r, c| if c == at + r { 1.0 } else { 0.0 })
 }
 
@@ -262,7 +263,8 @@ fn lambda(
         xi_block = xi_block.sub(Expr::scaled(xi, &(etau.transpose() * &etau))?)?;
     }
     if let Some(ch) = &plan.l2 {
-        xi_block = xi_block.add(Expr::constant(&output_energy(ch, &lay, &ex, &xk, f)?)?)?;
+        let energy = output_energy(ch, (lay.tau, lay.k), &ex, &xk, f)?;
+        xi_block = xi_block.add(Expr::constant(&energy)?)?;
     }
     // With a model error the gains must be known (N_b is data).
     let robust =
@@ -318,31 +320,6 @@ fn lambda(
         Some(sel) => robust_lambda(plan, v, top, sel, h, r),
         None => Ok(top),
     }
-}
-
-/// z'z of the H-inf channel `ch` as a quadratic form in psi: z = C E_x psi +
-/// E (F x(t_k)) + G E_tau psi, F's first `ch.e.ncols()` rows the held
-/// command u_k (the augmented observer loop's gain also holds the estimate's
-/// slope below them). Constant: the gains must be known (an unknown F would
-/// need the Schur complement; the co-design's gain step has no H-inf
-/// channel).
-fn output_energy(
-    ch: &L2Channel,
-    lay: &Layout,
-    ex: &DMatrix<f64>,
-    xk: &DMatrix<f64>,
-    f: Factor<'_>,
-) -> Result<DMatrix<f64>, LmiError> {
-    let Factor::Val(f) = f else {
-        return Err(LmiError::Variable {
-            what: "the sampled loop's H-inf channel needs known gains".into(),
-        });
-    };
-    let mut z = &ch.c * ex + &ch.e * f.rows(0, ch.e.ncols()) * xk;
-    if let Some((at, q)) = lay.tau {
-        z += &ch.g * pick(q, at, lay.k);
-    }
-    Ok(z.transpose() * z)
 }
 
 /// Builds the sampled-loop LMIs. With `reduce`, the h = h_min vertices are
