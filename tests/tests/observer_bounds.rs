@@ -6,7 +6,7 @@
 //! the continuous fuzzy observer from x_hat(0) = 0, the saturated command fed
 //! to plant and observer) from points on the boundary of the certified set.
 
-use crate::common::looped::mat;
+use crate::common::looped::{certified, mat};
 use crate::common::observer::{pendulum, tsfc};
 use crate::common::{compile_shipped, compile_text, errors_of, spec_path};
 use nalgebra::{DMatrix, DVector};
@@ -173,17 +173,6 @@ fn sector_rows(d: &Data, scale: f64) -> Vec<DMatrix<f64>> {
     (0..d.rules.len())
         .map(|j| (k(d, j, scale) - &h[j]).rows(0, 1).into_owned())
         .collect()
-}
-
-/// The report of a compile that must certify, as JSON.
-fn certified((_, c): (tsfc::model::TsModel, tsfc::driver::compile::Compiled)) -> Value {
-    assert_eq!(
-        c.status,
-        tsfc::driver::compile::Status::Certified,
-        "{:?}",
-        c.report.diagnosis
-    );
-    serde_json::to_value(&c.report).expect("report json")
 }
 
 #[test]

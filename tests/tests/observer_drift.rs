@@ -13,7 +13,7 @@
 //! plant checked against e^(-2 alpha t_k) V(0).
 
 use crate::common;
-use crate::common::looped::{mat, max_eig, Looped};
+use crate::common::looped::{mat, max_eig, report_gains, Looped};
 use crate::common::observer::{rk4_held, runtime_observer, runtime_terms};
 use crate::common::Rng;
 use nalgebra::{DMatrix, DVector};
@@ -78,15 +78,6 @@ fn worst_paired(report: &Value, gains: &[DMatrix<f64>], delta: f64, phi: f64) ->
         }
     }
     worst
-}
-
-fn report_gains(report: &Value) -> Vec<DMatrix<f64>> {
-    report["gains"]
-        .as_array()
-        .expect("gains")
-        .iter()
-        .map(|g| mat(&g["F"]))
-        .collect()
 }
 
 /// E(P, 1) of the report's sampled loop lies in the reported sample box

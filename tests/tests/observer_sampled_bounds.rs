@@ -13,7 +13,7 @@
 //! sampled loop does not cover are refused at their line:col.
 
 use crate::common;
-use crate::common::looped::mat;
+use crate::common::looped::{mat, report_gains};
 use crate::common::observer::{pendulum, rk4_held, runtime_observer, runtime_terms, tsfc};
 use crate::common::{errors_of, spec_path, Rng};
 use nalgebra::{DMatrix, DVector};
@@ -80,16 +80,6 @@ fn minimized() -> &'static Loop {
     })
 }
 
-/// F_l of the report.
-fn gains(report: &Value) -> Vec<DMatrix<f64>> {
-    report["gains"]
-        .as_array()
-        .expect("gains")
-        .iter()
-        .map(|g| mat(&g["F"]))
-        .collect()
-}
-
 /// Kbar = [0, F] (the u-rows of the augmented gain, xi = (x, xhat)).
 fn kbar(f: &DMatrix<f64>) -> DMatrix<f64> {
     let (m, n) = f.shape();
@@ -147,7 +137,7 @@ fn saturation_linear_region_rederived_from_the_report_and_fails_tightened() {
         p.symmetric_eigenvalues().min() > 0.0,
         "P is not positive definite"
     );
-    let f = gains(report);
+    let f = report_gains(report);
     let worst = worst_block(&p, &f, LEVEL);
     assert!(worst >= -1e-9, "linear region violated: {worst:e}");
     let doubled: Vec<DMatrix<f64>> = f.iter().map(|g| g * 2.0).collect();
@@ -175,7 +165,7 @@ fn minimized_input_bound_rederived_from_the_report_and_fails_at_098_mu() {
     let mu = s["bounds"]["input_norm"].as_f64().expect("mu");
     assert_eq!(report["objectives"]["input_norm_bound"].as_f64(), Some(mu));
     let p = mat(&s["P"]);
-    let f = gains(report);
+    let f = report_gains(report);
     let worst = worst_block(&p, &f, mu);
     assert!(worst >= -1e-9, "input bound violated: {worst:e}");
     let tight = worst_block(&p, &f, 0.98 * mu);
@@ -387,6 +377,6 @@ fn ellipsoidal_initial_set_gives_p11_below_r() {
     let gap = DMatrix::from_diagonal_element(2, 2, 25.0) - p.view((0, 0), (2, 2));
     let least = gap.symmetric_eigenvalues().min();
     assert!(least >= -1e-9, "P11 above R: {least:e}");
-    let worst = worst_block(&p, &gains(&l.report), LEVEL);
+    let worst = worst_block(&p, &report_gains(&l.report), LEVEL);
     assert!(worst >= -1e-9, "linear region violated: {worst:e}");
 }

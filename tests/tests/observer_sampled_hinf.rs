@@ -6,7 +6,7 @@
 //! simulation of the T-S blend under the runtime's discrete observer and
 //! held command, written here, whose energy ratio the certified gain bounds.
 
-use crate::common::looped::{mat, max_eig, Channel, Looped};
+use crate::common::looped::{certified, mat, max_eig, report_gains, Channel, Looped};
 use crate::common::{compile_text, errors_of, spec_path};
 use nalgebra::DMatrix;
 use serde_json::Value;
@@ -27,17 +27,10 @@ fn spec(objective: &str) -> String {
 }
 
 fn report() -> Value {
-    let (_, c) = compile_text(
+    certified(compile_text(
         "pendulum_observer_sampled_hinf",
         &spec("objective hinf(d -> z) <= 20;"),
-    );
-    assert_eq!(
-        c.status,
-        tsfc::driver::compile::Status::Certified,
-        "{:?}",
-        c.report.diagnosis
-    );
-    serde_json::to_value(&c.report).expect("report json")
+    ))
 }
 
 /// The channel of rule `i`: Dbar = [D_i; 0], z = theta.
@@ -55,14 +48,9 @@ fn channel(report: &Value, i: usize, g: f64) -> Channel {
     }
 }
 
-fn gains(report: &Value) -> Vec<DMatrix<f64>> {
-    let g = report["gains"].as_array().expect("gains");
-    g.iter().map(|g| mat(&g["F"])).collect()
-}
-
 /// The worst eigenvalue over every free vertex (i, j, l) and both blocks.
 fn worst(report: &Value, lp: &Looped, phi: f64, g: f64) -> f64 {
-    let f = gains(report);
+    let f = report_gains(report);
     let r = lp.rules();
     let mut worst = f64::NEG_INFINITY;
     for i in 0..r {
@@ -90,7 +78,7 @@ fn near(theta: f64) -> f64 {
 /// the T-S blend x' = sum h_i(theta) (A_i x + B_i u + D_i w), u held, the
 /// discrete observer of the report every T (RK4, 20 steps a period).
 fn energies(report: &Value, lp: &Looped, omega: f64) -> (f64, f64) {
-    let f = gains(report);
+    let f = report_gains(report);
     let d: Vec<DMatrix<f64>> = (0..lp.rules())
         .map(|i| mat(&report["local_models"][i]["D"]))
         .collect();

@@ -17,6 +17,23 @@ pub fn mat(v: &Value) -> DMatrix<f64> {
     DMatrix::from_fn(r, c, |i, j| rows[i][j])
 }
 
+/// The controller gains F_j of the report (`gains[j].F`).
+pub fn report_gains(report: &Value) -> Vec<DMatrix<f64>> {
+    let gains = report["gains"].as_array().expect("gains");
+    gains.iter().map(|g| mat(&g["F"])).collect()
+}
+
+/// The report of a compile that must certify, as JSON.
+pub fn certified((_, c): (tsfc::model::TsModel, tsfc::driver::compile::Compiled)) -> Value {
+    assert_eq!(
+        c.status,
+        tsfc::driver::compile::Status::Certified,
+        "{:?}",
+        c.report.diagnosis
+    );
+    serde_json::to_value(&c.report).expect("report json")
+}
+
 /// The exact zero-order hold of x' = A x + G w over `t`: (Phi, Gamma).
 pub fn zoh(a: &DMatrix<f64>, g: &DMatrix<f64>, t: f64) -> (DMatrix<f64>, DMatrix<f64>) {
     let (n, k) = (a.nrows(), g.ncols());

@@ -201,9 +201,18 @@ pub fn initial_map(n: usize) -> DMatrix<f64> {
 /// command max_j ||F_j|| reaches at the largest initial point (1 without
 /// points), at least 1e-6.
 pub fn mu_scale(bounds: &Bounds, f: &[DMatrix<f64>], n: usize) -> f64 {
-    let radius = bounds
-        .initial_sets()
-        .iter()
+    initial_scale(bounds.initial_sets().into_iter(), f, n)
+}
+
+/// max_j ||F_j|| times the largest radius of the `initial` sets (1 without
+/// one), at least 1e-6: the scale of a minimized input bound (also of the
+/// sampled loop's, [`super::sampled_bounds`]).
+pub fn initial_scale<'a>(
+    initial: impl Iterator<Item = &'a InitialSet>,
+    f: &[DMatrix<f64>],
+    n: usize,
+) -> f64 {
+    let radius = initial
         .map(|set| match set {
             InitialSet::Point(x0) => DMatrix::from_column_slice(n, 1, x0).norm(),
             InitialSet::Ellipsoid(r) => r

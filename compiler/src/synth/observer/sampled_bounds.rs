@@ -93,7 +93,7 @@ impl SampledBounds {
             per_rule: f.len(),
             inputs: f.first().map_or(0, DMatrix::nrows),
             input,
-            scale: scale_of(&initial, f, n),
+            scale: super::bounded::initial_scale(initial.iter(), f, n),
             levels,
             initial,
         })
@@ -131,27 +131,6 @@ impl SampledBounds {
         }
         parts.join(" and ")
     }
-}
-
-/// sigma of a minimized bound: max_l ||F_l|| times the largest initial
-/// radius (1 without one), at least 1e-6.
-fn scale_of(initial: &[InitialSet], f: &[DMatrix<f64>], n: usize) -> f64 {
-    let radius = initial
-        .iter()
-        .map(|set| match set {
-            InitialSet::Point(x0) => DMatrix::from_column_slice(n, 1, x0).norm(),
-            InitialSet::Ellipsoid(r) => r
-                .clone()
-                .symmetric_eigen()
-                .eigenvalues
-                .min()
-                .max(f64::MIN_POSITIVE)
-                .recip()
-                .sqrt(),
-        })
-        .fold(0.0, f64::max);
-    let gain = f.iter().map(|fl| fl.norm()).fold(0.0, f64::max);
-    (gain * if radius > 0.0 { radius } else { 1.0 }).max(1e-6)
 }
 
 /// E = [I; 0] (2n x n): xi_0 = (x0, 0).
