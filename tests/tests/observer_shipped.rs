@@ -164,14 +164,25 @@ fn shipped_pendulum_observer_sampled_conditions_rederived_from_the_report() {
     let report = compile(&common::fresh_dir("observer_shipped", "lmis"));
     let covers = report["sampled_loop"]["covers"].as_str().expect("covers");
     assert!(covers.contains("decays at rate 0.5"), "{covers}");
+    // The report's own field for the sampled loop's rate, re-derived below.
+    let rate = report["sampled_loop"]["decay_rate"]
+        .as_f64()
+        .expect("decay_rate");
+    assert_eq!(rate, 0.5);
     let gains: Vec<DMatrix<f64>> = report["gains"]
         .as_array()
         .expect("gains")
         .iter()
         .map(|g| mat(&g["F"]))
         .collect();
-    let worst = worst_looped(&report, &gains, 1.0);
+    let worst = worst_looped(&report, &gains, 2.0 * rate);
     assert!(worst < 0.0, "a looped condition is not negative: {worst:e}");
+    // The rate is not loose: the same matrices at twice the rate fail.
+    let faster = worst_looped(&report, &gains, 4.0 * rate);
+    assert!(
+        faster > 0.0,
+        "passes at twice the reported rate: {faster:e}"
+    );
     let off: Vec<DMatrix<f64>> = gains.iter().map(|g| g * 0.0).collect();
     let open = worst_looped(&report, &off, 1.0);
     assert!(open > 0.0, "open loop passes: {open:e}");

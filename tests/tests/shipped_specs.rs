@@ -94,3 +94,39 @@ fn every_shipped_spec_checks_clean() {
     }
     assert!(names.len() >= 12, "{names:?}");
 }
+
+/// The summary `tsfc compile` prints names what the SAMPLED loop (the loop
+/// the generated code runs) certifies, apart from the continuous loop's
+/// objectives: the spacecraft design's loop sampled every 4.5 s is certified
+/// stable only, although its continuous loop has decay rate 0.05; the
+/// observer pendulum's sampled loop has its own rate 0.5.
+#[test]
+fn summary_separates_the_sampled_loops_rate_from_the_continuous_one() {
+    let line = |name: &str| {
+        let (model, c) = common::compile_shipped(name);
+        let s = tsfc::driver::summary::summary(&model, &c, std::path::Path::new("r.json"));
+        let sampled: Vec<&str> = s
+            .lines()
+            .filter(|l| l.contains("sampled loop   "))
+            .collect();
+        assert_eq!(sampled.len(), 1, "{name}: {s}");
+        (s.clone(), sampled[0].trim().to_string(), c)
+    };
+    let (s, sampled, c) = line("amrr2019_tsfc_design.tsf");
+    assert!(s.contains("decay_rate           0.05"), "{s}");
+    assert_eq!(
+        sampled,
+        "sampled loop         every 4.5 s: asymptotic stability only (a decay rate above is the continuous loop's)"
+    );
+    let report = c.report.sampled_loop.as_ref().expect("sampled loop");
+    assert_eq!((report.decay_rate, report.sampling), (0.0, [4.5, 4.5]));
+    let (_, sampled, c) = line("pendulum_observer.tsf");
+    assert_eq!(
+        sampled,
+        "sampled loop         every 0.01 s: decay rate 0.5 certified"
+    );
+    assert_eq!(
+        c.report.sampled_loop.as_ref().map(|l| l.decay_rate),
+        Some(0.5)
+    );
+}

@@ -56,6 +56,9 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
             let _ = writeln!(s, "  verdict              {}: {word}{value}", v.objective);
         }
     }
+    if let Some(line) = r.sampled_loop.as_ref().map(sampled_line) {
+        let _ = writeln!(s, "  sampled loop         {line}");
+    }
     if let Some(cert) = &r.certificate {
         let strict = cert.lmis.iter().filter(|l| l.strict).count();
         let _ = writeln!(
@@ -110,6 +113,31 @@ pub fn summary(model: &TsModel, c: &Compiled, report_path: &Path) -> String {
     let _ = writeln!(s, "  report               {}", report_path.display());
     let _ = model;
     s
+}
+
+/// What the sampled loop (the loop the generated code runs) certifies, in
+/// one line: its sampling, its own decay rate or stability only (the
+/// `objectives` lines above are the continuous loop's), its H-inf gain.
+fn sampled_line(l: &crate::report::SampledReport) -> String {
+    let [lo, hi] = l.sampling;
+    let when = if lo == hi {
+        format!("every {hi} s")
+    } else {
+        format!("intervals in [{lo}, {hi}] s")
+    };
+    let rate = match (l.decay_rate > 0.0, l.modes.is_some()) {
+        (true, _) => format!("decay rate {} certified", l.decay_rate),
+        (false, false) => {
+            "asymptotic stability only (a decay rate above is the continuous loop's)".to_string()
+        }
+        (false, true) => {
+            "mean-square stability only (a decay rate above is the continuous loop's)".to_string()
+        }
+    };
+    let hinf = l
+        .hinf_gamma
+        .map_or(String::new(), |g| format!(", H-inf gain {g:.6}"));
+    format!("{when}: {rate}{hinf}")
 }
 
 /// The warning when the initial state `x0` of a scenario lies outside the

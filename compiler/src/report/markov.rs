@@ -160,6 +160,7 @@ pub fn sampled_loop(model: &TsModel, design: &Design) -> Option<SampledReport> {
     let modes = model.spec.modes.as_ref()?;
     Some(SampledReport {
         sampling: [s.sampling.0, s.sampling.1],
+        decay_rate: 0.0,
         covers: crate::synth::markov::sampled::covers(s.sampling),
         p: rows(s.p.first()?),
         y: Some(rows(&s.y)),

@@ -195,6 +195,10 @@ pub struct ConsistencyReport {
 pub struct SampledReport {
     /// [h_min, h_max] in s (equal for a periodic trigger).
     pub sampling: [f64; 2],
+    /// The decay rate a certified for the sampled loop itself
+    /// (V(t) <= e^(-2 a t) V(0)); 0: asymptotic (with modes: mean-square)
+    /// stability only. The `objectives` decay rate is the continuous loop's.
+    pub decay_rate: f64,
     /// What the certificate covers, in words.
     pub covers: String,
     /// P of the sampled loop's functional (n x n rows); under saturation E(P, 1)
@@ -253,6 +257,7 @@ fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
     let get = |name| s.values.value(name).map(rows);
     Some(SampledReport {
         sampling: [s.period, s.period],
+        decay_rate: s.alpha,
         covers: s.covers(),
         p: rows(&s.p),
         y: get(names::LOOP_Y),
@@ -593,6 +598,7 @@ pub fn report(
             every_sample
                 .map(|s| SampledReport {
                     sampling: [s.plan.sampling.0, s.plan.sampling.1],
+                    decay_rate: s.plan.phi / 2.0,
                     covers: crate::synth::sampling::covers(&s.plan),
                     p: rows(&s.p),
                     y: None,
