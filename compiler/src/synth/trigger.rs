@@ -201,8 +201,7 @@ impl Layout {
 /// Plant rule i and controller rule j differ (membership mismatch), so the
 /// bound Phi(h)' Y Phi(h) <= sum h_i h_j Phi_ij' Y Phi_ij (convexity, Y > 0)
 /// makes the vertex conditions sufficient. With saturation the plant gets
-/// -B M_q dz, M_q the dead-zone map of controller vertex `q`
-/// ([`TriggerPlan::dz_map`]; the identity but on the sampled observer loop).
+/// -B M_q dz ([`TriggerPlan::dz_map`] of controller vertex `q`).
 fn lambda(
     model: &TsModel,
     plan: &TriggerPlan,
@@ -363,11 +362,9 @@ fn declare_trigger_step<'a>(
         (_, 0) => None,
         // T known: the sector gains are the unknowns, one per vertex.
         (Some(t), m) => {
+            let name = |q| format!("{}{q}", names::LOOP_SECTOR_GAIN);
             sector = (1..=plan.gains.len())
-                .map(|q| {
-                    let name = format!("{}{q}", names::LOOP_SECTOR_GAIN);
-                    problem.full(&name, m, n).map(Factor::Var)
-                })
+                .map(|q| problem.full(&name(q), m, n).map(Factor::Var))
                 .collect::<Result<_, _>>()?;
             Some(Factor::Val(t))
         }
