@@ -18,7 +18,7 @@
 //! sampled loop does not cover are refused at their line:col.
 
 use crate::common;
-use crate::common::looped::{mat, report_gains, worst_paired, Looped};
+use crate::common::looped::{mat, max_eig, report_gains, worst_paired, Looped};
 use crate::common::observer::{pendulum, rk4_held, runtime_observer, runtime_terms, tsfc};
 use crate::common::{errors_of, spec_path, Rng};
 use nalgebra::{DMatrix, DVector};
@@ -532,4 +532,68 @@ fn ellipsoidal_initial_set_gives_p11_below_r() {
     assert!(least >= -1e-9, "P11 above R: {least:e}");
     let worst = worst_block(&p, &report_gains(&l.report), LEVEL);
     assert!(worst >= -1e-9, "linear region violated: {worst:e}");
+}
+
+/// (a) The free-vertex route (no `region`: every plant rule i with every
+/// pair (j, l)) with the saturation active: the test oscillator of
+/// `common::observer` with `saturate 5` from x1(0) = 0.9 at rest (the
+/// linear-region certificate stops between 0.5 and 0.7). The blocks with the
+/// dead-zone column, rebuilt from the report at every vertex (i, j, l), are
+/// negative at the decay rate 0.5 and fail with T = 0; E(P, 1) lies in the
+/// sector region and the command leaves the level on it.
+#[test]
+fn active_saturation_on_free_vertices_rederived_from_the_report() {
+    let text = common::observer::OSC_SPEC
+        .replace("PERIOD", "0.01")
+        .replace("input u;", "input u saturate 5;")
+        .replace(
+            "relaxation basic;",
+            "relaxation basic;\nobjective saturation region for x0 = [0.9, 0];",
+        );
+    let dir = common::fresh_dir("observer_sampled_bounds", "osc_active");
+    let path = dir.join("osc_active.tsf");
+    std::fs::write(&path, text).expect("write the spec");
+    let report = &compile_file(&path).report;
+    let s = &report["sampled_loop"];
+    assert_eq!(
+        s["bounds"]["saturation"], "active_sector",
+        "{}",
+        s["bounds"]
+    );
+    assert!(s["drift"].is_null(), "free vertices");
+    assert!(s["covers"]
+        .as_str()
+        .expect("covers")
+        .contains("decays at rate 0.5"));
+    let (t, g) = sector(report);
+    let (lp, f) = (Looped::of(report), report_gains(report));
+    let r = lp.rules();
+    let worst = |t: &DMatrix<f64>| {
+        let mut worst = f64::NEG_INFINITY;
+        for (a, b) in &lp.models {
+            for (q, gq) in g.iter().enumerate() {
+                let plant = lp.plant(a, b);
+                let (r1, r2) = lp.blocks_sat(&plant, (q / r, &f[q % r]), 1.0, (t, gq));
+                worst = worst.max(max_eig(&r1)).max(max_eig(&r2));
+            }
+        }
+        worst
+    };
+    let (held, none) = (worst(&t), worst(&(&t * 0.0)));
+    assert!(held < 0.0, "a vertex block is not negative: {held:e}");
+    assert!(none > 0.0, "T = 0 passes: {none:e}");
+    let p_inv = mat(&s["P"]).try_inverse().expect("P invertible");
+    for (q, gq) in g.iter().enumerate() {
+        let inside = reach(&p_inv, &(kbar(&f[q % r]) - gq));
+        assert!(inside <= 5.0 * (1.0 + 1e-9), "pair {q}: {inside} > 5");
+    }
+    let command = f
+        .iter()
+        .map(|fl| reach(&p_inv, &kbar(fl)))
+        .fold(0.0, f64::max);
+    assert!(
+        command > 5.0,
+        "|F_l xhat| <= {command} on E(P, 1): nothing saturates"
+    );
+    eprintln!("free vertices, active: worst block {held:e} (T = 0: {none:e}); |F_l xhat| reaches {command:.2} on E(P, 1)");
 }
