@@ -4,8 +4,10 @@
 //! augmented state (x, xhat) ([`crate::synth::observer::sampled`]), rebuilt
 //! from the shipped gains F_l and observer tables (Phi_j, Gu_j, Gy_j), also
 //! as stored, with the input bound and the saturation levels (as stored) of
-//! [`crate::synth::observer::sampled_bounds`]. Refused with the longest
-//! period that certifies.
+//! [`crate::synth::observer::sampled_bounds`]; with the saturation active,
+//! the dead-zone maps [I; Gu_j / T] from the (rounded) tables, the multiplier
+//! T from the (rounded) levels, and the solved sector gains. Refused with the
+//! longest period that certifies.
 
 use super::every_sample::looped_conditions;
 use super::{Condition, LoopCertificate, LoopDesign, LoopLaw, Rounding, Start};

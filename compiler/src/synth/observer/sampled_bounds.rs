@@ -19,8 +19,7 @@
 //!   channel s, i.e. |(F_l xhat_k)_s| <= u_s on E(P, 1): the actuator never
 //!   saturates on the certified set, so the saturated loop IS the linear
 //!   sampled loop there and its certificate covers it. Conservative: the set
-//!   is kept where the actuator is linear (no generalized sector condition
-//!   with active saturation, as the continuous [`super::bounded`] has);
+//!   is kept where the actuator is linear;
 //! - or the ACTIVE-saturation certificate ([`SampledBounds::active`]):
 //!   the dead zone dz_k = u_k - sat(u_k) is held like u_k, the plant gets
 //!   B (u_k - dz_k) and the observer is fed the saturated command
