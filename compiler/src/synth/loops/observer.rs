@@ -5,8 +5,9 @@
 //! from the shipped gains F_l and observer tables (Phi_j, Gu_j, Gy_j), also
 //! as stored, with the input bound and the saturation levels (as stored) of
 //! [`crate::synth::observer::sampled_bounds`]; with the saturation active,
-//! the dead-zone maps [I; Gu_j / T] from the (rounded) tables, the multiplier
-//! T from the (rounded) levels, and the solved sector gains. Refused with the
+//! the dead-zone maps [I; Gu_j / T] from the (rounded) tables, the same known
+//! multiplier T (any diagonal T > 0 is valid), the solved sector gains and the
+//! rounded levels in the sector region. Refused with the
 //! longest period that certifies.
 
 use super::every_sample::looped_conditions;
