@@ -13,7 +13,7 @@
 //! plant checked against e^(-2 alpha t_k) V(0).
 
 use crate::common;
-use crate::common::looped::{mat, max_eig, report_gains, Looped};
+use crate::common::looped::{mat, report_gains, Looped};
 use crate::common::observer::{rk4_held, runtime_observer, runtime_terms};
 use crate::common::Rng;
 use nalgebra::{DMatrix, DVector};
@@ -50,34 +50,13 @@ fn nums(v: &Value) -> Vec<f64> {
 }
 
 /// The worst eigenvalue of the paired conditions with the drift `delta` (of
-/// h_2; the two-rule drift term delta (A_2 - A_1, B_2 - B_1)) at both signs:
-/// Lambda_jj and Lambda_jl + Lambda_lj, plant j drifted, K of observer j and
-/// controller l.
+/// h_2) at both signs, K of observer j and controller l
+/// ([`crate::common::looped::worst_paired`]).
 fn worst_paired(report: &Value, gains: &[DMatrix<f64>], delta: f64, phi: f64) -> f64 {
     let lp = Looped::of(report);
-    let r = lp.rules();
-    let (a1, b1) = lp.models[0].clone();
-    let mut worst = f64::NEG_INFINITY;
-    for sign in [-1.0, 1.0] {
-        let d = sign * delta;
-        let plant = |j: usize| {
-            let (a, b) = &lp.models[j];
-            let (a2, b2) = &lp.models[1];
-            lp.plant(&(a + (a2 - &a1) * d), &(b + (b2 - &b1) * d))
-        };
-        for j in 0..r {
-            for l in j..r {
-                let (mut r1, mut r2) = lp.blocks(&plant(j), &lp.gain(j, &gains[l]), phi);
-                if l != j {
-                    let (s1, s2) = lp.blocks(&plant(l), &lp.gain(l, &gains[j]), phi);
-                    r1 += s1;
-                    r2 += s2;
-                }
-                worst = worst.max(max_eig(&r1)).max(max_eig(&r2));
-            }
-        }
-    }
-    worst
+    common::looped::worst_paired(&lp, delta, |plant, j, l| {
+        lp.blocks(plant, &lp.gain(j, &gains[l]), phi)
+    })
 }
 
 /// E(P, 1) of the report's sampled loop lies in the reported sample box

@@ -242,9 +242,20 @@ pub struct SampledBoundsReport {
     pub saturation_levels: Vec<f64>,
     /// Which certificate the saturation got: `inactive_on_certified_set`
     /// (the linear-region certificate: |u_s| <= u_s on E(P, 1), so the
-    /// saturated loop is the certified linear one there); `None` without
+    /// saturated loop is the certified linear one there) or `active_sector`
+    /// (the generalized sector condition: the actuator may saturate on
+    /// E(P, 1); `sector_multiplier`, `sector_gains`); `None` without
     /// saturation levels.
     pub saturation: Option<&'static str>,
+    /// `active_sector`: the diagonal of the known sector multiplier T (the
+    /// functional's term He(dz' T G xi_k) - 2 dz' T dz).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sector_multiplier: Option<Vec<f64>>,
+    /// `active_sector`: the solved sector gains G_jl (m x 2n rows, on xi =
+    /// (x, xhat)), one per pair (observer rule j outer, controller rule l
+    /// inner); E(P, 1) lies inside |((Kbar_l - G_jl) xi)_s| <= u_s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sector_gains: Option<Vec<Vec<Vec<f64>>>>,
 }
 
 /// The `sampled_loop` section of the sampled observer loop: the looped
@@ -266,16 +277,25 @@ fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
             .map(|(a, b)| [a, b]),
         modes: None,
         drift: s.plan.drift.as_ref().map(|d| d.bound.clone()),
-        bounds: s
-            .plan
-            .observer_bounds
-            .as_ref()
-            .map(|_| SampledBoundsReport {
+        bounds: s.plan.observer_bounds.as_ref().map(|_| {
+            let active = s.saturation_active();
+            SampledBoundsReport {
                 input_norm: s.input_bound(),
                 saturation_levels: s.saturation_levels().to_vec(),
-                saturation: (!s.saturation_levels().is_empty())
-                    .then_some("inactive_on_certified_set"),
-            }),
+                saturation: (!s.saturation_levels().is_empty()).then_some(if active {
+                    "active_sector"
+                } else {
+                    "inactive_on_certified_set"
+                }),
+                sector_multiplier: s
+                    .plan
+                    .sector_multiplier
+                    .as_ref()
+                    .filter(|_| active)
+                    .map(|t| t.diagonal().iter().copied().collect()),
+                sector_gains: active.then(|| s.sector_gains().iter().map(rows).collect()),
+            }
+        }),
         hinf_gamma: s.hinf_gamma(),
     })
 }

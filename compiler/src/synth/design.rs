@@ -387,6 +387,16 @@ pub struct TriggerPlan {
     pub gains: Vec<DMatrix<f64>>,
     /// Sector gains G_j (m x n), fixed.
     pub sector: Vec<DMatrix<f64>>,
+    /// Per controller vertex q (no premise region), the map M_q of the dead
+    /// zone into the held input: the loop gets v_k = K_q x(t_k) - M_q dz_k
+    /// (the sampled observer loop: M_jl = [I; Gu_j / T], the observer is fed
+    /// the saturated command). Empty: M = I (the input is the command).
+    pub dz_input: Vec<DMatrix<f64>>,
+    /// `Some(T)`: the sector multiplier T (diagonal) is KNOWN and the sector
+    /// gains unknown, one per controller vertex q (`G_sector{q}`; `sector`
+    /// unused), so the generalized sector terms stay linear; `None`: T
+    /// unknown with the gains `sector`.
+    pub sector_multiplier: Option<DMatrix<f64>>,
     /// Disturbance columns D_i of the L-inf channel, per rule.
     pub d: Vec<DMatrix<f64>>,
     /// Output map y = C x + G_y tau.
@@ -413,6 +423,15 @@ pub struct TriggerPlan {
 }
 
 impl TriggerPlan {
+    /// The dead-zone map M_q of controller vertex `q` ([`TriggerPlan::dz_input`]),
+    /// `m` x (the saturated channels); the identity when none is given.
+    pub fn dz_map(&self, q: usize, m: usize) -> DMatrix<f64> {
+        self.dz_input
+            .get(q)
+            .cloned()
+            .unwrap_or_else(|| DMatrix::identity(m, self.levels.len()))
+    }
+
     /// The level c of the certified region E(P, c) inside the linear region:
     /// with the L-inf channel, the level reached from rest, xi_max tau_bar^2 /
     /// phi ([`crate::synth::objectives::reach_level`]), raised to 1 when

@@ -74,6 +74,8 @@ pub fn plan_for(model: &TsModel, design: &Design, sampling: (f64, f64)) -> Trigg
         g: DMatrix::zeros(0, 0),
         region: None,
         model_error: super::loop_error::LoopError::of(model),
+        dz_input: Vec::new(),
+        sector_multiplier: None,
         drift: None,
         observer_bounds: None,
         l2: None,

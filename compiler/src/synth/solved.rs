@@ -22,6 +22,9 @@ pub mod names {
     pub const LOOP_L2: &str = "L2";
     /// T, the sector multiplier of the sampled loop (diagonal).
     pub const LOOP_SECTOR: &str = "T";
+    /// Prefix of the unknown sector gains of the loop, `G_sector{q}` per
+    /// controller vertex q (1-based), when the multiplier T is known.
+    pub const LOOP_SECTOR_GAIN: &str = "G_sector";
     /// gamma of the sampled loop's L-inf bound.
     pub const LOOP_GAMMA: &str = "gamma_tr";
     /// xi of the sampled loop's L-inf bound.

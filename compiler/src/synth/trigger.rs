@@ -180,7 +180,7 @@ impl Layout {
             at
         };
         let e = plan.event.then(|| take(model.n));
-        let dz = (!plan.levels.is_empty()).then(|| take(model.m));
+        let dz = (!plan.levels.is_empty()).then(|| take(plan.levels.len()));
         let q = plan.d.first().map_or(0, |d| d.ncols());
         let tau = ((plan.linf || plan.l2.is_some()) && q > 0).then(|| (take(q), q));
         Layout { k, e, dz, tau }
@@ -200,17 +200,21 @@ impl Layout {
 ///
 /// Plant rule i and controller rule j differ (membership mismatch), so the
 /// bound Phi(h)' Y Phi(h) <= sum h_i h_j Phi_ij' Y Phi_ij (convexity, Y > 0)
-/// makes the vertex conditions sufficient.
+/// makes the vertex conditions sufficient. With saturation the plant gets
+/// -B M_q dz ([`TriggerPlan::dz_map`] of controller vertex `q`).
 fn lambda(
     model: &TsModel,
     plan: &TriggerPlan,
     v: &LoopVars<'_>,
-    (plant, (f, g)): (&PlantVertex, (Factor<'_>, Factor<'_>)),
+    (plant, q, (f, g)): (&PlantVertex, usize, (Factor<'_>, Factor<'_>)),
     h: f64,
     r: u8,
 ) -> Result<Expr, LmiError> {
     let (n, m) = (model.n, model.m);
     let lay = Layout::of(model, plan);
+    let m_dz = plan.levels.len();
+    // The dead zone as it enters the held input: M_q dz.
+    let dz_in = lay.dz.map(|at| plan.dz_map(q, m) * pick(m_dz, at, lay.k));
     let k = lay.k;
     let (ex, es) = (pick(n, 0, k), pick(n, n, k));
     let b = &plant.b;
@@ -222,8 +226,8 @@ fn lambda(
     };
     // Phi = phi_c + B F_j x(t_k): the part without the gain is known.
     let mut phi_c = &plant.a * &ex;
-    if let Some(at) = lay.dz {
-        phi_c -= b * pick(m, at, k);
+    if let Some(dz_in) = &dz_in {
+        phi_c -= b * dz_in;
     }
     if let Some((at, q)) = lay.tau {
         phi_c += &plant.d * pick(q, at, k);
@@ -253,9 +257,9 @@ fn lambda(
         xi_block = xi_block.add(held)?.sub(w.between(&ee.transpose(), &ee)?)?;
     }
     if let (Some(at), Some(t)) = (lay.dz, v.t) {
-        let edz = pick(m, at, k);
+        let edz = pick(m_dz, at, k);
         xi_block = xi_block
-            .add(chain(&edz.transpose(), t, &DMatrix::identity(m, m), g, &xk)?.he()?)?
+            .add(chain(&edz.transpose(), t, &DMatrix::identity(m_dz, m_dz), g, &xk)?.he()?)?
             .sub(t.between(&edz.transpose(), &edz)?.scale(2.0)?)?;
     }
     if let (Some((at, q)), Some(xi)) = (lay.tau, v.xi) {
@@ -273,8 +277,8 @@ fn lambda(
             (false, Factor::Val(f)) => Some(Selectors {
                 ex: &ex,
                 phi: &phi_c + b * f * &xk,
-                sat_u: match lay.dz {
-                    Some(at) => f * &xk - pick(m, at, k),
+                sat_u: match &dz_in {
+                    Some(dz_in) => f * &xk - dz_in,
                     None => f * &xk,
                 },
                 tau: lay.tau.map(|(at, q)| pick(q, at, k)),
@@ -353,12 +357,19 @@ fn declare_trigger_step<'a>(
         problem.full(names::LOOP_L1, n, n)?,
         problem.full(names::LOOP_L2, n, n)?,
     ];
-    let t = if plan.levels.is_empty() {
-        None
-    } else {
-        Some(Factor::Var(problem.diagonal(names::LOOP_SECTOR, model.m)?))
+    let (gains, mut sector) = LoopVars::plan_gains(plan);
+    let t = match (&plan.sector_multiplier, plan.levels.len()) {
+        (_, 0) => None,
+        // T known: the sector gains are the unknowns, one per vertex.
+        (Some(t), m) => {
+            let name = |q| format!("{}{q}", names::LOOP_SECTOR_GAIN);
+            sector = (1..=plan.gains.len())
+                .map(|q| problem.full(&name(q), m, n).map(Factor::Var))
+                .collect::<Result<_, _>>()?;
+            Some(Factor::Val(t))
+        }
+        (None, m) => Some(Factor::Var(problem.diagonal(names::LOOP_SECTOR, m)?)),
     };
-    let (gains, sector) = LoopVars::plan_gains(plan);
     Ok(LoopVars {
         p: Factor::Var(p),
         y: Factor::Var(y),
@@ -473,14 +484,14 @@ pub(super) fn impose(
             if let Some(d) = &plan.drift {
                 let pre = format!("trigger r={rr} h={h}"); // paired: no pair dropped
                 drift::impose_pairs(&mut problem, d, &plant, &pre, eps, |pv, q| {
-                    lambda(model, plan, &vars, (pv, ctrl[q]), h, rr)
+                    lambda(model, plan, &vars, (pv, q, ctrl[q]), h, rr)
                 })?;
                 continue;
             }
             for &i in &kept {
                 for &j in &kept_ctrl {
                     let name = format!("trigger r={rr} h={h} {tag}[{},{}]", i + 1, j + 1);
-                    let e = lambda(model, plan, &vars, (&plant[i], ctrl[j]), h, rr)?;
+                    let e = lambda(model, plan, &vars, (&plant[i], j, ctrl[j]), h, rr)?;
                     problem.nsd(&name, e, eps)?;
                 }
             }
@@ -549,13 +560,16 @@ fn impose_regions(
     };
     for (j, (f, g)) in ctrl.iter().enumerate().filter(|_| sector) {
         for (s, ub) in plan.levels.iter().enumerate() {
-            let pick_s = pick(1, s, model.m);
+            // Row s of the command (F's first rows) and of the sector gain.
+            let (pick_f, pick_g) = (pick(1, s, model.m), pick(1, s, plan.levels.len()));
             let e = match (f, g, joint) {
-                (Factor::Val(f), Factor::Val(g), Some(_)) => contain(&(&pick_s * (*f - *g)), *ub)?,
+                (Factor::Val(f), Factor::Val(g), Some(_)) => {
+                    contain(&(&pick_f * *f - &pick_g * *g), *ub)?
+                }
                 _ => {
                     let row = f
-                        .between(&pick_s, &DMatrix::identity(n, n))?
-                        .sub(g.between(&pick_s, &DMatrix::identity(n, n))?)?
+                        .between(&pick_f, &DMatrix::identity(n, n))?
+                        .sub(g.between(&pick_g, &DMatrix::identity(n, n))?)?
                         .scale(level.sqrt() / ub)?;
                     region_block(vars.p.expr()?, row, one()?)?
                 }
@@ -716,6 +730,8 @@ pub fn plan_for(model: &TsModel, design: &Design) -> Result<TriggerPlan, SynthEr
         g: out.g.columns(sig.offset, sig.len).into_owned(),
         region,
         model_error: super::loop_error::LoopError::of(model),
+        dz_input: Vec::new(),
+        sector_multiplier: None,
         drift: None,
         observer_bounds: None,
         l2: None,

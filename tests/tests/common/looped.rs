@@ -165,14 +165,50 @@ impl Looped {
     /// (u_k the first rows of K xi(t_k)).
     pub fn blocks_with(
         &self,
-        (abar, bbar): &(DMatrix<f64>, DMatrix<f64>),
+        plant: &(DMatrix<f64>, DMatrix<f64>),
         k: &DMatrix<f64>,
         phi: f64,
         channel: Option<&Channel>,
     ) -> (DMatrix<f64>, DMatrix<f64>) {
+        self.blocks_full(plant, k, phi, channel, None)
+    }
+
+    /// The blocks with the saturation ACTIVE: psi = [xi(t); xi(t_k); dz],
+    /// the dead zone dz = u_k - sat(u_k) held with u_k, fed to the plant and
+    /// to the observer (it runs on the clipped command): the flow gains
+    /// -Bbar [I; Gu_j / T] dz, and Xi the sector term
+    /// He(dz' T G xi(t_k)) - 2 dz' T dz (Tarbouriech et al. 2011, Lemma 1.6)
+    /// with `sector` = (T, G) of the pair (observer rule `j`, gain `f`).
+    pub fn blocks_sat(
+        &self,
+        plant: &(DMatrix<f64>, DMatrix<f64>),
+        (j, f): (usize, &DMatrix<f64>),
+        phi: f64,
+        sector: (&DMatrix<f64>, &DMatrix<f64>),
+    ) -> (DMatrix<f64>, DMatrix<f64>) {
+        let (n, m) = (self.n, f.nrows());
+        let mut map = DMatrix::zeros(m + n, m);
+        map.view_mut((0, 0), (m, m)).fill_with_identity();
+        map.view_mut((m, 0), (n, m))
+            .copy_from(&(&self.steps[j].1 / self.t));
+        let k = self.gain(j, f);
+        self.blocks_full(plant, &k, phi, None, Some((&map, sector.0, sector.1)))
+    }
+
+    /// The blocks with the optional H-inf channel and dead-zone column (its
+    /// map into the held input, T, G).
+    fn blocks_full(
+        &self,
+        (abar, bbar): &(DMatrix<f64>, DMatrix<f64>),
+        k: &DMatrix<f64>,
+        phi: f64,
+        channel: Option<&Channel>,
+        dz: Option<(&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>)>,
+    ) -> (DMatrix<f64>, DMatrix<f64>) {
         let (t, big) = (self.t, 2 * self.n);
         let q = channel.map_or(0, |c| c.d.ncols());
-        let size = 2 * big + q;
+        let md = dz.map_or(0, |(map, _, _)| map.ncols());
+        let size = 2 * big + q + md;
         let pick = |at: usize, len: usize| {
             DMatrix::from_fn(len, size, |r, c| f64::from(u8::from(c == r + at)))
         };
@@ -188,6 +224,11 @@ impl Looped {
             let z = &ch.zx * &ex + &ch.zu * k.rows(0, m) * &es + &ch.zw * &ew;
             xi += z.transpose() * z - ew.transpose() * &ew * ch.g;
         }
+        if let Some((map, tm, g)) = dz {
+            let edz = pick(2 * big + q, md);
+            flow -= bbar * map * &edz;
+            xi += he(edz.transpose() * tm * g * &es) - edz.transpose() * tm * &edz * 2.0;
+        }
         xi += he(ex.transpose() * p * &flow);
         let r1 = &xi + flow.transpose() * y * &flow * t;
         let mut r2 = DMatrix::zeros(size + big, size + big);
@@ -200,6 +241,41 @@ impl Looped {
             .copy_from(&(-(-phi * t).exp() * y));
         (r1, r2)
     }
+}
+
+/// The worst eigenvalue of the paired conditions of the drift route with the
+/// drift `delta` of h_2 (two rules: the term delta (A_2 - A_1, B_2 - B_1))
+/// at both signs: Lambda_jj and Lambda_jl + Lambda_lj, plant j drifted,
+/// `blocks(plant, j, l)` the (r = 1, r = 2) blocks of observer rule j and
+/// controller rule l.
+pub fn worst_paired(
+    lp: &Looped,
+    delta: f64,
+    mut blocks: impl FnMut(&(DMatrix<f64>, DMatrix<f64>), usize, usize) -> (DMatrix<f64>, DMatrix<f64>),
+) -> f64 {
+    let r = lp.rules();
+    let (a1, b1) = lp.models[0].clone();
+    let mut worst = f64::NEG_INFINITY;
+    for sign in [-1.0, 1.0] {
+        let d = sign * delta;
+        let plant = |j: usize| {
+            let (a, b) = &lp.models[j];
+            let (a2, b2) = &lp.models[1];
+            lp.plant(&(a + (a2 - &a1) * d), &(b + (b2 - &b1) * d))
+        };
+        for j in 0..r {
+            for l in j..r {
+                let (mut r1, mut r2) = blocks(&plant(j), j, l);
+                if l != j {
+                    let (s1, s2) = blocks(&plant(l), l, j);
+                    r1 += s1;
+                    r2 += s2;
+                }
+                worst = worst.max(max_eig(&r1)).max(max_eig(&r2));
+            }
+        }
+    }
+    worst
 }
 
 /// The H-inf channel of [`Looped::blocks_with`].

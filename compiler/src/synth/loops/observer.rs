@@ -4,8 +4,11 @@
 //! augmented state (x, xhat) ([`crate::synth::observer::sampled`]), rebuilt
 //! from the shipped gains F_l and observer tables (Phi_j, Gu_j, Gy_j), also
 //! as stored, with the input bound and the saturation levels (as stored) of
-//! [`crate::synth::observer::sampled_bounds`]. Refused with the longest
-//! period that certifies.
+//! [`crate::synth::observer::sampled_bounds`]; with the saturation active,
+//! the dead-zone maps [I; Gu_j / T] from the (rounded) tables, the same known
+//! multiplier T (any diagonal T > 0 is valid), the solved sector gains and the
+//! rounded levels in the sector region. Refused with the
+//! longest period that certifies.
 
 use super::every_sample::looped_conditions;
 use super::{Condition, LoopCertificate, LoopDesign, LoopLaw, Rounding, Start};
@@ -64,9 +67,14 @@ impl LoopLaw for ObserverSampled {
                 "sampled observer-based input bound: ||u(t)|| <= {mu:.6} for t >= 0 from the initial set with x_hat(0) = 0 (the command held between samples; xi(t_k) stays in E(P, 1) of the sampled loop)"
             ));
         }
-        if !s.saturation_levels().is_empty() {
+        if s.saturation_active() {
             d.notes.push(format!(
-                "sampled observer-based saturation: linear-region certificate, saturation inactive on the certified set (|u_s| <= {:?} on E(P, 1) of the sampled loop, so the saturated loop is the certified linear one there; active saturation is not certified)",
+                "sampled observer-based saturation: ACTIVE-saturation certificate (the linear-region one does not hold): generalized sector condition with a known diagonal multiplier T and solved sector gains G_jl, E(P, 1) of the sampled loop inside |((Kbar_l - G_jl) xi)_s| <= {:?}; the plant and the observer get the saturated command",
+                s.saturation_levels()
+            ));
+        } else if !s.saturation_levels().is_empty() {
+            d.notes.push(format!(
+                "sampled observer-based saturation: linear-region certificate, saturation inactive on the certified set (|u_s| <= {:?} on E(P, 1) of the sampled loop, so the saturated loop is the certified linear one there)",
                 s.saturation_levels()
             ));
         }
@@ -92,6 +100,7 @@ impl LoopCertificate for SampledObserver {
         // The saturation levels as stored (the step clips at those).
         if let (Some(round), Some(b)) = (stored, plan.observer_bounds.as_mut()) {
             b.levels = b.levels.iter().map(|v| round(*v)).collect();
+            plan.levels = plan.levels.iter().map(|v| round(*v)).collect();
         }
         let aug = augmented_model(model);
         looped_conditions(&aug, &plan, eps, self.values.clone(), &self.reductions)

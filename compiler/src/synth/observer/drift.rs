@@ -33,7 +33,11 @@
 //!
 //! The bound delta_t^max holds while x stays in the region R
 //! ([`crate::model::region::drift`]): x(t_k) in the sample box R' and
-//! |u_k| <= U keep x(t) in R for the period. The certificate imposes
+//! |u_k| <= U keep x(t) in R for the period (u_k the command the PLANT
+//! gets; the observer's flow does not move the memberships, which read the
+//! measured x; with the saturation certified active U is the actuator's
+//! level, which the applied sat(u_k) never exceeds, and the face below is
+//! not needed: [`Drift::by_actuator`]). The certificate imposes
 //! E(P, 1) inside R' (x part of xi) and inside |F_l xhat| <= U (every l), and
 //! the looped functional gives xi(t_k)' P xi(t_k) = V(t_k) <= V(t_0) (the
 //! looped terms vanish at the samples). By induction over k, from xi(0) in
@@ -80,6 +84,12 @@ pub struct Drift {
     pub inputs: usize,
     /// U.
     pub input_bound: f64,
+    /// U is the actuator's saturation level (the largest): the command the
+    /// plant gets is clipped to it, so |sat(u_k)_s| <= U holds without
+    /// keeping E(P, 1) inside |F_l xhat| <= U (no `observer drift input`
+    /// faces; the active-saturation certificate of
+    /// [`super::sampled_bounds`]).
+    pub by_actuator: bool,
     /// The bound the terms come from (for the report).
     pub bound: DriftBound,
 }
@@ -126,6 +136,7 @@ impl Drift {
             faces,
             inputs: m,
             input_bound: bound.input_bound,
+            by_actuator: false,
             bound,
         }
     }
@@ -222,7 +233,7 @@ pub(in crate::synth) fn impose_faces(
             eps,
         )?;
     }
-    if d.input_bound.is_finite() {
+    if d.input_bound.is_finite() && !d.by_actuator {
         for (q, k) in plan.gains.iter().enumerate().take(d.per_rule) {
             for s in 0..d.inputs {
                 let row = k.rows(s, 1) / d.input_bound;

@@ -188,6 +188,44 @@ pub fn pair_gains(
     out
 }
 
+/// Sets the saturation terms of `plan` from its observer bounds
+/// ([`super::sampled_bounds`]): with the saturation certified ACTIVE
+/// (multiplier scale tau) the levels, the known multiplier
+/// T = diag(tau / u_s^2) (the sector gains G_jl are then unknowns of the
+/// problem) and per pair (observer rule j outer, controller rule l inner)
+/// the dead-zone map M_jl = [I_m; Gu_j / T] ((m + n) x m: the plant gets
+/// -B_i dz_k, the observer, fed the saturated command, -Gu_j dz_k / T);
+/// otherwise none.
+fn saturation_terms(plan: &mut TriggerPlan, steps: &ObserverSteps, period: f64) {
+    plan.levels = Vec::new();
+    plan.sector = Vec::new();
+    plan.dz_input = Vec::new();
+    plan.sector_multiplier = None;
+    let Some((levels, tau)) = plan
+        .observer_bounds
+        .as_ref()
+        .and_then(|b| b.active.map(|tau| (b.levels.clone(), tau)))
+    else {
+        return;
+    };
+    let (m, n) = (levels.len(), steps.phi.first().map_or(0, DMatrix::nrows));
+    let per_rule = plan.gains.len() / steps.gu.len().max(1);
+    for gu in &steps.gu {
+        let mut map = DMatrix::zeros(m + n, m);
+        map.view_mut((0, 0), (m, m)).fill_with_identity();
+        map.view_mut((m, 0), (n, m)).copy_from(&(gu / period));
+        plan.dz_input.extend(std::iter::repeat_n(map, per_rule));
+    }
+    plan.sector_multiplier = Some(DMatrix::from_fn(m, m, |r, c| {
+        if r == c {
+            tau / (levels[r] * levels[r])
+        } else {
+            0.0
+        }
+    }));
+    plan.levels = levels;
+}
+
 /// The certificate of the sampled observer loop.
 #[derive(Debug, Clone)]
 pub struct SampledObserver {
@@ -212,11 +250,43 @@ pub struct SampledObserver {
 impl SampledObserver {
     /// The looped-functional plan for the controller gains `f` and the
     /// observer `steps` (rounded as stored by the caller, if so).
+    /// With the saturation active, the plan's sector gains and dead-zone
+    /// maps are rebuilt from `f` and `steps` too.
     pub fn plan_with(&self, f: &[DMatrix<f64>], steps: &ObserverSteps) -> TriggerPlan {
-        TriggerPlan {
+        let mut plan = TriggerPlan {
             gains: pair_gains(f, &self.c, steps, self.period),
             ..self.plan.clone()
+        };
+        saturation_terms(&mut plan, steps, self.period);
+        plan
+    }
+
+    /// Whether the saturation is certified ACTIVE (the generalized sector
+    /// condition; else the linear-region certificate, or no saturation).
+    pub fn saturation_active(&self) -> bool {
+        let levels = self.saturation_levels();
+        !levels.is_empty()
+            && self
+                .plan
+                .observer_bounds
+                .as_ref()
+                .is_some_and(|b| b.active.is_some())
+    }
+
+    /// The active certificate's sector gains G_jl (m x 2n, on xi = (x,
+    /// xhat)), one per pair (observer rule j outer, controller rule l
+    /// inner), as solved; empty otherwise.
+    pub fn sector_gains(&self) -> Vec<DMatrix<f64>> {
+        if !self.saturation_active() {
+            return Vec::new();
         }
+        (1..=self.plan.gains.len())
+            .filter_map(|q| {
+                self.values
+                    .value(&format!("{}{q}", names::LOOP_SECTOR_GAIN))
+                    .cloned()
+            })
+            .collect()
     }
 
     /// The H-inf gain certified from w to z (the spec's `objective hinf`).
@@ -239,7 +309,8 @@ impl SampledObserver {
         };
         let start = match &self.plan.drift {
             Some(d) => format!(
-                " from every (x(0), xhat(0)) in E(P, 1), which lies in the sample box and where |u| <= {:.6}; the plant's memberships drift by at most {:?} within a period (paired plant/observer vertices)",
+                " from every (x(0), xhat(0)) in E(P, 1), which lies in the sample box and where {} <= {:.6}; the plant's memberships drift by at most {:?} within a period (paired plant/observer vertices)",
+                if d.by_actuator { "the applied command (by the actuator) |sat(u)|" } else { "|u|" },
                 d.input_bound, d.bound.delta
             ),
             None => String::new(),
@@ -252,8 +323,10 @@ impl SampledObserver {
                         "||u(t)|| <= {mu:.6} for t >= 0 (the command held between samples)"
                     ));
                 }
-                if !b.levels.is_empty() {
-                    parts.push(format!("|u_s| <= u_s on E(P, 1) for the levels {:?}: the saturation is inactive on the certified set (linear-region certificate), so the saturated loop is the certified linear one there", b.levels));
+                match b.active {
+                    _ if b.levels.is_empty() => {}
+                    Some(_) => parts.push(format!("the actuator saturates at the levels {:?} and the saturation may be ACTIVE on E(P, 1): the loop with the saturated command (plant and observer) is certified by the generalized sector condition dz_k' T (dz_k - G_jl xi_k) <= 0 (T known, the sector gains G_jl solved), which holds on E(P, 1) where |((Kbar_l - G_jl) xi)_s| <= u_s", b.levels)),
+                    None => parts.push(format!("|u_s| <= u_s on E(P, 1) for the levels {:?}: the saturation is inactive on the certified set (linear-region certificate), so the saturated loop is the certified linear one there", b.levels)),
                 }
                 if !b.initial.is_empty() {
                     parts.push("E(P, 1) contains the initial set with x_hat(0) = 0".to_string());
@@ -305,13 +378,12 @@ fn plan_at(
     let steps = ObserverSteps::of(model, &o.c, &o.gains, period);
     let mut plan = plan_for(model, d, (period, period));
     plan.phi = phi;
-    plan.levels = Vec::new();
-    plan.sector = Vec::new();
     plan.contain = Vec::new();
     plan.c = DMatrix::zeros(0, 2 * model.n);
     plan.gains = pair_gains(&d.gains, &o.c, &steps, period);
     plan.drift = drift.cloned();
     plan.observer_bounds = bounds.cloned();
+    saturation_terms(&mut plan, &steps, period);
     if let Some((d, l2)) = hinf_channel(model) {
         plan.d = d;
         plan.l2 = Some(l2);
@@ -355,12 +427,66 @@ fn hinf_channel(model: &TsModel) -> Option<(Vec<DMatrix<f64>>, L2Channel)> {
     Some((d, l2))
 }
 
+/// The multiplier scales tau tried, in order, by the active-saturation
+/// certificate (T = diag(tau / u_s^2) known, the sector gains solved:
+/// [`super::sampled_bounds`]). On the pendulum of
+/// `specs/pendulum_observer_sampled_saturated.tsf` tau from 12 to 120
+/// certifies 25 deg at rest (stability) and up to 120 the decay rate at
+/// 17 deg; 400 loses the decay rate there, 4 the 25 deg.
+pub const SECTOR_MULTIPLIERS: [f64; 3] = [40.0, 10.0, 160.0];
+
 impl Runner<'_> {
-    /// The sampled observer loop at `period` and `alpha`: free vertices, or
-    /// with a state box on every state the drift route ([`super::drift`]),
-    /// whose input bound U is tried at [`INPUT_FRACTIONS`] of the largest
-    /// that leaves a sample box (the first that certifies is kept).
+    /// The sampled observer loop at `period` and `alpha`
+    /// ([`Runner::observer_routes`]); with saturation levels the linear-region
+    /// certificate first, then the ACTIVE one at each of
+    /// [`SECTOR_MULTIPLIERS`] (the first that certifies is kept), so a loop
+    /// the linear-region certificate covers keeps it.
     fn observer_attempt(
+        &mut self,
+        aug: &TsModel,
+        d: &Design,
+        o: &ObserverDesign,
+        (period, alpha): (f64, f64),
+        bounds: Option<&SampledBounds>,
+    ) -> Result<Option<SampledObserver>, SynthError> {
+        if let Some(s) = self.observer_routes(aug, d, o, (period, alpha), bounds)? {
+            return Ok(Some(s));
+        }
+        let Some(b) = bounds.filter(|b| !b.levels.is_empty() && b.active.is_none()) else {
+            return Ok(None);
+        };
+        // On a region the plant gets sat(u_k): U = the largest level, by the
+        // actuator. A smaller U would keep E(P, 1) where nothing saturates
+        // (the linear-region certificate, tried above).
+        let drift = match state_box(self.model) {
+            None => None,
+            Some(_) => {
+                let level = b.levels.iter().fold(0.0, |a: f64, v| a.max(*v));
+                let Ok(bound) = drift_bound(self.model, period, level) else {
+                    return Ok(None);
+                };
+                Some(Drift {
+                    by_actuator: true,
+                    ..Drift::of(self.model, bound)
+                })
+            }
+        };
+        for tau in SECTOR_MULTIPLIERS {
+            let active = b.with_active(tau);
+            let on = (drift.as_ref(), Some(&active));
+            if let Some(s) = self.observer_solve(aug, d, o, (period, alpha), on)? {
+                return Ok(Some(s));
+            }
+        }
+        Ok(None)
+    }
+
+    /// The sampled observer loop at `period` and `alpha` with `bounds` as
+    /// given: free vertices, or with a state box on every state the drift
+    /// route ([`super::drift`]), whose input bound U is tried at
+    /// [`INPUT_FRACTIONS`] of the largest that leaves a sample box (the first
+    /// that certifies is kept).
+    fn observer_routes(
         &mut self,
         aug: &TsModel,
         d: &Design,
@@ -500,7 +626,7 @@ impl Runner<'_> {
         achievable.push("shrink the initial set, raise the saturation levels or the input bound, or lower the controller's gains (its decay rate, or `input_norm` on the design)".to_string());
         Ok(SynthError::Infeasible {
             message: format!(
-                "the observer-based loop sampled every {period} s certifies without its bounds, but not with {} (the linear sampled certificate keeps E(P, 1) where the actuator does not saturate)",
+                "the observer-based loop sampled every {period} s certifies without its bounds, but not with {} (neither the linear-region certificate, which keeps E(P, 1) where the actuator does not saturate, nor, with saturation levels, the active-saturation one at the multiplier scales {SECTOR_MULTIPLIERS:?})",
                 bounds.asked()
             ),
             achievable,

@@ -19,8 +19,29 @@
 //!   channel s, i.e. |(F_l xhat_k)_s| <= u_s on E(P, 1): the actuator never
 //!   saturates on the certified set, so the saturated loop IS the linear
 //!   sampled loop there and its certificate covers it. Conservative: the set
-//!   is kept where the actuator is linear (no generalized sector condition
-//!   with active saturation, as the continuous [`super::bounded`] has);
+//!   is kept where the actuator is linear;
+//! - or the ACTIVE-saturation certificate ([`SampledBounds::active`]):
+//!   the dead zone dz_k = u_k - sat(u_k) is held like u_k, the plant gets
+//!   B (u_k - dz_k) and the observer is fed the saturated command
+//!   (`tsf_runtime::Observer::update` takes the clipped u), so xi' gets
+//!   -[B_i; Gu_j / T] dz_k: the dead-zone map M_jl of
+//!   [`crate::synth::design::TriggerPlan::dz_input`]. The generalized sector
+//!   condition (Tarbouriech, Garcia, Gomes da Silva & Queinnec 2011, Lemma
+//!   1.6) dz_k' T (dz_k - G_jl xi_k) <= 0 holds where
+//!   |((Kbar_l - G_jl) xi_k)_s| <= u_s; that region contains E(P, 1)
+//!   (imposed as the looped functional's `trigger linear region`), which
+//!   holds xi_k (V(t_k) <= V(t_0) <= 1). The looped functional carries the
+//!   S-procedure term He(E_dz' T G_jl xi_k) - 2 E_dz' T E_dz, as the
+//!   state-feedback sampled loop ([`crate::synth::trigger`]). T and G_jl
+//!   cannot both be unknown (bilinear): T = diag(tau / u_s^2) is fixed (tau
+//!   scanned) and the G_jl (m x 2n, one per pair) are unknowns, which keeps
+//!   every term linear in (P, Y, L, G). Fixing G instead (G_jl = c Kbar_l,
+//!   T unknown, c in 0.05 .. 0.9) certified nothing beyond the
+//!   linear-region certificate on the pendulum; the free G_jl reach 25 deg
+//!   there. The blend: G(h) = sum h_j h_l G_jl and Kbar(h) = sum h_j h_l
+//!   Kbar_l, so the region holds for the blend by convexity, and every
+//!   vertex condition is affine in G_jl. Tried when the linear-region
+//!   certificate does not hold;
 //! - the initial set with x_hat(0) = 0 (the generated code's `INIT`):
 //!   xi_0 = (x0, 0) = E x0, E = [I; 0]: for a point 1 - xi_0' P xi_0 >= 0,
 //!   for an ellipsoid {x0' R x0 <= 1}: R - E' P E >= 0 (P11 <= R).
@@ -53,6 +74,11 @@ pub struct SampledBounds {
     /// Saturation levels u_s (empty: no actuator limit): E(P, 1) inside
     /// the linear region.
     pub levels: Vec<f64>,
+    /// `Some(tau)`: the saturation certified ACTIVE with the known sector
+    /// multiplier T = diag(tau / u_s^2) and unknown sector gains (the plan's
+    /// `levels`, `sector_multiplier`, `dz_input`); `None`: the linear-region
+    /// certificate.
+    pub active: Option<f64>,
     /// The initial sets (in x, with x_hat(0) = 0) E(P, 1) must contain.
     pub initial: Vec<InitialSet>,
 }
@@ -95,6 +121,7 @@ impl SampledBounds {
             input,
             scale: super::bounded::initial_scale(initial.iter(), f, n),
             levels,
+            active: None,
             initial,
         })
     }
@@ -103,6 +130,15 @@ impl SampledBounds {
     pub fn fixed(&self, mu: f64) -> Self {
         SampledBounds {
             input: self.input.map(|_| Some(mu)),
+            ..self.clone()
+        }
+    }
+
+    /// The same bounds with the saturation certified active, the sector
+    /// multiplier T = diag(tau / u_s^2).
+    pub fn with_active(&self, tau: f64) -> Self {
+        SampledBounds {
+            active: Some(tau),
             ..self.clone()
         }
     }
@@ -174,8 +210,14 @@ pub(in crate::synth) fn impose(
             nonstrict_psd(problem, nonstrict, &name, e, eps)?;
         }
     }
+    // Active saturation: the sector's region is the looped functional's.
+    let linear = if b.active.is_some() {
+        &[][..]
+    } else {
+        &b.levels[..]
+    };
     for (l, kbar) in u_rows.iter().enumerate() {
-        for (s, level) in b.levels.iter().enumerate() {
+        for (s, level) in linear.iter().enumerate() {
             let row = kbar.rows(s, 1) / *level;
             let e = region_block(p.expr()?, Expr::constant(&row)?, Expr::identity(1))?;
             let name = format!("observer sampled linear region [{},{}]", l + 1, s + 1);
