@@ -597,3 +597,59 @@ fn active_saturation_on_free_vertices_rederived_from_the_report() {
     );
     eprintln!("free vertices, active: worst block {held:e} (T = 0: {none:e}); |F_l xhat| reaches {command:.2} on E(P, 1)");
 }
+
+/// With saturation the report's `region_of_attraction` is the sampled loop's
+/// E(P, 1) written on (x, e): U = S' P S, S = [I, 0; I, -I], re-derived here
+/// from `sampled_loop.P`. The objective's x0 at rest with x_hat(0) = 0 lies
+/// in it at the level xi0' P xi0 (<= 1), 20 % further out it does not, and a
+/// scenario started there gets the summary's outside-the-region warning.
+#[test]
+fn region_of_attraction_is_the_sampled_set_on_x_and_e() {
+    let report = &shipped().report;
+    let p = mat(&report["sampled_loop"]["P"]);
+    let roa = &report["region_of_attraction"];
+    let u = mat(&roa["U"]);
+    let n = p.nrows() / 2;
+    let mut s = DMatrix::<f64>::zeros(2 * n, 2 * n);
+    for i in 0..n {
+        s[(i, i)] = 1.0;
+        s[(n + i, i)] = 1.0;
+        s[(n + i, n + i)] = -1.0;
+    }
+    let want = s.transpose() * &p * &s;
+    assert!(
+        (&u - &want).amax() <= 1e-12 * want.amax(),
+        "{u} against {want}"
+    );
+    let level = quad(&p, &initial(TH0));
+    let reported = roa["x0_level"].as_f64().expect("x0_level");
+    assert!(
+        (reported - level).abs() <= 1e-12,
+        "{reported} against {level}"
+    );
+    assert!(level <= 1.0 && roa["contains_x0"] == true, "{level}");
+    assert!(quad(&p, &initial(1.2 * TH0)) > 1.0);
+
+    let text = std::fs::read_to_string(spec_path(SPEC)).expect("spec");
+    let line = "    x0 = [th0, 0];";
+    assert_eq!(text.matches(line).count(), 1, "the scenario's x0");
+    let dir = common::fresh_dir("observer_sampled_bounds", "outside");
+    let path = dir.join("pendulum_observer_sampled_outside.tsf");
+    std::fs::write(&path, text.replace(line, "    x0 = [1.2 * th0, 0];")).expect("write");
+    let run = tsfc::pipeline::read(&path)
+        .and_then(|f| f.compile(&Settings::default()))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let roa = run
+        .compiled
+        .report
+        .region_of_attraction
+        .as_ref()
+        .expect("region");
+    assert_eq!(roa.contains_scenario_x0, Some(false));
+    let summary =
+        tsfc::driver::summary::summary(&run.model, &run.compiled, std::path::Path::new("r.json"));
+    assert!(
+        summary.contains("the scenario starts outside the certified region of attraction"),
+        "{summary}"
+    );
+}

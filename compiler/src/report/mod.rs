@@ -147,7 +147,9 @@ pub struct Timings {
 pub struct RegionOfAttraction {
     /// U = P / c (n x n rows): the certified region E(P, c) is {x : x' U x <= 1}.
     /// For `control observer_based` the region is on the augmented state
-    /// (x, e), e = x - x_hat (2n x 2n rows, U = P_aug), and the levels below
+    /// (x, e), e = x - x_hat (2n x 2n rows, U = P_aug; with `trigger
+    /// periodic` and saturation levels, the sampled loop's E(P, 1), its P on
+    /// (x, x_hat) written on (x, e)), and the levels below
     /// are those of (x0, x0 - xhat0): xhat0 = 0 for the objective's x0, the
     /// scenario's `xhat0` (else 0) for the simulate block's.
     #[serde(rename = "U")]
@@ -731,8 +733,10 @@ fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttractio
         _ => None,
     };
     // The certified region E(P, c) as E(U, 1); an observer loop's is the
-    // augmented E(P_aug, 1) on (x, e).
+    // augmented E(P_aug, 1) on (x, e), the sampled observer loop's its
+    // E(P, 1) on (x, xhat) written on (x, e).
     let u = match observer {
+        Some(_) if sampled_region(d).is_some() => sampled_region(d)?,
         Some(aug)
             if aug
                 .bounded
@@ -776,6 +780,28 @@ fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttractio
         scenario_x0_level: scenario,
         contains_scenario_x0: scenario.map(|l| l <= 1.0),
     })
+}
+
+/// The sampled observer loop's certified set under saturation, E(P, 1) with
+/// P on xi = (x, xhat), as a matrix on (x, e): xi = S (x, e) with
+/// S = [I, 0; I, -I] (xhat = x - e), so U = S' P S. `None` for any other
+/// loop, or without saturation levels (then the sampled certificate holds
+/// for every state the rules cover, or in its sample box, not on a set).
+fn sampled_region(d: &Design) -> Option<nalgebra::DMatrix<f64>> {
+    let crate::synth::loops::LoopDesign::ObserverSampled(s) = &d.loop_design else {
+        return None;
+    };
+    if s.saturation_levels().is_empty() {
+        return None;
+    }
+    let n = s.p.nrows() / 2;
+    let mut to_xi = nalgebra::DMatrix::<f64>::zeros(2 * n, 2 * n);
+    for i in 0..n {
+        to_xi[(i, i)] = 1.0;
+        to_xi[(n + i, i)] = 1.0;
+        to_xi[(n + i, n + i)] = -1.0;
+    }
+    Some(to_xi.transpose() * &s.p * &to_xi)
 }
 
 /// A fuzzy Lyapunov function V = x' (sum_k h_k P_k) x and what its
