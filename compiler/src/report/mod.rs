@@ -260,6 +260,30 @@ pub struct SampledBoundsReport {
     pub sector_gains: Option<Vec<Vec<Vec<f64>>>>,
 }
 
+/// The `sampled_loop` section of a design with a sampled loop: every sample
+/// transmitted (state feedback), the Markov modes' or the observer's.
+fn sampled_loop(model: &TsModel, d: &Design) -> Option<SampledReport> {
+    let every_sample = match &d.loop_design {
+        crate::synth::loops::LoopDesign::EverySample(s) => Some(s),
+        _ => None,
+    };
+    every_sample
+        .map(|s| SampledReport {
+            sampling: [s.plan.sampling.0, s.plan.sampling.1],
+            decay_rate: s.plan.phi / 2.0,
+            covers: crate::synth::sampling::covers(&s.plan),
+            p: rows(&s.p),
+            y: None,
+            l: None,
+            modes: None,
+            drift: None,
+            bounds: None,
+            hinf_gamma: None,
+        })
+        .or_else(|| markov::sampled_loop(model, d))
+        .or_else(|| observer_sampled_loop(d))
+}
+
 /// The `sampled_loop` section of the sampled observer loop: the looped
 /// functional's P, Y, L1, L2 on the augmented state (x, xhat).
 fn observer_sampled_loop(d: &Design) -> Option<SampledReport> {
@@ -612,27 +636,9 @@ pub fn report(
         signal_trigger: design
             .filter(|_| certified)
             .and_then(|d| d.loop_design.mixed().cloned()),
-        sampled_loop: design.filter(|_| certified).and_then(|d| {
-            let every_sample = match &d.loop_design {
-                crate::synth::loops::LoopDesign::EverySample(s) => Some(s),
-                _ => None,
-            };
-            every_sample
-                .map(|s| SampledReport {
-                    sampling: [s.plan.sampling.0, s.plan.sampling.1],
-                    decay_rate: s.plan.phi / 2.0,
-                    covers: crate::synth::sampling::covers(&s.plan),
-                    p: rows(&s.p),
-                    y: None,
-                    l: None,
-                    modes: None,
-                    drift: None,
-                    bounds: None,
-                    hinf_gamma: None,
-                })
-                .or_else(|| markov::sampled_loop(model, d))
-                .or_else(|| observer_sampled_loop(d))
-        }),
+        sampled_loop: design
+            .filter(|_| certified)
+            .and_then(|d| sampled_loop(model, d)),
         solver: SolverInfo {
             name: "clarabel",
             // A failed synthesis ends on its last SDP; a design on the kept one.
