@@ -43,6 +43,7 @@ pub mod signal_trigger;
 pub mod solved;
 pub mod transmissions;
 pub mod trigger;
+mod trigger_region;
 pub mod trigger_request;
 mod trigger_scale;
 pub mod vertices;
