@@ -741,9 +741,9 @@ fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttractio
     // The certified region E(P, c) as E(U, 1); an observer loop's is the
     // augmented E(P_aug, 1) on (x, e), the sampled observer loop's its
     // E(P, 1) on (x, xhat) written on (x, e).
-    let u = match observer {
-        Some(_) if sampled_region(d).is_some() => sampled_region(d)?,
-        Some(aug)
+    let u = match (observer, sampled_region(d)) {
+        (Some(_), Some(u)) => u,
+        (Some(aug), None)
             if aug
                 .bounded
                 .as_ref()
@@ -751,8 +751,8 @@ fn region_of_attraction(model: &TsModel, d: &Design) -> Option<RegionOfAttractio
         {
             aug.p.clone()
         }
-        Some(_) => return None,
-        None => {
+        (Some(_), None) => return None,
+        (None, _) => {
             let (p, c) = d.certified_region()?;
             p / c
         }
